@@ -1,0 +1,445 @@
+//! 2-D polygon and segment queries.
+//!
+//! A polygon is a slice of vertices; edge `i` joins `v[i]` to `v[(i + 1) % n]`.
+//! Anticlockwise polygons have positive [`signed_area`]. These are the primitives
+//! Pudney's surface model builds on (P§2.2–2.7): simplicity of perimeters, point
+//! containment, and *sight* — "a point can sight another if the straight line that
+//! lies between them does not cross the perimeter" (P§2.4.2).
+
+use crate::math::{Point2, Real};
+
+/// Twice the signed area of triangle `a b c`: positive when anticlockwise.
+#[inline]
+pub fn orient2d(a: &Point2, b: &Point2, c: &Point2) -> Real {
+    (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x)
+}
+
+/// Signed area (positive when the vertices run anticlockwise).
+pub fn signed_area(poly: &[Point2]) -> Real {
+    let n = poly.len();
+    if n < 3 {
+        return 0.0;
+    }
+    let mut s = 0.0;
+    for i in 0..n {
+        let a = &poly[i];
+        let b = &poly[(i + 1) % n];
+        s += a.x * b.y - b.x * a.y;
+    }
+    0.5 * s
+}
+
+/// `true` when the polygon runs anticlockwise (positive area).
+pub fn is_anticlockwise(poly: &[Point2]) -> bool {
+    signed_area(poly) > 0.0
+}
+
+/// Length of the perimeter.
+pub fn perimeter_length(poly: &[Point2]) -> Real {
+    let n = poly.len();
+    (0..n).map(|i| (poly[(i + 1) % n] - poly[i]).norm()).sum()
+}
+
+/// Distance from `p` to the segment `a b`.
+pub fn distance_point_segment(p: &Point2, a: &Point2, b: &Point2) -> Real {
+    let d = b - a;
+    let len2 = d.norm_squared();
+    let t = if len2 > 0.0 {
+        ((p - a).dot(&d) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + d * t)).norm()
+}
+
+/// How two closed segments meet.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SegmentIntersection {
+    /// No common point.
+    None,
+    /// One common point, at parameter `s` on the first segment and `t` on the second.
+    Point {
+        /// Parameter on the first segment, in `[0, 1]`.
+        s: Real,
+        /// Parameter on the second segment, in `[0, 1]`.
+        t: Real,
+    },
+    /// Collinear with a common stretch `[s0, s1]` (parameters on the first segment).
+    Overlap {
+        /// Start of the common stretch on the first segment.
+        s0: Real,
+        /// End of the common stretch on the first segment.
+        s1: Real,
+    },
+}
+
+/// Intersection of closed segments `a b` and `c d`. `tol` is a length: points
+/// closer than `tol` to a line count as on it, so touching and collinear cases are
+/// decided consistently.
+pub fn intersect_segments(
+    a: &Point2,
+    b: &Point2,
+    c: &Point2,
+    d: &Point2,
+    tol: Real,
+) -> SegmentIntersection {
+    let r = b - a;
+    let s = d - c;
+    let len_r = r.norm();
+    let len_s = s.norm();
+    let denom = r.x * s.y - r.y * s.x; // |r||s| sin(angle)
+    let qp = c - a;
+    // Distances of c and d from line ab, and of a and b from line cd.
+    let dist_c = if len_r > 0.0 {
+        (r.x * qp.y - r.y * qp.x) / len_r
+    } else {
+        qp.norm()
+    };
+    let dist_d = if len_r > 0.0 {
+        (r.x * (d.y - a.y) - r.y * (d.x - a.x)) / len_r
+    } else {
+        (d - a).norm()
+    };
+    let parallel = denom.abs() <= tol * (len_r.max(len_s)).max(Real::MIN_POSITIVE) * 1e-6
+        || len_r == 0.0
+        || len_s == 0.0;
+    if parallel || (dist_c.abs() <= tol && dist_d.abs() <= tol) {
+        if dist_c.abs() > tol || dist_d.abs() > tol {
+            return SegmentIntersection::None;
+        }
+        // Collinear (within tol): overlap of the parameter ranges along ab.
+        if len_r == 0.0 {
+            // ab is a point: on cd?
+            return if distance_point_segment(a, c, d) <= tol {
+                SegmentIntersection::Point {
+                    s: 0.0,
+                    t: if len_s > 0.0 {
+                        ((a - c).dot(&s) / (len_s * len_s)).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    },
+                }
+            } else {
+                SegmentIntersection::None
+            };
+        }
+        let tc = (c - a).dot(&r) / (len_r * len_r);
+        let td = (d - a).dot(&r) / (len_r * len_r);
+        let (lo, hi) = if tc <= td { (tc, td) } else { (td, tc) };
+        let eps = tol / len_r;
+        let s0 = lo.max(0.0);
+        let s1 = hi.min(1.0);
+        if s0 > s1 + eps {
+            return SegmentIntersection::None;
+        }
+        if s1 - s0 <= eps {
+            let sm = (0.5 * (s0 + s1)).clamp(0.0, 1.0);
+            let p = a + r * sm;
+            let t = if len_s > 0.0 {
+                ((p - c).dot(&s) / (len_s * len_s)).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            return SegmentIntersection::Point { s: sm, t };
+        }
+        return SegmentIntersection::Overlap { s0, s1 };
+    }
+    let t_ab = (qp.x * s.y - qp.y * s.x) / denom;
+    let t_cd = (qp.x * r.y - qp.y * r.x) / denom;
+    let eps_ab = tol / len_r;
+    let eps_cd = tol / len_s;
+    if t_ab < -eps_ab || t_ab > 1.0 + eps_ab || t_cd < -eps_cd || t_cd > 1.0 + eps_cd {
+        return SegmentIntersection::None;
+    }
+    SegmentIntersection::Point {
+        s: t_ab.clamp(0.0, 1.0),
+        t: t_cd.clamp(0.0, 1.0),
+    }
+}
+
+/// Distance between segments `a b` and `c d` (0 when they meet).
+pub fn distance_segment_segment(a: &Point2, b: &Point2, c: &Point2, d: &Point2) -> Real {
+    if !matches!(
+        intersect_segments(a, b, c, d, 0.0),
+        SegmentIntersection::None
+    ) {
+        return 0.0;
+    }
+    distance_point_segment(a, c, d)
+        .min(distance_point_segment(b, c, d))
+        .min(distance_point_segment(c, a, b))
+        .min(distance_point_segment(d, a, b))
+}
+
+/// `true` when the polygon is simple: at least three vertices, non-zero area, no
+/// repeated vertex, adjacent edges meet only at their shared vertex and
+/// non-adjacent edges do not meet at all (`tol` as in [`intersect_segments`]).
+pub fn is_simple(poly: &[Point2], tol: Real) -> bool {
+    let n = poly.len();
+    if n < 3 || signed_area(poly).abs() <= tol * tol {
+        return false;
+    }
+    for i in 0..n {
+        let a = &poly[i];
+        let b = &poly[(i + 1) % n];
+        if (b - a).norm() <= tol {
+            return false;
+        }
+        for j in (i + 1)..n {
+            let c = &poly[j];
+            let d = &poly[(j + 1) % n];
+            let adjacent_next = j == i + 1;
+            let adjacent_prev = i == 0 && j == n - 1;
+            match intersect_segments(a, b, c, d, tol) {
+                SegmentIntersection::None => {}
+                SegmentIntersection::Overlap { .. } => return false,
+                SegmentIntersection::Point { s, t } => {
+                    // Adjacent edges may only meet at their shared vertex.
+                    let at_shared = (adjacent_next
+                        && s >= 1.0 - tol / (b - a).norm()
+                        && t <= tol / (d - c).norm())
+                        || (adjacent_prev
+                            && s <= tol / (b - a).norm()
+                            && t >= 1.0 - tol / (d - c).norm());
+                    if !at_shared {
+                        return false;
+                    }
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Where a point lies relative to a polygon.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Containment {
+    /// Strictly inside.
+    Inside,
+    /// Within `tol` of the perimeter.
+    Boundary,
+    /// Strictly outside.
+    Outside,
+}
+
+/// Locate `p` relative to the polygon (any orientation), with a boundary band of
+/// width `tol`.
+pub fn locate_point(poly: &[Point2], p: &Point2, tol: Real) -> Containment {
+    let n = poly.len();
+    if n == 0 {
+        return Containment::Outside;
+    }
+    for i in 0..n {
+        if distance_point_segment(p, &poly[i], &poly[(i + 1) % n]) <= tol {
+            return Containment::Boundary;
+        }
+    }
+    // Crossing number with the half-open rule on y.
+    let mut inside = false;
+    for i in 0..n {
+        let a = &poly[i];
+        let b = &poly[(i + 1) % n];
+        if (a.y > p.y) != (b.y > p.y) {
+            let x = a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y);
+            if x > p.x {
+                inside = !inside;
+            }
+        }
+    }
+    if inside {
+        Containment::Inside
+    } else {
+        Containment::Outside
+    }
+}
+
+/// `true` when `p` is inside the polygon or on its boundary (within `tol`).
+pub fn contains_point(poly: &[Point2], p: &Point2, tol: Real) -> bool {
+    locate_point(poly, p, tol) != Containment::Outside
+}
+
+/// Sight test (P§2.4.2): `true` when the segment `a b` does not cross any of the
+/// given edges. Contact at `a` or `b` themselves (within `tol`) is not a crossing,
+/// so perimeter points can sight along their own perimeter; an edge equal to
+/// `a b` is ignored.
+pub fn can_sight<'a>(
+    a: &Point2,
+    b: &Point2,
+    edges: impl IntoIterator<Item = (&'a Point2, &'a Point2)>,
+    tol: Real,
+) -> bool {
+    let len = (b - a).norm();
+    if len <= tol {
+        return true;
+    }
+    let near = tol / len; // parameter band around a and b that does not count
+    for (c, d) in edges {
+        let same = ((c - a).norm() <= tol && (d - b).norm() <= tol)
+            || ((c - b).norm() <= tol && (d - a).norm() <= tol);
+        if same {
+            continue;
+        }
+        match intersect_segments(a, b, c, d, tol) {
+            SegmentIntersection::None => {}
+            SegmentIntersection::Point { s, .. } => {
+                if s > near && s < 1.0 - near {
+                    return false;
+                }
+            }
+            SegmentIntersection::Overlap { s0, s1 } => {
+                if s1 > near && s0 < 1.0 - near {
+                    return false;
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Sight test relative to a closed perimeter (all of its edges).
+pub fn can_sight_in_polygon(a: &Point2, b: &Point2, poly: &[Point2], tol: Real) -> bool {
+    let n = poly.len();
+    can_sight(a, b, (0..n).map(|i| (&poly[i], &poly[(i + 1) % n])), tol)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(x: f64, y: f64) -> Point2 {
+        Point2::new(x, y)
+    }
+
+    fn square() -> Vec<Point2> {
+        vec![p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)]
+    }
+
+    #[test]
+    fn area_and_orientation() {
+        let sq = square();
+        assert!((signed_area(&sq) - 1.0).abs() < 1e-15);
+        assert!(is_anticlockwise(&sq));
+        let mut cw = sq.clone();
+        cw.reverse();
+        assert!((signed_area(&cw) + 1.0).abs() < 1e-15);
+        assert!((perimeter_length(&sq) - 4.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn simplicity() {
+        assert!(is_simple(&square(), 1e-9));
+        // Bow tie.
+        let bow = vec![p(0.0, 0.0), p(1.0, 1.0), p(1.0, 0.0), p(0.0, 1.0)];
+        assert!(!is_simple(&bow, 1e-9));
+        // Vertex touching a non-adjacent edge.
+        let touch = vec![
+            p(0.0, 0.0),
+            p(2.0, 0.0),
+            p(2.0, 2.0),
+            p(1.0, 0.0),
+            p(0.0, 2.0),
+        ];
+        assert!(!is_simple(&touch, 1e-9));
+        // Fold-back spike (adjacent edges overlap).
+        let spike = vec![p(0.0, 0.0), p(2.0, 0.0), p(1.0, 0.0), p(1.0, 1.0)];
+        assert!(!is_simple(&spike, 1e-9));
+        // Concave L is simple.
+        let l = vec![
+            p(0.0, 0.0),
+            p(2.0, 0.0),
+            p(2.0, 1.0),
+            p(1.0, 1.0),
+            p(1.0, 2.0),
+            p(0.0, 2.0),
+        ];
+        assert!(is_simple(&l, 1e-9));
+        assert!(!is_simple(&[p(0.0, 0.0), p(1.0, 0.0)], 1e-9));
+    }
+
+    #[test]
+    fn containment() {
+        let l = vec![
+            p(0.0, 0.0),
+            p(2.0, 0.0),
+            p(2.0, 1.0),
+            p(1.0, 1.0),
+            p(1.0, 2.0),
+            p(0.0, 2.0),
+        ];
+        assert_eq!(locate_point(&l, &p(0.5, 0.5), 1e-9), Containment::Inside);
+        assert_eq!(locate_point(&l, &p(1.5, 1.5), 1e-9), Containment::Outside);
+        assert_eq!(locate_point(&l, &p(1.0, 1.5), 1e-9), Containment::Boundary);
+        assert_eq!(locate_point(&l, &p(1.5, 0.5), 1e-9), Containment::Inside);
+        assert!(contains_point(&l, &p(2.0, 0.0), 1e-9));
+    }
+
+    #[test]
+    fn segment_intersections() {
+        let r = intersect_segments(
+            &p(0.0, 0.0),
+            &p(2.0, 0.0),
+            &p(1.0, -1.0),
+            &p(1.0, 1.0),
+            1e-12,
+        );
+        assert_eq!(r, SegmentIntersection::Point { s: 0.5, t: 0.5 });
+        let r = intersect_segments(
+            &p(0.0, 0.0),
+            &p(2.0, 0.0),
+            &p(1.0, 0.0),
+            &p(3.0, 0.0),
+            1e-12,
+        );
+        assert_eq!(r, SegmentIntersection::Overlap { s0: 0.5, s1: 1.0 });
+        let r = intersect_segments(
+            &p(0.0, 0.0),
+            &p(2.0, 0.0),
+            &p(3.0, 0.0),
+            &p(4.0, 0.0),
+            1e-12,
+        );
+        assert_eq!(r, SegmentIntersection::None);
+        let r = intersect_segments(
+            &p(0.0, 0.0),
+            &p(2.0, 0.0),
+            &p(0.0, 1.0),
+            &p(2.0, 1.0),
+            1e-12,
+        );
+        assert_eq!(r, SegmentIntersection::None);
+        assert!(
+            (distance_segment_segment(&p(0.0, 0.0), &p(2.0, 0.0), &p(3.0, 1.0), &p(3.0, 2.0))
+                - 2f64.sqrt())
+            .abs()
+                < 1e-12
+        );
+        assert_eq!(
+            distance_segment_segment(&p(0.0, 0.0), &p(2.0, 2.0), &p(0.0, 2.0), &p(2.0, 0.0)),
+            0.0
+        );
+    }
+
+    #[test]
+    fn sight() {
+        // L-shape: the re-entrant corner blocks sight across the notch.
+        let l = vec![
+            p(0.0, 0.0),
+            p(2.0, 0.0),
+            p(2.0, 1.0),
+            p(1.0, 1.0),
+            p(1.0, 2.0),
+            p(0.0, 2.0),
+        ];
+        // (2,1)→(1,2) passes outside through the notch but touches no edge except at
+        // its ends: visible *relative to the perimeter* (no crossing).
+        assert!(can_sight_in_polygon(&p(2.0, 1.0), &p(1.0, 2.0), &l, 1e-9));
+        // (2,0.5)→(0.5,2) crosses edges (2,1)-(1,1) and (1,1)-(1,2).
+        assert!(!can_sight_in_polygon(&p(2.0, 0.5), &p(0.5, 2.0), &l, 1e-9));
+        // Consecutive vertices always sight each other.
+        for i in 0..l.len() {
+            assert!(can_sight_in_polygon(&l[i], &l[(i + 1) % l.len()], &l, 1e-9));
+        }
+        // A segment lying along an edge but beyond its ends crosses (overlap).
+        assert!(!can_sight_in_polygon(&p(-1.0, 0.0), &p(0.5, 0.0), &l, 1e-9));
+    }
+}
