@@ -1,0 +1,459 @@
+//! Compiled scenes: a triangle soup with materials and a BVH, answering ray,
+//! nearest-point and collision queries.
+
+use crate::bvh::{Aabb32, Bvh, RayF32};
+use crate::error::SceneError;
+use crate::material::{Material, MaterialId, validate_materials};
+use crate::mesh::TriMesh;
+use geom::{Aabb, Capsule, Point3, Ray, Real, Triangle, UnitVector3, Vector3};
+use rayon::prelude::*;
+use std::ops::{ControlFlow, Range};
+
+/// What a ray met.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Distance along the ray, metres.
+    pub distance: Real,
+    /// The surface point.
+    pub point: Point3,
+    /// Unit surface normal, turned to face the ray's origin.
+    pub normal: UnitVector3,
+    /// Material of the surface, when known.
+    pub material: Option<MaterialId>,
+    /// Index of the scene object, when the world is made of objects.
+    pub object: Option<u32>,
+    /// Index of the triangle (mesh worlds) or point (point-cloud worlds).
+    pub element: u32,
+}
+
+/// Anything a simulated range sensor can measure: one required method, batches
+/// provided (in parallel).
+pub trait RayCast: Sync {
+    /// The first surface along `ray` within `max_range_m`, if any.
+    fn cast_ray(&self, ray: &Ray, max_range_m: Real) -> Option<Hit>;
+
+    /// The material behind a [`Hit::material`] id, when the world has a table.
+    fn material(&self, _id: MaterialId) -> Option<&Material> {
+        None
+    }
+
+    /// [`RayCast::cast_ray`] for many rays, in parallel, results in input order.
+    fn cast_rays(&self, rays: &[Ray], max_range_m: Real) -> Vec<Option<Hit>> {
+        rays.par_iter()
+            .with_min_len(256)
+            .map(|r| self.cast_ray(r, max_range_m))
+            .collect()
+    }
+}
+
+/// One named object of a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneObject {
+    /// Name (unique within the scene).
+    pub name: String,
+    /// Material of all its faces.
+    pub material: MaterialId,
+    /// Its triangles in [`Scene::mesh`].
+    pub triangles: Range<usize>,
+    /// `true` when its mesh is closed (every edge shared by two triangles), so
+    /// "inside" is meaningful.
+    pub closed: bool,
+}
+
+/// A triangle prepared for the ray test: first vertex and two edges, in f32.
+#[derive(Clone, Copy, Debug)]
+struct TriF32 {
+    v0: [f32; 3],
+    e1: [f32; 3],
+    e2: [f32; 3],
+}
+
+impl TriF32 {
+    fn new(t: &Triangle) -> Self {
+        let f = |p: &Point3| [p.x as f32, p.y as f32, p.z as f32];
+        let a = f(&t.a);
+        let b = f(&t.b);
+        let c = f(&t.c);
+        Self {
+            v0: a,
+            e1: [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+            e2: [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+        }
+    }
+
+    /// Möller–Trumbore, both sides, hits in `(0, t_max)`.
+    #[inline]
+    fn hit(&self, o: &[f32; 3], d: &[f32; 3], t_max: f32) -> Option<f32> {
+        let (e1, e2) = (&self.e1, &self.e2);
+        let p = cross(d, e2);
+        let det = dot(e1, &p);
+        if det.abs() < 1e-20 {
+            return None;
+        }
+        let inv = 1.0 / det;
+        let s = [o[0] - self.v0[0], o[1] - self.v0[1], o[2] - self.v0[2]];
+        let u = dot(&s, &p) * inv;
+        if !(0.0..=1.0).contains(&u) {
+            return None;
+        }
+        let q = cross(&s, e1);
+        let v = dot(d, &q) * inv;
+        if v < 0.0 || u + v > 1.0 {
+            return None;
+        }
+        let t = dot(e2, &q) * inv;
+        (t > 0.0 && t < t_max).then_some(t)
+    }
+}
+
+#[inline]
+fn cross(a: &[f32; 3], b: &[f32; 3]) -> [f32; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[inline]
+fn dot(a: &[f32; 3], b: &[f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// A scene of triangle-mesh objects with materials, ready for queries.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    materials: Vec<Material>,
+    objects: Vec<SceneObject>,
+    mesh: TriMesh,
+    tri_object: Vec<u32>,
+    bvh: Bvh,
+    /// Triangles in BVH slot order.
+    tris: Vec<TriF32>,
+}
+
+impl Scene {
+    /// A scene from named meshes (world frame) and a material table.
+    pub fn from_objects(
+        materials: Vec<Material>,
+        objects: Vec<(String, MaterialId, TriMesh)>,
+    ) -> Result<Self, SceneError> {
+        validate_materials(&materials)?;
+        let mut mesh = TriMesh::default();
+        let mut list = Vec::with_capacity(objects.len());
+        let mut tri_object = Vec::new();
+        for (k, (name, material, m)) in objects.into_iter().enumerate() {
+            if usize::from(material.0) >= materials.len() {
+                return Err(SceneError::invalid(
+                    format!("object `{name}`"),
+                    format!(
+                        "material id {} is not in the table of {}",
+                        material.0,
+                        materials.len()
+                    ),
+                ));
+            }
+            if list.iter().any(|o: &SceneObject| o.name == name) {
+                return Err(SceneError::invalid(
+                    format!("object `{name}`"),
+                    "object names must be unique",
+                ));
+            }
+            if m.is_empty() {
+                return Err(SceneError::invalid(
+                    format!("object `{name}`"),
+                    "has no triangles",
+                ));
+            }
+            let start = mesh.triangles.len();
+            let closed = m.boundary_edge_count() == 0;
+            mesh.append(&m);
+            tri_object.extend(std::iter::repeat_n(k as u32, m.len()));
+            list.push(SceneObject {
+                name,
+                material,
+                triangles: start..mesh.triangles.len(),
+                closed,
+            });
+        }
+        if mesh.triangles.len() >= u32::MAX as usize {
+            return Err(SceneError::invalid("scene", "more than 2³² triangles"));
+        }
+        let (bounds, centroids): (Vec<Aabb32>, Vec<[f32; 3]>) = mesh
+            .iter_triangles()
+            .map(|t| {
+                let b = Aabb32::from_f64(&Aabb::from_points([&t.a, &t.b, &t.c]));
+                let c = t.centroid();
+                (b, [c.x as f32, c.y as f32, c.z as f32])
+            })
+            .unzip();
+        let bvh = Bvh::build(&bounds, &centroids);
+        let tris = bvh
+            .prim_indices
+            .iter()
+            .map(|&i| TriF32::new(&mesh.triangle(i as usize)))
+            .collect();
+        Ok(Self {
+            materials,
+            objects: list,
+            mesh,
+            tri_object,
+            bvh,
+            tris,
+        })
+    }
+
+    /// A scene of one mesh with one material.
+    pub fn from_mesh(
+        name: &str,
+        mesh: TriMesh,
+        materials: Vec<Material>,
+        material: MaterialId,
+    ) -> Result<Self, SceneError> {
+        Self::from_objects(materials, vec![(name.to_owned(), material, mesh)])
+    }
+
+    /// The material table.
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// A material by id.
+    pub fn material(&self, id: MaterialId) -> Option<&Material> {
+        self.materials.get(usize::from(id.0))
+    }
+
+    /// The objects.
+    pub fn objects(&self) -> &[SceneObject] {
+        &self.objects
+    }
+
+    /// All triangles, in world coordinates.
+    pub fn mesh(&self) -> &TriMesh {
+        &self.mesh
+    }
+
+    /// The object a triangle belongs to.
+    pub fn triangle_object(&self, face: u32) -> u32 {
+        self.tri_object[face as usize]
+    }
+
+    /// The material of a triangle.
+    pub fn triangle_material(&self, face: u32) -> MaterialId {
+        self.objects[self.tri_object[face as usize] as usize].material
+    }
+
+    /// Bounding box of the whole scene.
+    pub fn bounding_box(&self) -> Aabb {
+        self.mesh.bounding_box()
+    }
+
+    /// The acceleration structure (for checks and statistics).
+    pub fn bvh(&self) -> &Bvh {
+        &self.bvh
+    }
+
+    /// Check the BVH against the triangles.
+    pub fn check_invariants(&self) -> Result<(), String> {
+        let bounds: Vec<Aabb32> = self
+            .mesh
+            .iter_triangles()
+            .map(|t| Aabb32::from_f64(&Aabb::from_points([&t.a, &t.b, &t.c])))
+            .collect();
+        self.bvh.check_invariants(&bounds)
+    }
+
+    /// The raw fast path: distance to the first triangle along a unit direction
+    /// and its index, in single precision. Used by bulk ray casting.
+    #[inline]
+    pub fn first_hit_f32(&self, origin: [f32; 3], dir: [f32; 3], t_max: f32) -> Option<(f32, u32)> {
+        let ray = RayF32::new(origin, dir);
+        self.bvh
+            .closest_hit(&ray, t_max, |slot, best| {
+                self.tris[slot as usize].hit(&ray.origin, &ray.dir, best)
+            })
+            .map(|(slot, t)| (t, self.bvh.prim_indices[slot as usize]))
+    }
+
+    /// Bulk ray casting: `rays` holds six floats per ray (origin, unit direction);
+    /// `out` receives one distance per ray, `+inf` on a miss. Runs on the rayon
+    /// pool of the caller.
+    pub fn cast_rays_f32(&self, rays: &[[f32; 6]], t_max: f32, out: &mut [f32]) {
+        out.par_iter_mut()
+            .zip(rays.par_iter())
+            .with_min_len(1024)
+            .for_each(|(o, r)| {
+                *o = self
+                    .first_hit_f32([r[0], r[1], r[2]], [r[3], r[4], r[5]], t_max)
+                    .map_or(f32::INFINITY, |(t, _)| t);
+            });
+    }
+
+    /// The closest point of the scene's surface to `p` within `max_distance`:
+    /// `(distance, triangle, point)`.
+    pub fn closest_point(&self, p: &Point3, max_distance: Real) -> Option<(Real, u32, Point3)> {
+        let mut best_d = max_distance;
+        let mut best: Option<(u32, Point3)> = None;
+        // Grow the query box as the best distance shrinks: visit leaves within
+        // the current radius, closest-first is not needed for correctness.
+        let mut stack = vec![0usize];
+        let nodes = &self.bvh.nodes;
+        if self.bvh.is_empty() {
+            return None;
+        }
+        while let Some(i) = stack.pop() {
+            let n = &nodes[i];
+            let b = Aabb32 {
+                min: n.min,
+                max: n.max,
+            }
+            .to_f64();
+            if b.distance_squared_to_point(p) > best_d * best_d {
+                continue;
+            }
+            if n.count > 0 {
+                for slot in n.first..n.first + n.count {
+                    let face = self.bvh.prim_indices[slot as usize];
+                    let q = self.mesh.triangle(face as usize).closest_point(p);
+                    let d = (q - p).norm();
+                    if d < best_d {
+                        best_d = d;
+                        best = Some((face, q));
+                    }
+                }
+            } else {
+                // Push the farther child first so the nearer is visited first.
+                let c0 = n.first as usize;
+                let d0 = Aabb32 {
+                    min: nodes[c0].min,
+                    max: nodes[c0].max,
+                }
+                .to_f64()
+                .distance_squared_to_point(p);
+                let d1 = Aabb32 {
+                    min: nodes[c0 + 1].min,
+                    max: nodes[c0 + 1].max,
+                }
+                .to_f64()
+                .distance_squared_to_point(p);
+                if d0 <= d1 {
+                    stack.push(c0 + 1);
+                    stack.push(c0);
+                } else {
+                    stack.push(c0);
+                    stack.push(c0 + 1);
+                }
+            }
+        }
+        best.map(|(f, q)| (best_d, f, q))
+    }
+
+    /// Triangles whose boxes overlap `query` (candidates for exact tests).
+    pub fn triangles_near(&self, query: &Aabb) -> Vec<u32> {
+        let q = Aabb32::from_f64(query);
+        let mut out = Vec::new();
+        let _: Option<()> = self.bvh.query_aabb(&q, |slot| {
+            out.push(self.bvh.prim_indices[slot as usize]);
+            ControlFlow::Continue(())
+        });
+        out
+    }
+
+    /// The first triangle found within `clearance` of the capsule's surface
+    /// (i.e. closer than `radius + clearance` to its axis), with its distance.
+    pub fn capsule_contact(&self, capsule: &Capsule, clearance: Real) -> Option<(u32, Real)> {
+        let q = Aabb32::from_f64(&capsule.bounding_box().loosened(clearance));
+        self.bvh.query_aabb(&q, |slot| {
+            let face = self.bvh.prim_indices[slot as usize];
+            let d = capsule.distance_to_triangle(&self.mesh.triangle(face as usize));
+            if d <= clearance {
+                ControlFlow::Break((face, d))
+            } else {
+                ControlFlow::Continue(())
+            }
+        })
+    }
+
+    /// The first pair (scene triangle, given triangle index) that intersect,
+    /// testing the given triangles (world frame) against the scene.
+    pub fn triangles_contact(&self, triangles: &[Triangle]) -> Option<(u32, usize)> {
+        for (k, t) in triangles.iter().enumerate() {
+            let q = Aabb32::from_f64(&Aabb::from_points([&t.a, &t.b, &t.c]));
+            let found = self.bvh.query_aabb(&q, |slot| {
+                let face = self.bvh.prim_indices[slot as usize];
+                if self.mesh.triangle(face as usize).intersects_triangle(t) {
+                    ControlFlow::Break(face)
+                } else {
+                    ControlFlow::Continue(())
+                }
+            });
+            if let Some(face) = found {
+                return Some((face, k));
+            }
+        }
+        None
+    }
+
+    /// `true` when `p` lies inside a closed object (other than `except`): the
+    /// first surface of a closed object met along a fixed direction is seen from
+    /// its back. Triangles of `except` and of open objects are ignored, so a
+    /// face flush against another object's face resolves to the other object.
+    pub fn is_inside_closed_object(&self, p: &Point3, except: Option<u32>) -> bool {
+        // A direction off every axis avoids grazing axis-aligned edges.
+        let dir = Vector3::new(0.267_261_241_9, 0.534_522_483_8, 0.801_783_725_7);
+        let ray = RayF32::new(
+            [p.x as f32, p.y as f32, p.z as f32],
+            [dir.x as f32, dir.y as f32, dir.z as f32],
+        );
+        let hit = self.bvh.closest_hit(&ray, f32::INFINITY, |slot, best| {
+            let face = self.bvh.prim_indices[slot as usize];
+            let obj = self.tri_object[face as usize];
+            if Some(obj) == except || !self.objects[obj as usize].closed {
+                return None;
+            }
+            self.tris[slot as usize].hit(&ray.origin, &ray.dir, best)
+        });
+        hit.is_some_and(|(slot, _)| {
+            let face = self.bvh.prim_indices[slot as usize];
+            self.mesh
+                .triangle(face as usize)
+                .normal()
+                .is_some_and(|n| n.dot(&dir) > 0.0)
+        })
+    }
+}
+
+impl RayCast for Scene {
+    fn material(&self, id: MaterialId) -> Option<&Material> {
+        Scene::material(self, id)
+    }
+
+    fn cast_ray(&self, ray: &Ray, max_range_m: Real) -> Option<Hit> {
+        let o = [
+            ray.origin.x as f32,
+            ray.origin.y as f32,
+            ray.origin.z as f32,
+        ];
+        let d = [ray.dir.x as f32, ray.dir.y as f32, ray.dir.z as f32];
+        let (t32, face) = self.first_hit_f32(o, d, max_range_m as f32)?;
+        let tri = self.mesh.triangle(face as usize);
+        // Refine the distance in double precision on the hit triangle.
+        let t = tri
+            .ray_hit(ray, max_range_m * (1.0 + 1e-6))
+            .unwrap_or(Real::from(t32));
+        if t > max_range_m {
+            return None;
+        }
+        let n = tri.normal().unwrap_or(-ray.dir);
+        let normal = if n.dot(&ray.dir) > 0.0 { -n } else { n };
+        let object = self.tri_object[face as usize];
+        Some(Hit {
+            distance: t,
+            point: ray.point_at(t),
+            normal,
+            material: Some(self.objects[object as usize].material),
+            object: Some(object),
+            element: face,
+        })
+    }
+}
