@@ -1,0 +1,35 @@
+#![doc = include_str!("../README.md")]
+//!
+//! # Map of the crate
+//!
+//! | module | entry points |
+//! |---|---|
+//! | [`model`] | [`Robot`], [`Link`], [`Joint`], [`JointKind`], [`JointLimits`], [`CollisionShape`], [`LinkMesh`], [`RangeFinderMount`], [`ScannerMount`], [`PosedShape`]; [`Robot::fk_into`], [`Robot::jacobian_into`], [`Robot::min_algebraic_distance`] |
+//! | [`dh`] | [`DhRow`], [`Robot::from_dh`] (standard DH, Corke convention; Paul Table C.1) |
+//! | [`urdf`] | [`Robot::from_urdf_file`], [`Robot::from_urdf_str`] |
+//! | [`mod@builtin`] | [`builtin()`], [`builtin_names`]: `denso-vm6083`, `point3`, `arm4` |
+//! | [`linalg`] | [`pseudo_inverse`], [`damped_pseudo_inverse`], [`null_space_projector`] (Pudney eq. 3, P§3.3) |
+//! | [`bounds`] | [`bounds::enclosing_capsule`], [`bounds::enclosing_ellipsoid`] (Khachiyan MVEE; A§3.2.1.4) |
+//! | [`mesh`] | OBJ/STL loading and primitive meshes for [`LinkMesh`] |
+//! | [`error`] | [`RobotError`] |
+//!
+//! Frames are named `a_from_b` (SPEC §2): [`Robot::forward_kinematics`] returns
+//! `base_from_link` for every link, so `p_base = base_from_link[i] * p_link`.
+
+pub mod bounds;
+pub mod builtin;
+pub mod dh;
+pub mod error;
+pub mod linalg;
+pub mod mesh;
+pub mod model;
+pub mod urdf;
+
+pub use builtin::{builtin, builtin_names};
+pub use dh::DhRow;
+pub use error::RobotError;
+pub use linalg::{damped_pseudo_inverse, null_space_projector, pseudo_inverse};
+pub use model::{
+    CollisionShape, Joint, JointKind, JointLimits, Link, LinkMesh, PosedShape, RangeFinderMount,
+    Robot, ScannerMount,
+};
