@@ -1,0 +1,35 @@
+#![doc = include_str!("../README.md")]
+//!
+//! # Map of the crate
+//!
+//! | module | entry points |
+//! |---|---|
+//! | [`range_finder`] | [`RangeFinder`], [`SensorPoint`] |
+//! | [`scanner`] | [`Scanner`], [`ScannerConfig`], [`Scan`], [`ScanReturn`], [`RangeNoise`] |
+//! | [`reflection`] | [`reflection::ReflectionModel`]: intensity and range bias versus incidence |
+//! | [`sweep`] | [`SweepConfig`]: the tilt angles of a 3-D sweep |
+
+pub mod range_finder;
+pub mod reflection;
+pub mod scanner;
+pub mod sweep;
+
+pub use range_finder::{RangeFinder, SensorPoint};
+pub use reflection::ReflectionModel;
+pub use scanner::{RangeNoise, Scan, ScanReturn, Scanner, ScannerConfig};
+pub use sweep::SweepConfig;
+
+/// Errors of sensor configuration.
+#[derive(Debug, thiserror::Error)]
+pub enum SensorError {
+    /// A configuration field is out of its valid range.
+    #[error("sensor config `{field}`: expected {expected}, got {got}")]
+    Config {
+        /// The field.
+        field: &'static str,
+        /// What is accepted.
+        expected: &'static str,
+        /// What was given.
+        got: String,
+    },
+}

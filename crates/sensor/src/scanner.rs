@@ -1,0 +1,283 @@
+//! The Hokuyo URG-04LX 2-D laser scanner (Paul Table C.2, eq. 4.7 / 5.1).
+//!
+//! Scanner frame (A eq. 3.10): `z` is the centre ray, `y` the ±90° ray, `x` the
+//! normal of the scan plane. Ray `i` at bearing `θ_i` has direction
+//! `(0, −sin θ_i, cos θ_i)`, so a return at range `r_i` is the point
+//! `[0, −r_i sin θ_i, r_i cos θ_i]` of A eq. 4.7.
+
+use crate::SensorError;
+use crate::reflection::ReflectionModel;
+use geom::{Isometry3, Point3, Ray, Real, UnitVector3, Vector3};
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+use scene::{Material, MaterialId, RayCast, default_materials};
+use serde::{Deserialize, Serialize};
+
+/// Range noise: σ = `sigma_near_m` up to `near_limit_m`, then
+/// `relative_far × range` (Table C.2: 10 mm to 1 m, 1 % to 4 m).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RangeNoise {
+    /// Add noise at all.
+    pub enabled: bool,
+    /// σ below `near_limit_m`, metres.
+    pub sigma_near_m: Real,
+    /// Where the relative regime starts, metres.
+    pub near_limit_m: Real,
+    /// σ as a fraction of the range beyond `near_limit_m`.
+    pub relative_far: Real,
+}
+
+impl Default for RangeNoise {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            sigma_near_m: 0.010,
+            near_limit_m: 1.0,
+            relative_far: 0.01,
+        }
+    }
+}
+
+impl RangeNoise {
+    /// σ at a range (0 when disabled).
+    pub fn sigma_m(&self, range_m: Real) -> Real {
+        if !self.enabled {
+            0.0
+        } else if range_m <= self.near_limit_m {
+            self.sigma_near_m
+        } else {
+            self.relative_far * range_m
+        }
+    }
+}
+
+/// Configuration of the scanner.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ScannerConfig {
+    /// Angle between rays, degrees (0.36° for the URG-04LX).
+    pub angular_step_deg: Real,
+    /// Half of the usable field, degrees; at most 120. The default, 61.38°, gives
+    /// the thesis' 342 rays per scan.
+    pub half_fov_deg: Real,
+    /// Shortest range reported, metres.
+    pub min_range_m: Real,
+    /// Longest range reported, metres.
+    pub max_range_m: Real,
+    /// Range noise.
+    pub noise: RangeNoise,
+    /// Intensity and range-bias model.
+    pub reflection: ReflectionModel,
+    /// Apply the material-dependent range bias of the reflection model.
+    pub material_range_bias: bool,
+}
+
+impl Default for ScannerConfig {
+    fn default() -> Self {
+        Self {
+            angular_step_deg: 0.36,
+            half_fov_deg: 61.38,
+            min_range_m: 0.02,
+            max_range_m: 4.0,
+            noise: RangeNoise::default(),
+            reflection: ReflectionModel::default(),
+            material_range_bias: true,
+        }
+    }
+}
+
+impl ScannerConfig {
+    /// The full ±120° field (667 rays, ±119.88°).
+    pub fn full_field() -> Self {
+        Self {
+            half_fov_deg: 120.0,
+            ..Self::default()
+        }
+    }
+
+    /// Check the fields.
+    pub fn validate(&self) -> Result<(), SensorError> {
+        let check = |ok: bool, field, expected, v: Real| {
+            if ok {
+                Ok(())
+            } else {
+                Err(SensorError::Config {
+                    field,
+                    expected,
+                    got: v.to_string(),
+                })
+            }
+        };
+        check(
+            self.angular_step_deg.is_finite() && self.angular_step_deg > 0.0,
+            "angular_step_deg",
+            "a positive angle",
+            self.angular_step_deg,
+        )?;
+        check(
+            self.half_fov_deg.is_finite() && (0.0..=120.0).contains(&self.half_fov_deg),
+            "half_fov_deg",
+            "an angle in [0, 120]",
+            self.half_fov_deg,
+        )?;
+        check(
+            self.min_range_m.is_finite() && self.min_range_m >= 0.0,
+            "min_range_m",
+            "a non-negative distance",
+            self.min_range_m,
+        )?;
+        check(
+            self.max_range_m.is_finite() && self.max_range_m > self.min_range_m,
+            "max_range_m",
+            "a distance greater than min_range_m",
+            self.max_range_m,
+        )
+    }
+
+    /// Ray bearings `θ_i`, radians, symmetric about 0 and inside the field:
+    /// `n = ⌊2h/step⌋ + 1` rays.
+    pub fn bearings_rad(&self) -> Vec<Real> {
+        let steps = (2.0 * self.half_fov_deg / self.angular_step_deg + 1e-9).floor() as usize;
+        let start = -(steps as Real) * 0.5 * self.angular_step_deg;
+        (0..=steps)
+            .map(|i| (start + i as Real * self.angular_step_deg).to_radians())
+            .collect()
+    }
+}
+
+/// One return of a scan.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScanReturn {
+    /// Measured range (with noise and bias), metres.
+    pub range_m: Real,
+    /// Measured point in the world frame (`world_from_scanner · [0, −r sin θ, r cos θ]`).
+    pub point: Point3,
+    /// Return intensity.
+    pub intensity: Real,
+    /// Ground truth for simulation and metrics: the range without noise.
+    pub true_range_m: Real,
+    /// Ground truth: angle of incidence on the surface, radians.
+    pub incidence_rad: Real,
+    /// Ground truth: material of the surface hit, when the world knows it.
+    pub material: Option<MaterialId>,
+}
+
+/// One scan: the scanner pose and one slot per bearing (`None`: no return).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scan {
+    /// Where the scanner was.
+    pub world_from_scanner: Isometry3,
+    /// Returns in bearing order.
+    pub returns: Vec<Option<ScanReturn>>,
+}
+
+/// A URG-04LX model ready to scan.
+#[derive(Clone, Debug)]
+pub struct Scanner {
+    config: ScannerConfig,
+    bearings: Vec<Real>,
+    dirs: Vec<UnitVector3>,
+    fallback_material: Material,
+}
+
+impl Scanner {
+    /// A scanner with a validated configuration.
+    pub fn new(config: ScannerConfig) -> Result<Self, SensorError> {
+        config.validate()?;
+        let bearings = config.bearings_rad();
+        let dirs = bearings
+            .iter()
+            .map(|t| UnitVector3::new_unchecked(Vector3::new(0.0, -t.sin(), t.cos())))
+            .collect();
+        let fallback_material = default_materials()
+            .into_iter()
+            .next()
+            .unwrap_or_else(|| Material::new("painted_metal", 0.5, 0.35));
+        Ok(Self {
+            config,
+            bearings,
+            dirs,
+            fallback_material,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &ScannerConfig {
+        &self.config
+    }
+
+    /// Ray bearings, radians.
+    pub fn bearings_rad(&self) -> &[Real] {
+        &self.bearings
+    }
+
+    /// Rays per scan.
+    pub fn ray_count(&self) -> usize {
+        self.bearings.len()
+    }
+
+    /// The scan's rays in the world frame.
+    pub fn rays(&self, world_from_scanner: &Isometry3) -> Vec<Ray> {
+        let origin = Point3::from(world_from_scanner.translation.vector);
+        self.dirs
+            .iter()
+            .map(|d| Ray::new(origin, world_from_scanner.rotation * *d))
+            .collect()
+    }
+
+    /// Scan the world from a pose. Rays are cast in parallel; noise is drawn
+    /// from `rng` in bearing order, so a seed fixes the result.
+    pub fn scan<W: RayCast + ?Sized, R: Rng + ?Sized>(
+        &self,
+        world: &W,
+        world_from_scanner: &Isometry3,
+        rng: &mut R,
+    ) -> Scan {
+        let rays = self.rays(world_from_scanner);
+        let hits = world.cast_rays(&rays, self.config.max_range_m);
+        let model = &self.config.reflection;
+        let returns = rays
+            .iter()
+            .zip(hits)
+            .map(|(ray, hit)| {
+                // Draw both numbers for every ray so a miss does not shift the
+                // noise of the rays after it.
+                let n_range: Real = StandardNormal.sample(rng);
+                let n_int: Real = StandardNormal.sample(rng);
+                let hit = hit?;
+                if hit.distance < self.config.min_range_m {
+                    return None;
+                }
+                let material = hit
+                    .material
+                    .and_then(|id| world.material(id))
+                    .unwrap_or(&self.fallback_material);
+                let incidence = hit.normal.dot(&-ray.dir).clamp(-1.0, 1.0).acos();
+                let bias = if self.config.material_range_bias {
+                    model.range_bias_m(material, incidence)
+                } else {
+                    0.0
+                };
+                let range = hit.distance + bias + self.config.noise.sigma_m(hit.distance) * n_range;
+                if !(self.config.min_range_m..=self.config.max_range_m).contains(&range) {
+                    return None;
+                }
+                let expected = model.intensity(material, incidence, hit.distance);
+                let intensity = (expected * (1.0 + model.intensity_noise_rel * n_int)).max(0.0);
+                Some(ScanReturn {
+                    range_m: range,
+                    point: ray.point_at(range),
+                    intensity,
+                    true_range_m: hit.distance,
+                    incidence_rad: incidence,
+                    material: hit.material,
+                })
+            })
+            .collect();
+        Scan {
+            world_from_scanner: *world_from_scanner,
+            returns,
+        }
+    }
+}
