@@ -1,0 +1,72 @@
+#![doc = include_str!("../README.md")]
+//!
+//! # Map of the crate
+//!
+//! | module | entry points |
+//! |---|---|
+//! | [`scenario`] | [`Scenario`] (TOML), [`scenario::builtin_scenario`], [`LoadedScenario`] |
+//! | [`rig`] | the hardware traits [`Arm`], [`LineScanner`], [`RangeSensors`]; [`SimRig`] |
+//! | [`sweep`] | [`tilt_sweep`]: nod the scanner, points on the (scan, ray) grid |
+//! | [`metrics`] | [`metrics::coverage`], [`metrics::accuracy`] against the ground truth |
+//! | [`safety`] | [`safety::robot_contacts`]: the robot's link shapes against the scene |
+//! | [`scan_job`] | the `surveyor scan` job as library calls |
+
+pub mod metrics;
+pub mod rig;
+pub mod safety;
+pub mod scan_job;
+pub mod scenario;
+pub mod sweep;
+
+pub use rig::{Arm, LineScanner, RangeSensors, ScanReadings, SimRig};
+pub use scenario::{LoadedScenario, Scenario};
+pub use sweep::{Sweep, SweepPoint, tilt_sweep};
+
+use geom::Real;
+
+/// What can go wrong running a scenario.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// A scenario file or field is invalid.
+    #[error("scenario {source_name}: {message}")]
+    Scenario {
+        /// The file or scenario name.
+        source_name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The robot model rejected something.
+    #[error(transparent)]
+    Robot(#[from] robot::RobotError),
+    /// The scene could not be built or loaded.
+    #[error(transparent)]
+    Scene(#[from] scene::SceneError),
+    /// A sensor configuration is invalid.
+    #[error(transparent)]
+    Sensor(#[from] sensor::SensorError),
+    /// A scan was requested from a robot without a scanner.
+    #[error("the robot carries no scanner")]
+    NoScanner,
+    /// The sweep's tilt joint does not exist.
+    #[error("tilt joint {joint} does not exist: the robot has {dof} joints")]
+    TiltJoint {
+        /// 1-based joint number asked for.
+        joint: usize,
+        /// Joints the robot has.
+        dof: usize,
+    },
+    /// A commanded pose is outside the joint limits.
+    #[error("joint values {joints:?} are outside the joint limits")]
+    JointLimits {
+        /// The pose.
+        joints: Vec<Real>,
+    },
+    /// A scanner returned a scan of the wrong length.
+    #[error("the scanner returned {got} readings, expected {expected}")]
+    ScanLength {
+        /// Rays per scan.
+        expected: usize,
+        /// Readings received.
+        got: usize,
+    },
+}

@@ -1,0 +1,175 @@
+//! Hardware behind traits, and their simulated implementations.
+//!
+//! The algorithms talk to a robot through [`Arm`] (report joints, move) and to
+//! sensors through [`LineScanner`] (a 2-D laser scan at the current pose) and
+//! [`RangeSensors`] (single-point range finders). A driver for a real robot
+//! implements the same traits; [`SimRig`] implements them against a
+//! ground-truth [`World`], so nothing above this module knows which it has.
+
+use crate::SimError;
+use geom::{Isometry3, Real};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use robot::Robot;
+use scene::{MaterialId, World};
+use sensor::{RangeFinder, Scanner, SensorPoint};
+use std::sync::Arc;
+
+/// A robot that reports its joints and moves.
+pub trait Arm {
+    /// Current joint values (radians / metres).
+    fn joints(&self) -> Vec<Real>;
+    /// Move to `q` and wait until there; errors leave the arm where it was.
+    fn move_to(&mut self, q: &[Real]) -> Result<(), SimError>;
+}
+
+/// One 2-D scan as a scanner reports it, in bearing order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScanReadings {
+    /// Range per bearing, `None` without a return.
+    pub ranges_m: Vec<Option<Real>>,
+    /// Intensity per bearing (0 without a return).
+    pub intensities: Vec<Real>,
+    /// Ground truth a simulator can add: the material hit per bearing.
+    pub truth_materials: Option<Vec<Option<MaterialId>>>,
+}
+
+/// A 2-D line scanner taking a scan at the robot's current pose.
+pub trait LineScanner {
+    /// Bearing of every slot, radians (scanner frame, A eq. 4.7).
+    fn bearings_rad(&self) -> &[Real];
+    /// Take one scan.
+    fn scan(&mut self) -> Result<ScanReadings, SimError>;
+}
+
+/// Single-point range finders mounted on the robot.
+pub trait RangeSensors {
+    /// One reading per mounted sensor at the current pose (`None`: nothing in range).
+    fn read_all(&mut self) -> Result<Vec<Option<SensorPoint>>, SimError>;
+}
+
+/// A simulated robot with its sensors in a ground-truth world.
+#[derive(Clone, Debug)]
+pub struct SimRig {
+    robot: Robot,
+    world: Arc<World>,
+    world_from_base: Isometry3,
+    q: Vec<Real>,
+    scanner: Option<Scanner>,
+    rng: ChaCha8Rng,
+    frames: Vec<Isometry3>,
+}
+
+impl SimRig {
+    /// A rig at joint values `q`. `seed` drives all sensor noise.
+    pub fn new(
+        robot: Robot,
+        world: Arc<World>,
+        world_from_base: Isometry3,
+        q: &[Real],
+        scanner: Option<Scanner>,
+        seed: u64,
+    ) -> Result<Self, SimError> {
+        let frames = robot.forward_kinematics(q)?;
+        Ok(Self {
+            robot,
+            world,
+            world_from_base,
+            q: q.to_vec(),
+            scanner,
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            frames,
+        })
+    }
+
+    /// The robot model.
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+
+    /// The world.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// Where the base stands.
+    pub fn world_from_base(&self) -> Isometry3 {
+        self.world_from_base
+    }
+
+    /// `world_from_link` of every link at the current pose.
+    pub fn world_frames(&self) -> Vec<Isometry3> {
+        self.frames
+            .iter()
+            .map(|f| self.world_from_base * f)
+            .collect()
+    }
+
+    /// The scanner pose in the world at the current joints.
+    pub fn world_from_scanner(&self) -> Result<Isometry3, SimError> {
+        let mount = self.robot.scanner.as_ref().ok_or(SimError::NoScanner)?;
+        Ok(self.world_from_base * self.frames[mount.link] * mount.link_from_scanner)
+    }
+}
+
+impl Arm for SimRig {
+    fn joints(&self) -> Vec<Real> {
+        self.q.clone()
+    }
+
+    fn move_to(&mut self, q: &[Real]) -> Result<(), SimError> {
+        self.robot.check_joints(q)?;
+        if !self.robot.within_limits(q) {
+            return Err(SimError::JointLimits { joints: q.to_vec() });
+        }
+        self.robot.fk_into(q, &mut self.frames)?;
+        self.q.clear();
+        self.q.extend_from_slice(q);
+        Ok(())
+    }
+}
+
+impl LineScanner for SimRig {
+    fn bearings_rad(&self) -> &[Real] {
+        self.scanner.as_ref().map_or(&[], |s| s.bearings_rad())
+    }
+
+    fn scan(&mut self) -> Result<ScanReadings, SimError> {
+        let pose = self.world_from_scanner()?;
+        let scanner = self.scanner.as_ref().ok_or(SimError::NoScanner)?;
+        let scan = scanner.scan(self.world.as_ref(), &pose, &mut self.rng);
+        Ok(ScanReadings {
+            ranges_m: scan.returns.iter().map(|r| r.map(|r| r.range_m)).collect(),
+            intensities: scan
+                .returns
+                .iter()
+                .map(|r| r.map_or(0.0, |r| r.intensity))
+                .collect(),
+            truth_materials: Some(
+                scan.returns
+                    .iter()
+                    .map(|r| r.and_then(|r| r.material))
+                    .collect(),
+            ),
+        })
+    }
+}
+
+impl RangeSensors for SimRig {
+    fn read_all(&mut self) -> Result<Vec<Option<SensorPoint>>, SimError> {
+        let mounts = self.robot.range_finders.clone();
+        Ok(mounts
+            .iter()
+            .map(|m| {
+                let rf = RangeFinder {
+                    origin: m.origin,
+                    axis: m.axis,
+                    max_range_m: m.max_range_m,
+                    noise_sigma_m: 0.0,
+                };
+                let world_from_link = self.world_from_base * self.frames[m.link];
+                rf.measure(self.world.as_ref(), &world_from_link, &mut self.rng)
+            })
+            .collect())
+    }
+}

@@ -1,0 +1,370 @@
+//! Scenarios: a robot, its sensors, a ground-truth scene and the parameters of
+//! every stage, as one TOML file (SPEC §5). Every built-in is printable as such a
+//! file (`surveyor scenario show NAME`), which is the documented way to make a
+//! new scene: print one, edit it, pass the file.
+
+use crate::SimError;
+use geom::{Aabb, Isometry3, Point3, Real};
+use robot::{Robot, ScannerMount};
+use scene::{PoseSpec, SamplingConfig, SceneSpec, World, builtin};
+use sensor::{ScannerConfig, SweepConfig};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// A complete scenario.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Short name.
+    pub name: String,
+    /// One line saying what it is.
+    #[serde(default)]
+    pub description: String,
+    /// The robot and where it starts.
+    pub robot: RobotSpec,
+    /// The tilting laser scanner and its sweep (AXBAM scenarios).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scanner: Option<ScannerSpec>,
+    /// Regions of interest A1 ⊂ A2 ⊂ A3 (A§4.2.1), when the method uses them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub regions: Option<Regions>,
+    /// A-priori planar polygons for the surface model (P§4.3), vertices in the
+    /// world frame, anticlockwise about the outward normal.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub initial_segments: Vec<Vec<[Real; 3]>>,
+    /// How results are scored against the ground truth.
+    #[serde(default)]
+    pub metrics: MetricsConfig,
+    /// The ground truth.
+    pub scene: SceneSpec,
+}
+
+/// Which robot, where, and in which pose it starts.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    /// A built-in robot (`denso-vm6083`, `point3`, `arm4`), or
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preset: Option<String>,
+    /// a URDF file (path relative to the scenario file).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub urdf: Option<PathBuf>,
+    /// For a URDF: the link to use as the tool (default: the chain's leaf).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tip: Option<String>,
+    /// Where the robot base stands in the world (`world_from_base`).
+    #[serde(default)]
+    pub base_pose: PoseSpec,
+    /// Start joint values, radians (metres for prismatic joints).
+    pub start_joints: Vec<Real>,
+}
+
+/// The tilting scanner of an AXBAM scenario.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct ScannerSpec {
+    /// The scanner model.
+    #[serde(default)]
+    pub config: ScannerConfig,
+    /// The sweep.
+    #[serde(default)]
+    pub sweep: SweepConfig,
+    /// Scanner placement on the robot's tool link (`tool_from_scanner`); the
+    /// built-in VM-6083 carries its own, URDF robots need one (default: the tool frame).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mount: Option<PoseSpec>,
+}
+
+/// An axis-aligned region.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegionBox {
+    /// Lowest corner, world frame.
+    pub min: [Real; 3],
+    /// Highest corner, world frame.
+    pub max: [Real; 3],
+}
+
+impl RegionBox {
+    /// As a box.
+    pub fn aabb(&self) -> Aabb {
+        Aabb::new(Point3::from(self.min), Point3::from(self.max))
+    }
+
+    /// A cube of half-size `h` around `c`.
+    pub fn around(c: [Real; 3], h: Real) -> Self {
+        Self {
+            min: [c[0] - h, c[1] - h, c[2] - h],
+            max: [c[0] + h, c[1] + h, c[2] + h],
+        }
+    }
+}
+
+/// Regions of interest A1 ⊂ A2 ⊂ A3 (A§4.2.1): the arm's workspace, its reach
+/// plus the tool range, and the surroundings a tool could damage.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Regions {
+    /// A1: the manipulator's workspace.
+    pub a1: RegionBox,
+    /// A2: reachable by the tool.
+    pub a2: RegionBox,
+    /// A3: could be affected by the work.
+    pub a3: RegionBox,
+}
+
+/// How results are scored (SPEC §6).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MetricsConfig {
+    /// A true-surface sample counts as covered when a measured point lies within
+    /// this distance, metres.
+    pub covered_within_m: Real,
+    /// Ground-truth sampling (density, seed, exposed faces only). Its `region`,
+    /// when unset, defaults to the scenario's A2 region.
+    pub sampling: SamplingConfig,
+}
+
+impl Default for MetricsConfig {
+    fn default() -> Self {
+        Self {
+            covered_within_m: 0.010,
+            sampling: SamplingConfig::default(),
+        }
+    }
+}
+
+/// Names of the built-in scenarios.
+pub const BUILTIN_NAMES: [&str; 7] = builtin::NAMES;
+
+fn deg(v: [Real; 6]) -> Vec<Real> {
+    v.iter().map(|d| d.to_radians()).collect()
+}
+
+/// A built-in scenario by name.
+pub fn builtin_scenario(name: &str) -> Option<Scenario> {
+    let scene = builtin::scene(name)?;
+    let (description, robot, scanner, regions, initial, sampling_region) = match name {
+        "bridge1" | "bridge2" | "bridge3" => {
+            // Regions centred on the first joint's shoulder height (d1), sized by
+            // the VM-6083's reach (~1.1 m) and the 0.5 m grit-blast stream.
+            let c = [0.0, 0.0, 0.475];
+            let regions = Regions {
+                a1: RegionBox::around(c, 1.1),
+                a2: RegionBox::around(c, 1.6),
+                a3: RegionBox::around(c, 2.1),
+            };
+            let description = match name {
+                "bridge1" => {
+                    "steel bridge channel: two I-beams, timber deck, plate, sheet, scaffold, hose (A§6.3)"
+                }
+                "bridge2" => "bridge1 plus a timber crossbeam behind the robot (A§6.4)",
+                _ => "bridge2 plus a front crossbeam and a hanging timber lattice (A§6.5)",
+            };
+            (
+                description,
+                RobotSpec {
+                    preset: Some("denso-vm6083".into()),
+                    urdf: None,
+                    tip: None,
+                    base_pose: PoseSpec::default(),
+                    start_joints: deg([0.0, -55.0, 165.0, 0.0, -110.0, 0.0]),
+                },
+                Some(ScannerSpec::default()),
+                Some(regions),
+                Vec::new(),
+                Some(regions.a2.aabb()),
+            )
+        }
+        _ => {
+            // Surface following (P§4.3): point robot 0.1 above the top face's
+            // centre, the table z = 0 as an initial segment.
+            let (top, description) = match name {
+                "cube" => (
+                    [0.0, 0.0, 1.0],
+                    "Pudney's Cube: 1 m cube on a table (P§4.3, Fig. 41)",
+                ),
+                "block1" => (
+                    [-0.3, 0.0, 0.8],
+                    "Pudney's Block1: L-shaped block (P Fig. 42)",
+                ),
+                "block2" => (
+                    [0.025, 0.0, 0.6],
+                    "Pudney's Block2: block with two chamfered edges (P Fig. 43)",
+                ),
+                _ => (
+                    [0.0, 0.0, 0.8],
+                    "Pudney's curved surface: a cylinder (P Fig. 50–51)",
+                ),
+            };
+            let table = vec![
+                [-2.0, -2.0, 0.0],
+                [2.0, -2.0, 0.0],
+                [2.0, 2.0, 0.0],
+                [-2.0, 2.0, 0.0],
+            ];
+            (
+                description,
+                RobotSpec {
+                    preset: Some("point3".into()),
+                    urdf: None,
+                    tip: None,
+                    base_pose: PoseSpec::default(),
+                    start_joints: vec![top[0], top[1], top[2] + 0.1],
+                },
+                None,
+                None,
+                vec![table],
+                None,
+            )
+        }
+    };
+    let metrics = MetricsConfig {
+        sampling: SamplingConfig {
+            region: sampling_region,
+            ..SamplingConfig::default()
+        },
+        ..MetricsConfig::default()
+    };
+    Some(Scenario {
+        name: name.to_owned(),
+        description: description.to_owned(),
+        robot,
+        scanner,
+        regions,
+        initial_segments: initial,
+        metrics,
+        scene,
+    })
+}
+
+/// A scenario and the folder its relative paths are resolved against.
+#[derive(Clone, Debug)]
+pub struct LoadedScenario {
+    /// The scenario.
+    pub scenario: Scenario,
+    /// Folder of the file (the working directory for built-ins).
+    pub base_dir: PathBuf,
+}
+
+impl Scenario {
+    /// Parse a scenario from TOML text; `source` names the file in errors.
+    pub fn from_toml(text: &str, source: &str) -> Result<Self, SimError> {
+        toml::from_str(text).map_err(|e| SimError::Scenario {
+            source_name: source.to_owned(),
+            message: e.to_string(),
+        })
+    }
+
+    /// The scenario as TOML.
+    pub fn to_toml(&self) -> Result<String, SimError> {
+        toml::to_string(self).map_err(|e| SimError::Scenario {
+            source_name: self.name.clone(),
+            message: e.to_string(),
+        })
+    }
+
+    /// A built-in by name or a scenario file by path.
+    pub fn load(name_or_file: &str) -> Result<LoadedScenario, SimError> {
+        if let Some(s) = builtin_scenario(name_or_file) {
+            return Ok(LoadedScenario {
+                scenario: s,
+                base_dir: PathBuf::from("."),
+            });
+        }
+        let path = Path::new(name_or_file);
+        if !path.exists() {
+            return Err(SimError::Scenario {
+                source_name: name_or_file.to_owned(),
+                message: format!(
+                    "no such built-in scenario or file (built-ins: {})",
+                    BUILTIN_NAMES.join(", ")
+                ),
+            });
+        }
+        let text = std::fs::read_to_string(path).map_err(|e| SimError::Scenario {
+            source_name: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        let scenario = Self::from_toml(&text, &path.display().to_string())?;
+        Ok(LoadedScenario {
+            scenario,
+            base_dir: path
+                .parent()
+                .map_or_else(|| PathBuf::from("."), Path::to_path_buf),
+        })
+    }
+
+    /// `world_from_base`.
+    pub fn world_from_base(&self) -> Isometry3 {
+        self.robot.base_pose.isometry()
+    }
+}
+
+impl LoadedScenario {
+    /// Build the ground-truth world.
+    pub fn build_world(&self) -> Result<World, SimError> {
+        Ok(self.scenario.scene.build(&self.base_dir)?)
+    }
+
+    /// Build the robot, with the scanner mounted when the scenario has one, and
+    /// check the start pose against it.
+    pub fn build_robot(&self) -> Result<Robot, SimError> {
+        let spec = &self.scenario.robot;
+        let mut robot = build_robot(
+            spec.preset.as_deref(),
+            spec.urdf
+                .as_deref()
+                .map(|p| self.base_dir.join(p))
+                .as_deref(),
+            spec.tip.as_deref(),
+        )?;
+        if let Some(scanner) = &self.scenario.scanner {
+            mount_scanner(&mut robot, scanner.mount.as_ref());
+        }
+        robot
+            .check_joints(&spec.start_joints)
+            .map_err(|e| SimError::Scenario {
+                source_name: self.scenario.name.clone(),
+                message: format!("robot.start_joints: {e}"),
+            })?;
+        Ok(robot)
+    }
+}
+
+/// A robot from a preset name or a URDF file (exactly one of them).
+pub fn build_robot(
+    preset: Option<&str>,
+    urdf: Option<&Path>,
+    tip: Option<&str>,
+) -> Result<Robot, SimError> {
+    match (preset, urdf) {
+        (Some(name), None) => Ok(robot::builtin(name)?),
+        (None, Some(path)) => Ok(Robot::from_urdf_file(path, tip)?),
+        _ => Err(SimError::Scenario {
+            source_name: "robot".into(),
+            message: "give exactly one of `preset` and `urdf`".into(),
+        }),
+    }
+}
+
+/// Give the robot a scanner: `tool_from_scanner` when given, else keep a
+/// built-in mount, else the tool frame itself.
+pub fn mount_scanner(robot: &mut Robot, tool_from_scanner: Option<&PoseSpec>) {
+    let (tool_link, link_from_tool) = robot.tool;
+    match (tool_from_scanner, &robot.scanner) {
+        (Some(pose), _) => {
+            robot.scanner = Some(ScannerMount {
+                link: tool_link,
+                link_from_scanner: link_from_tool * pose.isometry(),
+            });
+        }
+        (None, Some(_)) => {}
+        (None, None) => {
+            robot.scanner = Some(ScannerMount {
+                link: tool_link,
+                link_from_scanner: link_from_tool,
+            });
+        }
+    }
+}
