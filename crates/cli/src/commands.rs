@@ -1,0 +1,466 @@
+//! Argument definitions and the one library call behind each command.
+
+use anyhow::{Context, Result, anyhow, bail};
+use clap::{Args, Parser, Subcommand};
+use geom::Real;
+use geom::math::isometry_to_rows;
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use sim::LoadedScenario;
+use sim::scan_job::{ScanSetup, write_sweep_ply};
+use sim::scenario::{BUILTIN_NAMES, Scenario, builtin_scenario};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Explore an unknown structure with a robot and range sensors, and build a model
+/// of its surfaces (Pudney 1994 surface following; Paul 2010 AXBAM exploration).
+#[derive(Debug, Parser)]
+#[command(name = "surveyor", version, about, propagate_version = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// List the built-in scenarios or print one as a TOML scenario file.
+    #[command(subcommand)]
+    Scenario(ScenarioCmd),
+    /// Forward kinematics: the pose of every link frame for given joint values.
+    Fk(FkArgs),
+    /// One tilt sweep of the laser scanner from a pose, written as PLY and scored
+    /// against the ground truth.
+    Scan(ScanArgs),
+    /// Bulk ray casting: first-hit distance of every ray in a binary file.
+    Raycast(RaycastArgs),
+    /// Write the ray-casting benchmark workload (structure mesh and rays).
+    RaycastFixture(FixtureArgs),
+}
+
+#[derive(Debug, Subcommand)]
+enum ScenarioCmd {
+    /// List the built-in scenarios.
+    List,
+    /// Print a scenario (built-in name or file) as TOML: edit it to make your own.
+    Show {
+        /// Built-in name or scenario file.
+        name: String,
+    },
+}
+
+/// Joint values given on the command line.
+#[derive(Debug, Args)]
+struct JointArgs {
+    /// Joint values, comma separated: radians (metres for prismatic joints).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, num_args = 1)]
+    joints: Option<Vec<Real>>,
+    /// Read --joints as degrees (revolute joints).
+    #[arg(long)]
+    deg: bool,
+}
+
+impl JointArgs {
+    fn values(&self) -> Option<Vec<Real>> {
+        self.joints.as_ref().map(|q| {
+            if self.deg {
+                q.iter().map(|v| v.to_radians()).collect()
+            } else {
+                q.clone()
+            }
+        })
+    }
+}
+
+#[derive(Debug, Args)]
+struct FkArgs {
+    /// Built-in robot name (denso-vm6083, point3, arm4) or a URDF file.
+    #[arg(long)]
+    robot: String,
+    /// For a URDF: the link to treat as the tip (default: the chain's leaf).
+    #[arg(long)]
+    tip: Option<String>,
+    #[command(flatten)]
+    joints: JointArgs,
+    /// Print one JSON object: "tip", "frames" [{name, pose}], "sensor" (4×4
+    /// row-major base-frame transforms).
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Args)]
+struct ScanArgs {
+    /// Built-in scenario name or scenario file.
+    #[arg(long, conflicts_with = "scene")]
+    scenario: Option<String>,
+    /// A mesh (OBJ, STL, PLY) or point cloud (PCD, PLY, text) placed as-is in the
+    /// world frame, instead of a scenario.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// With --scene: built-in robot name or URDF file (default denso-vm6083).
+    #[arg(long, requires = "scene")]
+    robot: Option<String>,
+    /// With --scene: where the robot base stands in the world, metres.
+    #[arg(
+        long,
+        requires = "scene",
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        num_args = 1
+    )]
+    base_xyz: Option<Vec<Real>>,
+    /// With --scene: base orientation, roll/pitch/yaw in degrees (fixed axes x, y, z).
+    #[arg(
+        long,
+        requires = "scene",
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        num_args = 1
+    )]
+    base_rpy_deg: Option<Vec<Real>>,
+    #[command(flatten)]
+    joints: JointArgs,
+    /// Total tilt of the sweep, degrees (default: the scenario's, 60).
+    #[arg(long)]
+    tilt_deg: Option<Real>,
+    /// Seed of the sensor noise.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Output PLY (vertex properties x y z intensity ox oy oz).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+#[derive(Debug, Args)]
+struct RaycastArgs {
+    /// The mesh to cast against (OBJ, STL, PLY).
+    #[arg(long)]
+    scene: PathBuf,
+    /// Rays: little-endian f32, six per ray (origin xyz, unit direction xyz).
+    #[arg(long)]
+    rays: PathBuf,
+    /// Output: one little-endian f32 per ray, the first-hit distance, +inf on a miss.
+    #[arg(long)]
+    out: PathBuf,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+#[derive(Debug, Args)]
+struct FixtureArgs {
+    /// Folder to write `structure.ply` and `rays.bin` into.
+    #[arg(long)]
+    out: PathBuf,
+    /// Number of rays.
+    #[arg(long, default_value_t = 1_000_000)]
+    rays: usize,
+    /// Seed of the ray directions and origins.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+/// Run a parsed command line.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Scenario(ScenarioCmd::List) => {
+            for name in BUILTIN_NAMES {
+                let s = builtin_scenario(name).ok_or_else(|| anyhow!("missing built-in {name}"))?;
+                println!("{name:<10} {}", s.description);
+            }
+            Ok(())
+        }
+        Command::Scenario(ScenarioCmd::Show { name }) => {
+            let loaded = Scenario::load(&name)?;
+            print!("{}", loaded.scenario.to_toml()?);
+            Ok(())
+        }
+        Command::Fk(a) => fk(&a),
+        Command::Scan(a) => scan(&a),
+        Command::Raycast(a) => raycast(&a),
+        Command::RaycastFixture(a) => raycast_fixture(&a),
+    }
+}
+
+#[derive(Serialize)]
+struct NamedPose {
+    name: String,
+    pose: [[Real; 4]; 4],
+}
+
+#[derive(Serialize)]
+struct FkOutput {
+    tip: [[Real; 4]; 4],
+    frames: Vec<NamedPose>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sensor: Option<[[Real; 4]; 4]>,
+}
+
+fn fk(a: &FkArgs) -> Result<()> {
+    let robot = if a.robot.to_ascii_lowercase().ends_with(".urdf") {
+        robot::Robot::from_urdf_file(Path::new(&a.robot), a.tip.as_deref())?
+    } else {
+        if a.tip.is_some() {
+            bail!("--tip applies to URDF robots only");
+        }
+        robot::builtin(&a.robot)?
+    };
+    let q = a
+        .joints
+        .values()
+        .ok_or_else(|| anyhow!("--joints is required ({} values)", robot.dof()))?;
+    let frames = robot.forward_kinematics(&q)?;
+    let out = FkOutput {
+        tip: isometry_to_rows(&robot.tool_pose(&q)?),
+        frames: robot
+            .links
+            .iter()
+            .zip(&frames)
+            .map(|(l, f)| NamedPose {
+                name: l.name.clone(),
+                pose: isometry_to_rows(f),
+            })
+            .collect(),
+        sensor: robot.scanner_pose(&q)?.map(|p| isometry_to_rows(&p)),
+    };
+    if a.json {
+        println!("{}", serde_json::to_string(&out)?);
+    } else {
+        let show = |name: &str, m: &[[Real; 4]; 4]| {
+            println!(
+                "{name:<16} xyz [{:+.6}, {:+.6}, {:+.6}]  z-axis [{:+.4}, {:+.4}, {:+.4}]",
+                m[0][3], m[1][3], m[2][3], m[0][2], m[1][2], m[2][2]
+            );
+        };
+        for f in &out.frames {
+            show(&f.name, &f.pose);
+        }
+        show("tip", &out.tip);
+        if let Some(s) = &out.sensor {
+            show("scanner", s);
+        }
+        if !robot.within_limits(&q) {
+            println!("warning: the pose is outside the joint limits");
+        }
+    }
+    Ok(())
+}
+
+fn progress_bar(len: u64, what: &str) -> ProgressBar {
+    let pb = ProgressBar::new(len);
+    if let Ok(style) = ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} {elapsed}") {
+        pb.set_style(style.progress_chars("=> "));
+    }
+    pb.set_message(what.to_owned());
+    pb
+}
+
+fn scan(a: &ScanArgs) -> Result<()> {
+    let t0 = Instant::now();
+    let setup = match (&a.scenario, &a.scene) {
+        (_, Some(file)) => {
+            let q = a
+                .joints
+                .values()
+                .ok_or_else(|| anyhow!("--joints is required with --scene"))?;
+            let robot = a.robot.as_deref().unwrap_or("denso-vm6083");
+            let three = |v: &Option<Vec<Real>>, flag: &str| -> Result<[Real; 3]> {
+                match v.as_deref() {
+                    None => Ok([0.0; 3]),
+                    Some([x, y, z]) => Ok([*x, *y, *z]),
+                    Some(other) => bail!(
+                        "{flag} takes three comma-separated values, got {}",
+                        other.len()
+                    ),
+                }
+            };
+            let base = scene::PoseSpec {
+                translation: three(&a.base_xyz, "--base-xyz")?,
+                rpy_deg: three(&a.base_rpy_deg, "--base-rpy-deg")?,
+            };
+            ScanSetup::from_scene_file(file, robot, base.isometry(), q, a.tilt_deg, a.seed)?
+        }
+        (Some(name), None) => {
+            let loaded: LoadedScenario = Scenario::load(name)?;
+            ScanSetup::from_scenario(&loaded, a.joints.values(), a.tilt_deg, a.seed)?
+        }
+        (None, None) => bail!("give --scenario NAME|FILE or --scene FILE"),
+    };
+    let t_setup = t0.elapsed();
+    let pb = progress_bar(setup.sweep.scan_count() as u64, "sweeping");
+    let t1 = Instant::now();
+    let outcome = setup.run(&mut |done, _| pb.set_position(done as u64))?;
+    pb.finish_and_clear();
+    let t_sweep = t1.elapsed();
+    write_sweep_ply(&a.out, &outcome.sweep)
+        .with_context(|| format!("writing {}", a.out.display()))?;
+    let sweep = &outcome.sweep;
+    println!(
+        "{} points from {} scans × {} rays ({:.0}° tilt) → {}",
+        sweep.points.len(),
+        sweep.tilts_rad.len(),
+        sweep.rays_per_scan(),
+        setup.sweep.tilt_deg,
+        a.out.display()
+    );
+    for c in &outcome.contacts {
+        println!(
+            "WARNING: link {} ({}) touches the scene (object {})",
+            c.link, setup.robot.links[c.link].name, c.object
+        );
+    }
+    let t2 = Instant::now();
+    let spinner = ProgressBar::new_spinner();
+    spinner.set_message("scoring against the ground truth");
+    spinner.enable_steady_tick(std::time::Duration::from_millis(100));
+    let scores = setup.score(sweep);
+    spinner.finish_and_clear();
+    let t_score = t2.elapsed();
+    match scores {
+        Some(s) => {
+            let cov = &s.coverage;
+            let region = cov.region.map_or_else(
+                || "whole scene".to_owned(),
+                |r| {
+                    format!(
+                        "[{:.2},{:.2}]×[{:.2},{:.2}]×[{:.2},{:.2}]",
+                        r.min.x, r.max.x, r.min.y, r.max.y, r.min.z, r.max.z
+                    )
+                },
+            );
+            println!(
+                "coverage {:.1}% of {} true-surface samples within {:.0} mm (exposed faces in {region})",
+                100.0 * cov.fraction(),
+                cov.samples,
+                1000.0 * cov.covered_within_m
+            );
+            for m in &cov.per_material {
+                println!(
+                    "  {:<16} {:5.1}% of {}",
+                    m.material,
+                    100.0 * m.covered as Real / m.samples.max(1) as Real,
+                    m.samples
+                );
+            }
+            println!(
+                "accuracy: mean {:.1} mm, 95th percentile {:.1} mm, max {:.1} mm over {} points",
+                1000.0 * s.accuracy.mean_m,
+                1000.0 * s.accuracy.p95_m,
+                1000.0 * s.accuracy.max_m,
+                s.accuracy.points
+            );
+        }
+        None => println!("(point-cloud world: no true surface to score against)"),
+    }
+    println!(
+        "time: setup {:.3} s, sweep {:.3} s, scoring {:.3} s",
+        t_setup.as_secs_f64(),
+        t_sweep.as_secs_f64(),
+        t_score.as_secs_f64()
+    );
+    Ok(())
+}
+
+fn read_rays(path: &Path) -> Result<Vec<[f32; 6]>> {
+    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    if bytes.len() % 24 != 0 {
+        bail!(
+            "{}: {} bytes is not a whole number of rays (24 bytes each: six little-endian f32)",
+            path.display(),
+            bytes.len()
+        );
+    }
+    let mut rays = Vec::with_capacity(bytes.len() / 24);
+    for (k, chunk) in bytes.chunks_exact(24).enumerate() {
+        let mut r = [0f32; 6];
+        for (i, v) in r.iter_mut().enumerate() {
+            let b = [
+                chunk[4 * i],
+                chunk[4 * i + 1],
+                chunk[4 * i + 2],
+                chunk[4 * i + 3],
+            ];
+            *v = f32::from_le_bytes(b);
+        }
+        if r.iter().any(|v| !v.is_finite()) {
+            bail!("{}: ray {k} has a non-finite value", path.display());
+        }
+        let n2 = r[3] * r[3] + r[4] * r[4] + r[5] * r[5];
+        if (n2 - 1.0).abs() > 1e-3 {
+            bail!(
+                "{}: ray {k}: direction length {:.6}, expected a unit vector",
+                path.display(),
+                n2.sqrt()
+            );
+        }
+        rays.push(r);
+    }
+    Ok(rays)
+}
+
+fn raycast(a: &RaycastArgs) -> Result<()> {
+    let t0 = Instant::now();
+    let mesh = scene::io::load_mesh(&a.scene, 1.0)?;
+    let t_load = t0.elapsed();
+    let t1 = Instant::now();
+    let n_tris = mesh.len();
+    let scene = scene::Scene::from_mesh(
+        "scene",
+        mesh,
+        scene::default_materials(),
+        scene::MaterialId(0),
+    )?;
+    let t_build = t1.elapsed();
+    let rays = read_rays(&a.rays)?;
+    let mut out = vec![0f32; rays.len()];
+    let threads = a.threads.unwrap_or_else(rayon::current_num_threads).max(1);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("starting the thread pool")?;
+    let t2 = Instant::now();
+    pool.install(|| scene.cast_rays_f32(&rays, f32::INFINITY, &mut out));
+    let t_cast = t2.elapsed().as_secs_f64();
+    let bytes: Vec<u8> = out.iter().flat_map(|d| d.to_le_bytes()).collect();
+    std::fs::write(&a.out, bytes).with_context(|| format!("writing {}", a.out.display()))?;
+    let hits = out.iter().filter(|d| d.is_finite()).count();
+    println!(
+        "{} rays against {} triangles on {} thread{}: {:.3} s, {:.2} Mrays/s ({} hits)",
+        rays.len(),
+        n_tris,
+        threads,
+        if threads == 1 { "" } else { "s" },
+        t_cast,
+        rays.len() as f64 / t_cast.max(1e-12) / 1e6,
+        hits
+    );
+    println!(
+        "time: load {:.3} s, BVH build {:.3} s",
+        t_load.as_secs_f64(),
+        t_build.as_secs_f64()
+    );
+    Ok(())
+}
+
+fn raycast_fixture(a: &FixtureArgs) -> Result<()> {
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let mesh = scene::fixtures::benchmark_structure();
+    let mesh_path = a.out.join("structure.ply");
+    scene::io::write_mesh_ply(&mesh_path, &mesh)?;
+    let rays = scene::fixtures::incoherent_rays(a.rays, a.seed);
+    let bytes: Vec<u8> = rays
+        .iter()
+        .flatten()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let rays_path = a.out.join("rays.bin");
+    std::fs::write(&rays_path, bytes)
+        .with_context(|| format!("writing {}", rays_path.display()))?;
+    println!(
+        "{} ({} triangles), {} ({} rays)",
+        mesh_path.display(),
+        mesh.len(),
+        rays_path.display(),
+        rays.len()
+    );
+    Ok(())
+}

@@ -1,0 +1,316 @@
+//! The command contract, exercised through the built binary.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers may panic
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn surveyor(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_surveyor"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = surveyor(args);
+    assert!(
+        out.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn fails(args: &[&str]) -> String {
+    let out = surveyor(args);
+    assert!(!out.status.success(), "{args:?} should fail");
+    String::from_utf8(out.stderr).unwrap()
+}
+
+fn data(rel: &str) -> String {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/"))
+        .join(rel)
+        .display()
+        .to_string()
+}
+
+type M4 = [[f64; 4]; 4];
+
+fn mul(a: &M4, b: &M4) -> M4 {
+    let mut c = [[0.0; 4]; 4];
+    for i in 0..4 {
+        for j in 0..4 {
+            c[i][j] = (0..4).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    c
+}
+
+fn json_matrix(v: &serde_json::Value) -> M4 {
+    let mut m = [[0.0; 4]; 4];
+    for (i, row) in v.as_array().unwrap().iter().enumerate() {
+        for (j, x) in row.as_array().unwrap().iter().enumerate() {
+            m[i][j] = x.as_f64().unwrap();
+        }
+    }
+    m
+}
+
+fn assert_close(a: &M4, b: &M4, tol: f64) {
+    for i in 0..4 {
+        for j in 0..4 {
+            assert!((a[i][j] - b[i][j]).abs() < tol, "{a:?}\n vs\n{b:?}");
+        }
+    }
+}
+
+/// Standard DH link transform Rz(θ) Tz(d) Tx(a) Rx(α).
+fn dh(theta: f64, d: f64, a: f64, alpha: f64) -> M4 {
+    let (s, c) = theta.sin_cos();
+    let (sa, ca) = alpha.sin_cos();
+    [
+        [c, -s * ca, s * sa, a * c],
+        [s, c * ca, -c * sa, a * s],
+        [0.0, sa, ca, d],
+        [0.0, 0.0, 0.0, 1.0],
+    ]
+}
+
+/// URDF joint: Trans(xyz) · Rz(y) Ry(p) Rx(r) · Rot(axis, q).
+fn urdf(xyz: [f64; 3], rpy: [f64; 3], axis: [f64; 3], q: f64) -> M4 {
+    let rot = |ax: [f64; 3], t: f64| -> [[f64; 3]; 3] {
+        let (s, c) = t.sin_cos();
+        let [x, y, z] = ax;
+        let v = 1.0 - c;
+        [
+            [c + x * x * v, x * y * v - z * s, x * z * v + y * s],
+            [y * x * v + z * s, c + y * y * v, y * z * v - x * s],
+            [z * x * v - y * s, z * y * v + x * s, c + z * z * v],
+        ]
+    };
+    let r3 = |m: [[f64; 3]; 3], t: [f64; 3]| -> M4 {
+        [
+            [m[0][0], m[0][1], m[0][2], t[0]],
+            [m[1][0], m[1][1], m[1][2], t[1]],
+            [m[2][0], m[2][1], m[2][2], t[2]],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    };
+    let origin = mul(
+        &mul(
+            &r3(rot([0.0, 0.0, 1.0], rpy[2]), xyz),
+            &r3(rot([0.0, 1.0, 0.0], rpy[1]), [0.0; 3]),
+        ),
+        &r3(rot([1.0, 0.0, 0.0], rpy[0]), [0.0; 3]),
+    );
+    mul(&origin, &r3(rot(axis, q), [0.0; 3]))
+}
+
+#[test]
+fn fk_json_matches_independent_dh_and_urdf_chains() {
+    let a = [0.18, 0.385, -0.1, 0.0, 0.0, 0.0];
+    let d = [0.475, 0.0, 0.0, 0.445, 0.0, 0.084];
+    let pi = std::f64::consts::PI;
+    let alpha = [-pi / 2.0, 0.0, pi / 2.0, -pi / 2.0, pi / 2.0, 0.0];
+    let offset = [0.0, -pi / 2.0, pi / 2.0, 0.0, 0.0, 0.0];
+    for q in [
+        [0.0; 6],
+        [0.3, -0.7, 1.9, 0.2, -1.1, 2.5],
+        [-2.0, 1.2, -0.5, 3.0, 1.9, -5.0],
+    ] {
+        let arg = q.map(|v| v.to_string()).join(",");
+        let out = ok(&["fk", "--robot", "denso-vm6083", "--joints", &arg, "--json"]);
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        let mut t: M4 = dh(0.0, 0.0, 0.0, 0.0);
+        let frames = v["frames"].as_array().unwrap();
+        assert_eq!(frames.len(), 7);
+        for i in 0..6 {
+            t = mul(&t, &dh(q[i] + offset[i], d[i], a[i], alpha[i]));
+            assert_close(&json_matrix(&frames[i + 1]["pose"]), &t, 1e-9);
+        }
+        assert_close(&json_matrix(&v["tip"]), &t, 1e-9);
+        // The scanner: 5 cm along the flange's z axis, same axes.
+        let scanner = mul(&t, &dh(0.0, 0.05, 0.0, 0.0));
+        assert_close(&json_matrix(&v["sensor"]), &scanner, 1e-9);
+    }
+    // UR5 URDF, tip tool0: its joint origins and axes typed in.
+    let h = 1.570_796_325;
+    let q = [0.4, -1.1, 1.3, -0.6, 0.9, 2.2];
+    let chain = [
+        urdf([0.0, 0.0, 0.089_159], [0.0; 3], [0.0, 0.0, 1.0], q[0]),
+        urdf([0.0, 0.13585, 0.0], [0.0, h, 0.0], [0.0, 1.0, 0.0], q[1]),
+        urdf([0.0, -0.1197, 0.425], [0.0; 3], [0.0, 1.0, 0.0], q[2]),
+        urdf([0.0, 0.0, 0.39225], [0.0, h, 0.0], [0.0, 1.0, 0.0], q[3]),
+        urdf([0.0, 0.093, 0.0], [0.0; 3], [0.0, 0.0, 1.0], q[4]),
+        urdf([0.0, 0.0, 0.09465], [0.0; 3], [0.0, 1.0, 0.0], q[5]),
+        urdf([0.0, 0.0823, 0.0], [-h, 0.0, 0.0], [0.0, 0.0, 1.0], 0.0),
+    ];
+    let tool0 = chain
+        .iter()
+        .fold(dh(0.0, 0.0, 0.0, 0.0), |acc, m| mul(&acc, m));
+    let arg = q.map(|v| v.to_string()).join(",");
+    let urdf_path = data("robots/ur5/ur5_robot.urdf");
+    let out = ok(&[
+        "fk", "--robot", &urdf_path, "--tip", "tool0", "--joints", &arg, "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_close(&json_matrix(&v["tip"]), &tool0, 1e-9);
+    assert!(v.get("sensor").is_none());
+    let names: Vec<&str> = v["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names.first(), Some(&"world"));
+    assert_eq!(names.last(), Some(&"tool0"));
+}
+
+#[test]
+fn fk_errors_are_clear() {
+    let e = fails(&["fk", "--robot", "denso-vm6083", "--joints", "0,0,0"]);
+    assert!(e.contains('6') && e.contains('3'), "{e}");
+    let e = fails(&["fk", "--robot", "ghost", "--joints", "0"]);
+    assert!(e.contains("denso-vm6083"), "{e}");
+    let e = fails(&["fk", "--robot", "/nonexistent/robot.urdf", "--joints", "0"]);
+    assert!(e.contains("/nonexistent/robot.urdf"), "{e}");
+}
+
+#[test]
+fn scenario_show_parses_back() {
+    let list = ok(&["scenario", "list"]);
+    assert!(list.lines().count() == 7 && list.contains("bridge3"));
+    let dir = tempfile::tempdir().unwrap();
+    let text = ok(&["scenario", "show", "block2"]);
+    let path = dir.path().join("b2.toml");
+    std::fs::write(&path, &text).unwrap();
+    let again = ok(&["scenario", "show", path.to_str().unwrap()]);
+    assert_eq!(text, again);
+}
+
+fn read_ply_columns(path: &Path) -> scene::io::PlyTable {
+    scene::io::read_ply_vertices(path).unwrap()
+}
+
+#[test]
+fn scan_writes_the_contracted_ply_and_scores_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.ply");
+    let stdout = ok(&[
+        "scan",
+        "--scenario",
+        "bridge1",
+        "--tilt-deg",
+        "6",
+        "--seed",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        stdout.contains("points") && stdout.contains("coverage") && stdout.contains("accuracy"),
+        "{stdout}"
+    );
+    let t = read_ply_columns(&out);
+    assert_eq!(t.names, ["x", "y", "z", "intensity", "ox", "oy", "oz"]);
+    let n: usize = stdout.split_whitespace().next().unwrap().parse().unwrap();
+    assert_eq!(t.len(), n);
+    // Ray origins are the scanner: ~5 cm above the flange at (0.317, 0, 0.72).
+    let oz = t.column("oz").unwrap();
+    assert!(oz.iter().all(|z| (z - 0.77).abs() < 0.05));
+    // With --scene, a mesh placed as-is and a robot base placed by the user.
+    let out2 = dir.path().join("t.ply");
+    let stdout = ok(&[
+        "scan",
+        "--scene",
+        &data("meshes/cinder_block_meters.obj"),
+        "--base-xyz",
+        "-0.6,0,-0.3",
+        "--deg",
+        "--joints",
+        "0,-55,165,0,-110,0",
+        "--out",
+        out2.to_str().unwrap(),
+    ]);
+    assert!(stdout.contains("coverage"), "{stdout}");
+    // Bad input.
+    let e = fails(&[
+        "scan",
+        "--scenario",
+        "bridge1",
+        "--joints",
+        "1,2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(e.contains("expected 6"), "{e}");
+    let e = fails(&[
+        "scan",
+        "--scene",
+        "/no/such.obj",
+        "--joints",
+        "0,0,0,0,0,0",
+        "--out",
+        "x.ply",
+    ]);
+    assert!(e.contains("/no/such.obj"), "{e}");
+}
+
+#[test]
+fn raycast_round_trip_against_a_known_plane() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 2 m square at z = 1 as an OBJ.
+    let obj = dir.path().join("plane.obj");
+    std::fs::write(
+        &obj,
+        "v -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    let rays: Vec<[f32; 6]> = vec![
+        [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+        [0.5, 0.5, -1.0, 0.0, 0.0, 1.0],
+        [0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
+        [0.0, 0.0, 0.0, 0.6, 0.0, 0.8],
+    ];
+    let bytes: Vec<u8> = rays
+        .iter()
+        .flatten()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let rays_path = dir.path().join("rays.bin");
+    std::fs::write(&rays_path, bytes).unwrap();
+    let out = dir.path().join("d.bin");
+    let stdout = ok(&[
+        "raycast",
+        "--scene",
+        obj.to_str().unwrap(),
+        "--rays",
+        rays_path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--threads",
+        "1",
+    ]);
+    assert!(stdout.contains("Mrays/s"), "{stdout}");
+    let d: Vec<f32> = std::fs::read(&out)
+        .unwrap()
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    assert_eq!(d.len(), 4);
+    assert!((d[0] - 1.0).abs() < 1e-6 && (d[1] - 2.0).abs() < 1e-6);
+    assert!(d[2].is_infinite() && d[2] > 0.0);
+    assert!((d[3] - 1.25).abs() < 1e-6);
+    // A file that is not whole rays.
+    std::fs::write(&rays_path, [0u8; 30]).unwrap();
+    let e = fails(&[
+        "raycast",
+        "--scene",
+        obj.to_str().unwrap(),
+        "--rays",
+        rays_path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(e.contains("rays.bin") && e.contains("30 bytes"), "{e}");
+}
