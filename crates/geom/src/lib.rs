@@ -15,6 +15,8 @@
 //! | [`triangle`] | [`Triangle`]: ray hit, closest point, segment/triangle distance, intersection |
 //! | [`ellipsoid`] | [`Ellipsoid`]: algebraic distance of Paul eq. 3.5 |
 //! | [`capsule`] | [`Capsule`]: distances to points, segments, capsules and triangles |
+//! | [`mesh`] | [`TriMesh`]: the workspace's one indexed triangle mesh |
+//! | [`primitives`] | closed meshes of boxes, prisms, I-beams, cylinders |
 //!
 //! Queries are named `[operation]_[shape]_[shape]` where two shapes are involved,
 //! e.g. [`line::distance_segment_segment`].
@@ -24,10 +26,12 @@ pub mod capsule;
 pub mod ellipsoid;
 pub mod line;
 pub mod math;
+pub mod mesh;
 pub mod moments;
 pub mod plane;
 pub mod polygon2;
 pub mod polygon3;
+pub mod primitives;
 pub mod ray;
 pub mod triangle;
 
@@ -39,6 +43,7 @@ pub use math::{
     Isometry3, Matrix3, Matrix4, Point2, Point3, Real, Rotation3, Translation3, UnitQuaternion,
     UnitVector3, Vector2, Vector3, unit,
 };
+pub use mesh::{MeshError, TriMesh};
 pub use moments::{Moments, Pca};
 pub use plane::Plane;
 pub use polygon3::PlaneFrame;

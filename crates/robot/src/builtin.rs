@@ -15,10 +15,12 @@
 use crate::bounds::{enclosing_capsule, enclosing_ellipsoid, enclosing_ellipsoid_of, unit_or_z};
 use crate::dh::DhRow;
 use crate::error::RobotError;
+use crate::mesh::parse_embedded_obj;
 use crate::model::{
-    CollisionShape, Joint, JointLimits, Link, LinkMesh, RangeFinderMount, Robot, ScannerMount,
+    CollisionShape, Joint, JointLimits, Link, RangeFinderMount, Robot, ScannerMount,
 };
-use geom::{Capsule, Ellipsoid, Isometry3, Point3, Real, Vector3};
+use geom::primitives::cuboid;
+use geom::{Capsule, Ellipsoid, Isometry3, Point3, Real, TriMesh, Vector3};
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 use std::sync::OnceLock;
 
@@ -96,13 +98,13 @@ pub const VM6083_FLANGE_FROM_SCANNER_M: [Real; 3] = [0.0, 0.0, 0.05];
 /// The seven VM-6083 link meshes in their link frames (base first), the last one
 /// including the scanner body on the flange. The meshes were made with `d6 = 0.09`
 /// (SOURCES §3.1), so link 6 sits 6 mm off the Table C.1 flange.
-pub fn denso_vm6083_link_meshes() -> Result<Vec<LinkMesh>, RobotError> {
+pub fn denso_vm6083_link_meshes() -> Result<Vec<TriMesh>, RobotError> {
     let mut meshes = Vec::with_capacity(VM6083_OBJ.len());
     for (i, text) in VM6083_OBJ.iter().enumerate() {
-        let mut mesh = LinkMesh::from_obj_str(text, &format!("DensoVM6083Link{i}.obj (embedded)"))?;
+        let mut mesh = parse_embedded_obj(text, &format!("DensoVM6083Link{i}.obj (embedded)"))?;
         if i == 6 {
             let (lo, hi) = VM6083_SCANNER_BODY;
-            mesh.append(&LinkMesh::cuboid(Point3::from(lo), Point3::from(hi)));
+            mesh.append(&cuboid(Point3::from(lo), Point3::from(hi)));
         }
         meshes.push(mesh);
     }

@@ -4,13 +4,13 @@
 //!
 //! | module | entry points |
 //! |---|---|
-//! | [`model`] | [`Robot`], [`Link`], [`Joint`], [`JointKind`], [`JointLimits`], [`CollisionShape`], [`LinkMesh`], [`RangeFinderMount`], [`ScannerMount`], [`PosedShape`]; [`Robot::fk_into`], [`Robot::jacobian_into`], [`Robot::min_algebraic_distance`] |
+//! | [`model`] | [`Robot`], [`Link`], [`Joint`], [`JointKind`], [`JointLimits`], [`CollisionShape`], [`RangeFinderMount`], [`ScannerMount`], [`PosedShape`]; [`Robot::fk_into`], [`Robot::jacobian_into`], [`Robot::min_algebraic_distance`] |
 //! | [`dh`] | [`DhRow`], [`Robot::from_dh`] (standard DH, Corke convention; Paul Table C.1) |
 //! | [`urdf`] | [`Robot::from_urdf_file`], [`Robot::from_urdf_str`] |
 //! | [`mod@builtin`] | [`builtin()`], [`builtin_names`]: `denso-vm6083`, `point3`, `arm4` |
 //! | [`linalg`] | [`pseudo_inverse`], [`damped_pseudo_inverse`], [`null_space_projector`] (Pudney eq. 3, P§3.3) |
 //! | [`bounds`] | [`bounds::enclosing_capsule`], [`bounds::enclosing_ellipsoid`] (Khachiyan MVEE; A§3.2.1.4) |
-//! | [`mesh`] | OBJ/STL loading and primitive meshes for [`LinkMesh`] |
+//! | [`mesh`] | [`MeshLoader`] (how URDF mesh files are read), URDF primitive meshes |
 //! | [`error`] | [`RobotError`] |
 //!
 //! Frames are named `a_from_b` (SPEC §2): [`Robot::forward_kinematics`] returns
@@ -29,7 +29,8 @@ pub use builtin::{builtin, builtin_names};
 pub use dh::DhRow;
 pub use error::RobotError;
 pub use linalg::{damped_pseudo_inverse, null_space_projector, pseudo_inverse};
+pub use mesh::{LoadedMesh, MeshLoader, NoMeshLoader};
 pub use model::{
-    CollisionShape, Joint, JointKind, JointLimits, Link, LinkMesh, PosedShape, RangeFinderMount,
-    Robot, ScannerMount,
+    CollisionShape, Joint, JointKind, JointLimits, Link, PosedShape, RangeFinderMount, Robot,
+    ScannerMount,
 };

@@ -17,7 +17,8 @@
 
 use crate::error::RobotError;
 use geom::{
-    Capsule, Ellipsoid, Isometry3, Point3, Real, Translation3, UnitQuaternion, UnitVector3, Vector3,
+    Capsule, Ellipsoid, Isometry3, Point3, Real, Translation3, TriMesh, UnitQuaternion,
+    UnitVector3, Vector3,
 };
 use nalgebra::{Matrix6xX, Quaternion};
 use serde::{Deserialize, Serialize};
@@ -213,22 +214,13 @@ fn is_identity(iso: &Isometry3) -> bool {
     q.w == 1.0 && q.i == 0.0 && q.j == 0.0 && q.k == 0.0 && t.x == 0.0 && t.y == 0.0 && t.z == 0.0
 }
 
-/// A triangle mesh in a link frame (metres).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct LinkMesh {
-    /// Vertex positions.
-    pub vertices: Vec<Point3>,
-    /// Triangles as indices into `vertices`, anticlockwise seen from outside.
-    pub triangles: Vec<[u32; 3]>,
-}
-
 /// A collision shape in its link's frame.
 #[derive(Clone, Debug, PartialEq)]
 pub enum CollisionShape {
     /// A capsule (a sphere when both ends coincide).
     Capsule(Capsule),
     /// A triangle mesh, shared between robot copies.
-    Mesh(Arc<LinkMesh>),
+    Mesh(Arc<TriMesh>),
 }
 
 /// A rigid body of the chain.
@@ -304,7 +296,7 @@ pub enum PosedShape {
         /// Link index.
         link: usize,
         /// The mesh, in the link frame.
-        mesh: Arc<LinkMesh>,
+        mesh: Arc<TriMesh>,
         /// Link frame in the base frame.
         base_from_link: Isometry3,
     },

@@ -16,20 +16,24 @@
 //!
 //! Mesh filenames: `package://<pkg>/<rest>` resolves to `<urdf dir>/<rest>`,
 //! `file://<path>` and absolute paths are used as they are, relative paths are
-//! relative to the URDF's directory. STL and OBJ are read; other formats (COLLADA
-//! `.dae`…) add a note to [`Robot::warnings`] and contribute no shape. A link left
-//! without any shape gets an automatic capsule from its origin to the next joint's
-//! origin (radius [`DEFAULT_LINK_RADIUS_M`]), so every link has a shape.
+//! relative to the URDF's directory. Mesh files are read by the caller's
+//! [`MeshLoader`] ([`Robot::from_urdf_file_with`]); files it skips (an unread
+//! format such as COLLADA `.dae`, or no loader at all with
+//! [`Robot::from_urdf_file`]) add a note to [`Robot::warnings`] and contribute no
+//! shape. A link left without any shape gets an automatic capsule from its origin
+//! to the next joint's origin (radius [`DEFAULT_LINK_RADIUS_M`]), so every link has
+//! a shape.
 //!
 //! Every error names the file and line (and the element and attribute) at fault.
 
 use crate::bounds::enclosing_ellipsoid_of;
 use crate::dh::DEFAULT_LINK_RADIUS_M;
 use crate::error::RobotError;
-use crate::mesh::{CYLINDER_SEGMENTS, extension};
-use crate::model::{CollisionShape, Joint, JointKind, JointLimits, Link, LinkMesh, Robot};
+use crate::mesh::{LoadedMesh, MeshLoader, NoMeshLoader, urdf_cylinder};
+use crate::model::{CollisionShape, Joint, JointKind, JointLimits, Link, Robot};
 use geom::math::isometry_from_xyz_rpy;
-use geom::{Capsule, Isometry3, Point3, Real, Vector3, unit};
+use geom::primitives::cuboid;
+use geom::{Capsule, Isometry3, Point3, Real, TriMesh, Vector3, unit};
 use roxmltree::{Document, Node};
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
@@ -37,7 +41,8 @@ use std::sync::Arc;
 
 impl Robot {
     /// Load the serial chain from the root link to `tip` (or to the single leaf of
-    /// an unbranched tree) of the URDF file at `path`.
+    /// an unbranched tree) of the URDF file at `path`, without reading mesh files
+    /// (their geometry is skipped with a warning; see [`Robot::from_urdf_file_with`]).
     ///
     /// ```
     /// let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/robots/ur5/ur5_robot.urdf"));
@@ -46,21 +51,42 @@ impl Robot {
     /// # Ok::<(), robot::RobotError>(())
     /// ```
     pub fn from_urdf_file(path: &Path, tip: Option<&str>) -> Result<Robot, RobotError> {
+        Self::from_urdf_file_with(path, tip, &NoMeshLoader)
+    }
+
+    /// [`Robot::from_urdf_file`], reading collision mesh files with `meshes`.
+    pub fn from_urdf_file_with(
+        path: &Path,
+        tip: Option<&str>,
+        meshes: &dyn MeshLoader,
+    ) -> Result<Robot, RobotError> {
         let xml = std::fs::read_to_string(path).map_err(|e| RobotError::Io {
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
         let base_dir = path.parent().unwrap_or_else(|| Path::new("."));
-        Self::from_urdf_str(&xml, base_dir, &path.display().to_string(), tip)
+        Self::from_urdf_str_with(&xml, base_dir, &path.display().to_string(), tip, meshes)
     }
 
-    /// Load a URDF from text. Mesh paths resolve against `base_dir`; `source_name`
-    /// (usually the file path) prefixes every error message.
+    /// Load a URDF from text without reading mesh files. Mesh paths resolve
+    /// against `base_dir`; `source_name` (usually the file path) prefixes every
+    /// error message.
     pub fn from_urdf_str(
         xml: &str,
         base_dir: &Path,
         source_name: &str,
         tip: Option<&str>,
+    ) -> Result<Robot, RobotError> {
+        Self::from_urdf_str_with(xml, base_dir, source_name, tip, &NoMeshLoader)
+    }
+
+    /// [`Robot::from_urdf_str`], reading collision mesh files with `meshes`.
+    pub fn from_urdf_str_with(
+        xml: &str,
+        base_dir: &Path,
+        source_name: &str,
+        tip: Option<&str>,
+        meshes: &dyn MeshLoader,
     ) -> Result<Robot, RobotError> {
         let doc = Document::parse(xml).map_err(|e| {
             let pos = e.pos();
@@ -75,6 +101,7 @@ impl Robot {
             doc: &doc,
             file: source_name,
             base_dir,
+            meshes,
             warnings: Vec::new(),
         };
         parser.robot(tip)
@@ -94,13 +121,14 @@ struct Parser<'a, 'input> {
     doc: &'a Document<'input>,
     file: &'a str,
     base_dir: &'a Path,
+    meshes: &'a dyn MeshLoader,
     warnings: Vec<String>,
 }
 
 /// One collision element after parsing.
 enum Geometry {
     Capsule(Capsule),
-    Mesh(LinkMesh),
+    Mesh(TriMesh),
 }
 
 impl<'a, 'input> Parser<'a, 'input> {
@@ -591,16 +619,15 @@ impl<'a, 'input> Parser<'a, 'input> {
                 }
                 let h = Vector3::from(size) * 0.5;
                 Geometry::Mesh(
-                    LinkMesh::cuboid(Point3::from(-h), Point3::from(h))
-                        .transformed(&link_from_geometry),
+                    cuboid(Point3::from(-h), Point3::from(h)).transformed(&link_from_geometry),
                 )
             }
             "cylinder" => {
                 let radius = self.positive(shape, "radius")?;
                 let length = self.positive(shape, "length")?;
+                let what = format!("{}:{}: <cylinder>", self.file, self.line(shape));
                 Geometry::Mesh(
-                    LinkMesh::cylinder(radius, length, CYLINDER_SEGMENTS)
-                        .transformed(&link_from_geometry),
+                    urdf_cylinder(radius, length, &what)?.transformed(&link_from_geometry),
                 )
             }
             "sphere" => {
@@ -630,27 +657,19 @@ impl<'a, 'input> Parser<'a, 'input> {
                     path: path.clone(),
                     message,
                 };
-                match extension(&path).as_deref() {
-                    Some("stl" | "obj") => {}
-                    other => {
+                let mut mesh = match self.meshes.load(&path).map_err(mesh_error)? {
+                    LoadedMesh::Mesh(m) => m,
+                    LoadedMesh::Skipped(reason) => {
                         self.warnings.push(format!(
-                            "{}:{line}: link '{link}': mesh '{filename}' is {}, which is not read (STL and OBJ only); \
+                            "{}:{line}: link '{link}': mesh '{filename}' not read ({reason}); \
                              this geometry is skipped",
-                            self.file,
-                            other.map_or_else(|| "of unknown format".to_owned(), |e| format!("a .{e} file"))
+                            self.file
                         ));
                         return Ok(None);
                     }
-                }
-                let mesh = LinkMesh::from_file(&path).map_err(|e| match e {
-                    RobotError::Io { message, .. } | RobotError::MeshData { message, .. } => {
-                        mesh_error(message)
-                    }
-                    other => mesh_error(other.to_string()),
-                })?;
-                let mesh = mesh
-                    .scaled(&Vector3::from(scale))
-                    .transformed(&link_from_geometry);
+                };
+                mesh.scale(Vector3::from(scale));
+                let mesh = mesh.transformed(&link_from_geometry);
                 Geometry::Mesh(mesh)
             }
             other => {

@@ -4,6 +4,9 @@
 // Helpers outside #[test] functions unwrap too: a failure is a test failure.
 #![allow(clippy::unwrap_used)]
 
+mod common;
+use common::scene_meshes;
+
 use geom::{Point3, Real};
 use robot::{DhRow, JointLimits, Robot, RobotError};
 use std::path::Path;
@@ -299,7 +302,7 @@ fn missing_and_broken_mesh_files() {
     let xml = "<robot name=\"t\">\n  <link name=\"a\">\n    <collision>\n      <geometry>\n        <mesh filename=\"package://pkg/meshes/missing.stl\"/>\n      </geometry>\n    </collision>\n  </link>\n</robot>";
     let path = dir.path().join("robot.urdf");
     std::fs::write(&path, xml).unwrap();
-    let e = Robot::from_urdf_file(&path, None).unwrap_err();
+    let e = Robot::from_urdf_file_with(&path, None, &scene_meshes).unwrap_err();
     let expected_mesh = dir.path().join("meshes/missing.stl");
     assert_contains(
         &e.to_string(),
@@ -312,8 +315,14 @@ fn missing_and_broken_mesh_files() {
     // An unreadable (garbage) STL is an error too.
     std::fs::create_dir_all(dir.path().join("meshes")).unwrap();
     std::fs::write(&expected_mesh, b"solid x\nfacet normal oops\n").unwrap();
-    let e = Robot::from_urdf_file(&path, None).unwrap_err().to_string();
+    let e = Robot::from_urdf_file_with(&path, None, &scene_meshes)
+        .unwrap_err()
+        .to_string();
     assert_contains(&e, &[":5", "missing.stl", "STL"]);
+    // Without a loader the mesh is skipped with a warning naming it.
+    std::fs::remove_file(&expected_mesh).unwrap();
+    let r = Robot::from_urdf_file(&path, None).unwrap();
+    assert_contains(&r.warnings[0], &[":5", "missing.stl", "not read"]);
     // A missing URDF names its path.
     let e = Robot::from_urdf_file(&dir.path().join("nope.urdf"), None)
         .unwrap_err()

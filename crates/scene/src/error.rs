@@ -72,3 +72,12 @@ impl SceneError {
         }
     }
 }
+
+impl From<geom::MeshError> for SceneError {
+    fn from(e: geom::MeshError) -> Self {
+        Self::Invalid {
+            what: e.what,
+            message: e.message,
+        }
+    }
+}

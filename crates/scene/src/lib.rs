@@ -9,7 +9,7 @@
 //! | [`world`] | [`Scene`]: triangles + materials + BVH; [`RayCast`], [`Hit`]; nearest point, capsule and triangle contacts |
 //! | [`cloud_world`] | [`PointCloudWorld`]: a real scan as a world, Pudney's ε rule (P§4.2) |
 //! | [`bvh`] | the binned-SAH bounding-volume hierarchy behind every query |
-//! | [`primitives`] | closed meshes of boxes, prisms, I-beams, cylinders |
+//! | [`primitives`] | (re-exported from `geom`) closed meshes of boxes, prisms, I-beams, cylinders |
 //! | [`sampling`] | uniform area samples of the true surfaces, for coverage metrics |
 //! | [`io`] | OBJ / STL / PLY meshes, PLY / PCD / text clouds, PLY output |
 //! | [`material`] | [`Material`], the default table, [`MaterialId`] |
@@ -22,8 +22,6 @@ pub mod error;
 pub mod fixtures;
 pub mod io;
 pub mod material;
-pub mod mesh;
-pub mod primitives;
 pub mod sampling;
 pub mod spec;
 pub mod world;
@@ -31,8 +29,9 @@ pub mod world;
 pub use cloud::PointCloud;
 pub use cloud_world::PointCloudWorld;
 pub use error::SceneError;
+pub use geom::mesh::{self, TriMesh};
+pub use geom::primitives;
 pub use material::{Material, MaterialId, default_materials};
-pub use mesh::TriMesh;
 pub use sampling::{SamplingConfig, SurfaceSample, sample_surfaces};
 pub use spec::{CloudSpec, ObjectSpec, PoseSpec, SceneSpec, ShapeSpec, World};
 pub use world::{Hit, RayCast, Scene, SceneObject};

@@ -218,7 +218,7 @@ impl ShapeSpec {
                 if !finite(from) || !finite(to) || !finite(up) {
                     return Err(SceneError::invalid("i_beam", "non-finite coordinates"));
                 }
-                primitives::i_beam(
+                Ok(primitives::i_beam(
                     &p3(from),
                     &p3(to),
                     &Vector3::new(up[0], up[1], up[2]),
@@ -228,7 +228,7 @@ impl ShapeSpec {
                         flange_thickness: *flange_thickness,
                         web_thickness: *web_thickness,
                     },
-                )
+                )?)
             }
             Self::Cylinder {
                 from,
@@ -239,7 +239,12 @@ impl ShapeSpec {
                 if !finite(from) || !finite(to) {
                     return Err(SceneError::invalid("cylinder", "non-finite coordinates"));
                 }
-                primitives::cylinder(&p3(from), &p3(to), *radius, *segments)
+                Ok(primitives::cylinder(
+                    &p3(from),
+                    &p3(to),
+                    *radius,
+                    *segments,
+                )?)
             }
             Self::Prism {
                 axis,
@@ -254,7 +259,7 @@ impl ShapeSpec {
                     ));
                 }
                 let prof: Vec<Point2> = profile.iter().map(|p| Point2::new(p[0], p[1])).collect();
-                primitives::prism(*axis, &prof, *from, *to)
+                Ok(primitives::prism(*axis, &prof, *from, *to)?)
             }
             Self::Mesh { file, scale } => {
                 if !(scale.is_finite() && *scale > 0.0) {

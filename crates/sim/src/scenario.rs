@@ -5,7 +5,7 @@
 
 use crate::SimError;
 use geom::{Aabb, Isometry3, Point3, Real};
-use robot::{Robot, ScannerMount};
+use robot::{LoadedMesh, Robot, ScannerMount};
 use scene::{PoseSpec, SamplingConfig, SceneSpec, World, builtin};
 use sensor::{ScannerConfig, SweepConfig};
 use serde::{Deserialize, Serialize};
@@ -332,7 +332,26 @@ impl LoadedScenario {
     }
 }
 
-/// A robot from a preset name or a URDF file (exactly one of them).
+/// Reads URDF collision meshes with `scene`'s importer (STL, OBJ, PLY); other
+/// formats (COLLADA `.dae`, ...) are skipped with a warning on the robot.
+pub fn scene_mesh_loader(path: &Path) -> Result<LoadedMesh, String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("stl" | "obj" | "ply") => scene::io::load_mesh(path, 1.0)
+            .map(LoadedMesh::Mesh)
+            .map_err(|e| e.to_string()),
+        other => Ok(LoadedMesh::Skipped(format!(
+            "{} meshes are not read (STL, OBJ and PLY are)",
+            other.map_or_else(|| "extension-less".to_owned(), |e| format!(".{e}"))
+        ))),
+    }
+}
+
+/// A robot from a preset name or a URDF file (exactly one of them); URDF
+/// collision meshes are read with [`scene_mesh_loader`].
 pub fn build_robot(
     preset: Option<&str>,
     urdf: Option<&Path>,
@@ -340,7 +359,7 @@ pub fn build_robot(
 ) -> Result<Robot, SimError> {
     match (preset, urdf) {
         (Some(name), None) => Ok(robot::builtin(name)?),
-        (None, Some(path)) => Ok(Robot::from_urdf_file(path, tip)?),
+        (None, Some(path)) => Ok(Robot::from_urdf_file_with(path, tip, &scene_mesh_loader)?),
         _ => Err(SimError::Scenario {
             source_name: "robot".into(),
             message: "give exactly one of `preset` and `urdf`".into(),

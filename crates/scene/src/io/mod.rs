@@ -283,7 +283,11 @@ fn finish_mesh(
             ),
         ));
     }
-    TriMesh::new(vertices, triangles, &path.display().to_string())
+    Ok(TriMesh::new(
+        vertices,
+        triangles,
+        &path.display().to_string(),
+    )?)
 }
 
 /// Per-point columns decoded from a file, all of one length.

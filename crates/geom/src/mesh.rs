@@ -1,8 +1,31 @@
-//! Indexed triangle meshes.
+//! Indexed triangle meshes: the one mesh type of the workspace (scene objects,
+//! robot link shapes, reconstructed surfaces).
 
-use crate::error::SceneError;
-use geom::{Aabb, Isometry3, Point3, Real, Triangle, Vector3};
+use crate::aabb::Aabb;
+use crate::math::{Isometry3, Point3, Real, Vector3, is_finite_point};
+use crate::triangle::Triangle;
 use serde::{Deserialize, Serialize};
+
+/// Geometry that cannot make a valid mesh (or a primitive with invalid
+/// dimensions). `what` names the source: a file, an object, a shape.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{what}: {message}")]
+pub struct MeshError {
+    /// The file, object or shape at fault.
+    pub what: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl MeshError {
+    /// An error about `what`.
+    pub fn new(what: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            what: what.into(),
+            message: message.into(),
+        }
+    }
+}
 
 /// An indexed triangle mesh in metres. Triangles wind anticlockwise seen from
 /// outside (right-hand normals point out) for the closed primitives; imported
@@ -23,12 +46,9 @@ impl TriMesh {
         vertices: Vec<Point3>,
         triangles: Vec<[u32; 3]>,
         what: &str,
-    ) -> Result<Self, SceneError> {
-        if let Some(i) = vertices
-            .iter()
-            .position(|p| !geom::math::is_finite_point(p))
-        {
-            return Err(SceneError::invalid(
+    ) -> Result<Self, MeshError> {
+        if let Some(i) = vertices.iter().position(|p| !is_finite_point(p)) {
+            return Err(MeshError::new(
                 what,
                 format!("vertex {i} has a non-finite coordinate"),
             ));
@@ -39,7 +59,7 @@ impl TriMesh {
             .enumerate()
             .find(|(_, tri)| tri.iter().any(|&v| v as usize >= n))
         {
-            return Err(SceneError::invalid(
+            return Err(MeshError::new(
                 what,
                 format!("triangle {t} refers to a vertex beyond the {n} given"),
             ));
@@ -93,7 +113,14 @@ impl TriMesh {
         }
     }
 
-    /// Scale every vertex about the origin.
+    /// The mesh moved by a rigid transform.
+    pub fn transformed(&self, frame_from_mesh: &Isometry3) -> Self {
+        let mut m = self.clone();
+        m.transform(frame_from_mesh);
+        m
+    }
+
+    /// Scale every vertex about the origin, per axis.
     pub fn scale(&mut self, factor: Vector3) {
         for v in &mut self.vertices {
             v.coords.component_mul_assign(&factor);

@@ -1,10 +1,9 @@
 //! Closed triangle meshes of the shapes scenes are made of: boxes, prisms from a
 //! 2-D profile, I-beams, cylinders. All have outward normals (positive volume).
 
-use crate::error::SceneError;
-use crate::mesh::TriMesh;
-use geom::polygon2::{is_simple, orient2d, signed_area};
-use geom::{Isometry3, Point2, Point3, Real, Rotation3, UnitVector3, Vector3, unit};
+use crate::math::{Isometry3, Point2, Point3, Real, Rotation3, UnitVector3, Vector3, unit};
+use crate::mesh::{MeshError, TriMesh};
+use crate::polygon2::{is_simple, orient2d, signed_area};
 
 /// The box `[min, max]` (12 triangles).
 pub fn cuboid(min: Point3, max: Point3) -> TriMesh {
@@ -20,20 +19,20 @@ pub fn cuboid(min: Point3, max: Point3) -> TriMesh {
 
 /// A prism: the simple polygon `profile` in the (y, z) plane extruded along x
 /// from `x0` to `x1`. Either winding of the profile is accepted.
-pub fn prism_x(profile: &[Point2], x0: Real, x1: Real) -> Result<TriMesh, SceneError> {
+pub fn prism_x(profile: &[Point2], x0: Real, x1: Real) -> Result<TriMesh, MeshError> {
     let mut prof: Vec<Point2> = profile.to_vec();
     // Drop a repeated closing vertex.
     if prof.len() > 3 && prof.first() == prof.last() {
         prof.pop();
     }
     if prof.len() < 3 || !is_simple(&prof, 1e-12) {
-        return Err(SceneError::invalid(
+        return Err(MeshError::new(
             "prism profile",
             "expected a simple polygon of at least 3 distinct vertices",
         ));
     }
     if !(x1 - x0).is_finite() || (x1 - x0).abs() <= 0.0 {
-        return Err(SceneError::invalid(
+        return Err(MeshError::new(
             "prism extent",
             format!("expected two different finite ends, got {x0} and {x1}"),
         ));
@@ -88,7 +87,7 @@ pub enum Axis {
 
 /// A prism along a world axis, the profile given in the other two coordinates
 /// in increasing order ((y, z) for x, (x, z) for y, (x, y) for z).
-pub fn prism(axis: Axis, profile: &[Point2], from: Real, to: Real) -> Result<TriMesh, SceneError> {
+pub fn prism(axis: Axis, profile: &[Point2], from: Real, to: Real) -> Result<TriMesh, MeshError> {
     let mut mesh = prism_x(profile, from, to)?;
     // prism_x puts profile (u, v) at (y, z) and extrusion on x; permute coordinates.
     for v in &mut mesh.vertices {
@@ -127,21 +126,21 @@ pub fn i_beam(
     to: &Point3,
     up: &Vector3,
     s: &IBeamSection,
-) -> Result<TriMesh, SceneError> {
+) -> Result<TriMesh, MeshError> {
     let dims = [s.depth, s.flange_width, s.flange_thickness, s.web_thickness];
     if dims.iter().any(|v| !v.is_finite() || *v <= 0.0)
         || 2.0 * s.flange_thickness >= s.depth
         || s.web_thickness >= s.flange_width
     {
-        return Err(SceneError::invalid(
+        return Err(MeshError::new(
             "i_beam",
             "expected positive dimensions with 2·flange_thickness < depth and web_thickness < flange_width",
         ));
     }
     let axis = unit(to - from)
-        .ok_or_else(|| SceneError::invalid("i_beam", "`from` and `to` must be different points"))?;
+        .ok_or_else(|| MeshError::new("i_beam", "`from` and `to` must be different points"))?;
     let up = unit(up - axis.into_inner() * axis.dot(up))
-        .ok_or_else(|| SceneError::invalid("i_beam", "`up` must not be parallel to the beam"))?;
+        .ok_or_else(|| MeshError::new("i_beam", "`up` must not be parallel to the beam"))?;
     let side = UnitVector3::new_unchecked(up.cross(&axis));
     let (hw, hf, tf, d) = (
         0.5 * s.web_thickness,
@@ -182,16 +181,15 @@ pub fn cylinder(
     to: &Point3,
     radius: Real,
     segments: u32,
-) -> Result<TriMesh, SceneError> {
+) -> Result<TriMesh, MeshError> {
     if !(radius.is_finite() && radius > 0.0) || segments < 3 {
-        return Err(SceneError::invalid(
+        return Err(MeshError::new(
             "cylinder",
             format!("expected radius > 0 and at least 3 segments, got {radius} and {segments}"),
         ));
     }
-    let axis = unit(to - from).ok_or_else(|| {
-        SceneError::invalid("cylinder", "`from` and `to` must be different points")
-    })?;
+    let axis = unit(to - from)
+        .ok_or_else(|| MeshError::new("cylinder", "`from` and `to` must be different points"))?;
     let profile: Vec<Point2> = (0..segments)
         .map(|i| {
             let a = std::f64::consts::TAU * Real::from(i) / Real::from(segments);
@@ -199,7 +197,7 @@ pub fn cylinder(
         })
         .collect();
     let mut mesh = prism_x(&profile, 0.0, (to - from).norm())?;
-    let u = geom::math::any_perpendicular(&axis);
+    let u = crate::math::any_perpendicular(&axis);
     let v = axis.cross(&u);
     let rot = Rotation3::from_basis_unchecked(&[axis.into_inner(), u.into_inner(), v]);
     mesh.transform(&Isometry3::from_parts(from.coords.into(), rot.into()));
