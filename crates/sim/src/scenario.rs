@@ -6,7 +6,7 @@
 use crate::SimError;
 use geom::{Aabb, Isometry3, Point3, Real};
 use robot::{LoadedMesh, Robot, ScannerMount};
-use scene::{PoseSpec, SamplingConfig, SceneSpec, World, builtin};
+use scene::{PoseSpec, SamplingConfig, SceneError, SceneSpec, World, builtin};
 use sensor::{ScannerConfig, SweepConfig};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -332,21 +332,15 @@ impl LoadedScenario {
     }
 }
 
-/// Reads URDF collision meshes with `scene`'s importer (STL, OBJ, PLY); other
-/// formats (COLLADA `.dae`, ...) are skipped with a warning on the robot.
+/// Reads URDF collision meshes with `scene`'s importer; formats it does not read
+/// (COLLADA `.dae`, ...) are skipped with a warning on the robot.
 pub fn scene_mesh_loader(path: &Path) -> Result<LoadedMesh, String> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("stl" | "obj" | "ply") => scene::io::load_mesh(path, 1.0)
-            .map(LoadedMesh::Mesh)
-            .map_err(|e| e.to_string()),
-        other => Ok(LoadedMesh::Skipped(format!(
-            "{} meshes are not read (STL, OBJ and PLY are)",
-            other.map_or_else(|| "extension-less".to_owned(), |e| format!(".{e}"))
+    match scene::io::load_mesh(path, 1.0) {
+        Ok(mesh) => Ok(LoadedMesh::Mesh(mesh)),
+        Err(SceneError::Unsupported { expected, .. }) => Ok(LoadedMesh::Skipped(format!(
+            "not a mesh format surveyor reads ({expected})"
         ))),
+        Err(e) => Err(e.to_string()),
     }
 }
 
