@@ -15,7 +15,7 @@ use std::time::Instant;
 /// Explore an unknown structure with a robot and range sensors, and build a model
 /// of its surfaces (Pudney 1994 surface following; Paul 2010 AXBAM exploration).
 #[derive(Debug, Parser)]
-#[command(name = "surveyor", version, about, propagate_version = true)]
+#[command(name = "surveyor", version, propagate_version = true)]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
