@@ -8,12 +8,15 @@
 //! | [`scanner`] | [`Scanner`], [`ScannerConfig`], [`Scan`], [`ScanReturn`], [`RangeNoise`] |
 //! | [`reflection`] | [`reflection::ReflectionModel`]: intensity and range bias versus incidence |
 //! | [`sweep`] | [`SweepConfig`]: the tilt angles of a 3-D sweep |
+//! | [`classifier`] | [`Lrc`], [`LrcConfig`], [`Observation`]: the material classifier of A App. B |
 
+pub mod classifier;
 pub mod range_finder;
 pub mod reflection;
 pub mod scanner;
 pub mod sweep;
 
+pub use classifier::{Classification, ClassifyError, Lrc, LrcConfig, LrcError, Observation};
 pub use range_finder::{RangeFinder, SensorPoint};
 pub use reflection::ReflectionModel;
 pub use scanner::{RangeNoise, Scan, ScanReturn, Scanner, ScannerConfig};
