@@ -4,7 +4,8 @@
 //! new scene: print one, edit it, pass the file.
 
 use crate::SimError;
-use geom::{Aabb, Isometry3, Point3, Real};
+use geom::{Isometry3, Real};
+use map::RegionsConfig;
 use robot::{LoadedMesh, Robot, ScannerMount};
 use scene::{PoseSpec, SamplingConfig, SceneError, SceneSpec, World, builtin};
 use sensor::{ScannerConfig, SweepConfig};
@@ -27,7 +28,7 @@ pub struct Scenario {
     pub scanner: Option<ScannerSpec>,
     /// Regions of interest A1 ⊂ A2 ⊂ A3 (A§4.2.1), when the method uses them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub regions: Option<Regions>,
+    pub regions: Option<RegionsConfig>,
     /// A-priori planar polygons for the surface model (P§4.3), vertices in the
     /// world frame, anticlockwise about the outward normal.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -75,44 +76,6 @@ pub struct ScannerSpec {
     pub mount: Option<PoseSpec>,
 }
 
-/// An axis-aligned region.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RegionBox {
-    /// Lowest corner, world frame.
-    pub min: [Real; 3],
-    /// Highest corner, world frame.
-    pub max: [Real; 3],
-}
-
-impl RegionBox {
-    /// As a box.
-    pub fn aabb(&self) -> Aabb {
-        Aabb::new(Point3::from(self.min), Point3::from(self.max))
-    }
-
-    /// A cube of half-size `h` around `c`.
-    pub fn around(c: [Real; 3], h: Real) -> Self {
-        Self {
-            min: [c[0] - h, c[1] - h, c[2] - h],
-            max: [c[0] + h, c[1] + h, c[2] + h],
-        }
-    }
-}
-
-/// Regions of interest A1 ⊂ A2 ⊂ A3 (A§4.2.1): the arm's workspace, its reach
-/// plus the tool range, and the surroundings a tool could damage.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Regions {
-    /// A1: the manipulator's workspace.
-    pub a1: RegionBox,
-    /// A2: reachable by the tool.
-    pub a2: RegionBox,
-    /// A3: could be affected by the work.
-    pub a3: RegionBox,
-}
-
 /// How results are scored (SPEC §6).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -148,12 +111,7 @@ pub fn builtin_scenario(name: &str) -> Option<Scenario> {
         "bridge1" | "bridge2" | "bridge3" => {
             // Regions centred on the first joint's shoulder height (d1), sized by
             // the VM-6083's reach (~1.1 m) and the 0.5 m grit-blast stream.
-            let c = [0.0, 0.0, 0.475];
-            let regions = Regions {
-                a1: RegionBox::around(c, 1.1),
-                a2: RegionBox::around(c, 1.6),
-                a3: RegionBox::around(c, 2.1),
-            };
+            let regions = RegionsConfig::around([0.0, 0.0, 0.475], [1.1, 1.6, 2.1]);
             let description = match name {
                 "bridge1" => {
                     "steel bridge channel: two I-beams, timber deck, plate, sheet, scaffold, hose (A§6.3)"
