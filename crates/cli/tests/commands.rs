@@ -314,3 +314,122 @@ fn raycast_round_trip_against_a_known_plane() {
     ]);
     assert!(e.contains("rays.bin") && e.contains("30 bytes"), "{e}");
 }
+
+#[test]
+fn map_sld_and_segment_follow_their_contracts() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).display().to_string();
+    // Two short sweeps from different poses.
+    for (name, joints) in [
+        ("a.ply", "0,-55,165,0,-110,0"),
+        ("b.ply", "40,-55,165,0,-110,0"),
+    ] {
+        ok(&[
+            "scan",
+            "--scenario",
+            "bridge1",
+            "--deg",
+            "--joints",
+            joints,
+            "--tilt-deg",
+            "10",
+            "--out",
+            &p(name),
+        ]);
+    }
+    let out = ok(&[
+        "map",
+        "--scans",
+        &p("a.ply"),
+        &p("b.ply"),
+        "--scenario",
+        "bridge1",
+        "--voxel",
+        "0.02",
+        "--out",
+        &p("maps"),
+    ]);
+    assert_eq!(out.matches("points integrated in").count(), 2, "{out}");
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("maps/occupancy.json")).unwrap(),
+    )
+    .unwrap();
+    let regions = report["regions"].as_array().unwrap();
+    assert_eq!(regions.len(), 3);
+    for r in regions {
+        let sum = r["free"].as_u64().unwrap()
+            + r["unknown"].as_u64().unwrap()
+            + r["occupied"].as_u64().unwrap();
+        assert_eq!(sum, r["total"].as_u64().unwrap());
+    }
+    // H1 unweighted = n_u ln 2 over A3 (eq. 4.10).
+    let n_u = regions[2]["unknown"].as_f64().unwrap();
+    assert!(
+        (report["h1_unweighted"].as_f64().unwrap() - n_u * std::f64::consts::LN_2).abs()
+            < 1e-6 * n_u
+    );
+    let mesh = scene::io::load_mesh(&dir.path().join("maps/mesh.ply"), 1.0).unwrap();
+    assert!(mesh.len() > 1000);
+
+    let out = ok(&[
+        "sld",
+        "--input",
+        &p("a.ply"),
+        "--seed",
+        "2",
+        "--out",
+        &p("discs.csv"),
+    ]);
+    assert!(
+        out.contains("discs from") && out.contains("% registered"),
+        "{out}"
+    );
+    let csv = std::fs::read_to_string(dir.path().join("discs.csv")).unwrap();
+    assert!(csv.starts_with("cx,cy,cz,nx,ny,nz,radius,points"));
+    let discs = csv.lines().count() - 1;
+    assert!(discs > 50);
+
+    let out = ok(&[
+        "segment",
+        "--discs",
+        &p("discs.csv"),
+        "--out",
+        &p("segments.json"),
+    ]);
+    assert!(out.contains("segments from"), "{out}");
+    let seg: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("segments.json")).unwrap())
+            .unwrap();
+    let mut members: Vec<u64> = seg["segments"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|s| s.as_array().unwrap().iter().map(|i| i.as_u64().unwrap()))
+        .collect();
+    members.sort_unstable();
+    assert_eq!(
+        members,
+        (0..discs as u64).collect::<Vec<_>>(),
+        "every disc in exactly one segment"
+    );
+
+    // Bad input: a cloud without ray origins cannot be mapped; τq needs six values.
+    let e = fails(&[
+        "map",
+        "--scans",
+        &data("pointclouds/pcl_milk.pcd"),
+        "--out",
+        &p("m2"),
+    ]);
+    assert!(e.contains("pcl_milk.pcd"), "{e}");
+    let e = fails(&[
+        "segment",
+        "--discs",
+        &p("discs.csv"),
+        "--tau-q-deg",
+        "1,2",
+        "--out",
+        &p("s.json"),
+    ]);
+    assert!(e.contains("six"), "{e}");
+}

@@ -1,5 +1,7 @@
 //! Argument definitions and the one library call behind each command.
 
+mod maps;
+
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Parser, Subcommand};
 use geom::Real;
@@ -35,6 +37,12 @@ enum Command {
     Raycast(RaycastArgs),
     /// Write the ray-casting benchmark workload (structure mesh and rays).
     RaycastFixture(FixtureArgs),
+    /// Fuse scan files into the occupancy grid and the TSDF mesh (Paul §4.2, §5.1.1).
+    Map(maps::MapArgs),
+    /// Scale-Like Discs of a point cloud (Paul §5.2).
+    Sld(maps::SldArgs),
+    /// Segment a disc map into surfaces (Paul §5.3, Algorithm 1).
+    Segment(maps::SegmentArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -165,7 +173,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Scenario(ScenarioCmd::List) => {
             for name in BUILTIN_NAMES {
                 let s = builtin_scenario(name).ok_or_else(|| anyhow!("missing built-in {name}"))?;
-                println!("{name:<10} {}", s.description);
+                say!("{name:<10} {}", s.description)?;
             }
             Ok(())
         }
@@ -178,6 +186,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Scan(a) => scan(&a),
         Command::Raycast(a) => raycast(&a),
         Command::RaycastFixture(a) => raycast_fixture(&a),
+        Command::Map(a) => maps::map(&a),
+        Command::Sld(a) => maps::sld(&a),
+        Command::Segment(a) => maps::segment(&a),
     }
 }
 
@@ -223,23 +234,28 @@ fn fk(a: &FkArgs) -> Result<()> {
         sensor: robot.scanner_pose(&q)?.map(|p| isometry_to_rows(&p)),
     };
     if a.json {
-        println!("{}", serde_json::to_string(&out)?);
+        say!("{}", serde_json::to_string(&out)?)?;
     } else {
         let show = |name: &str, m: &[[Real; 4]; 4]| {
-            println!(
+            say!(
                 "{name:<16} xyz [{:+.6}, {:+.6}, {:+.6}]  z-axis [{:+.4}, {:+.4}, {:+.4}]",
-                m[0][3], m[1][3], m[2][3], m[0][2], m[1][2], m[2][2]
-            );
+                m[0][3],
+                m[1][3],
+                m[2][3],
+                m[0][2],
+                m[1][2],
+                m[2][2]
+            )
         };
         for f in &out.frames {
-            show(&f.name, &f.pose);
+            show(&f.name, &f.pose)?;
         }
-        show("tip", &out.tip);
+        show("tip", &out.tip)?;
         if let Some(s) = &out.sensor {
-            show("scanner", s);
+            show("scanner", s)?;
         }
         if !robot.within_limits(&q) {
-            println!("warning: the pose is outside the joint limits");
+            say!("warning: the pose is outside the joint limits")?;
         }
     }
     Ok(())
@@ -294,19 +310,21 @@ fn scan(a: &ScanArgs) -> Result<()> {
     write_sweep_ply(&a.out, &outcome.sweep)
         .with_context(|| format!("writing {}", a.out.display()))?;
     let sweep = &outcome.sweep;
-    println!(
+    say!(
         "{} points from {} scans × {} rays ({:.0}° tilt) → {}",
         sweep.points.len(),
         sweep.tilts_rad.len(),
         sweep.rays_per_scan(),
         setup.sweep.tilt_deg,
         a.out.display()
-    );
+    )?;
     for c in &outcome.contacts {
-        println!(
+        say!(
             "WARNING: link {} ({}) touches the scene (object {})",
-            c.link, setup.robot.links[c.link].name, c.object
-        );
+            c.link,
+            setup.robot.links[c.link].name,
+            c.object
+        )?;
     }
     let t2 = Instant::now();
     let spinner = ProgressBar::new_spinner();
@@ -327,36 +345,36 @@ fn scan(a: &ScanArgs) -> Result<()> {
                     )
                 },
             );
-            println!(
+            say!(
                 "coverage {:.1}% of {} true-surface samples within {:.0} mm (exposed faces in {region})",
                 100.0 * cov.fraction(),
                 cov.samples,
                 1000.0 * cov.covered_within_m
-            );
+            )?;
             for m in &cov.per_material {
-                println!(
+                say!(
                     "  {:<16} {:5.1}% of {}",
                     m.material,
                     100.0 * m.covered as Real / m.samples.max(1) as Real,
                     m.samples
-                );
+                )?;
             }
-            println!(
+            say!(
                 "accuracy: mean {:.1} mm, 95th percentile {:.1} mm, max {:.1} mm over {} points",
                 1000.0 * s.accuracy.mean_m,
                 1000.0 * s.accuracy.p95_m,
                 1000.0 * s.accuracy.max_m,
                 s.accuracy.points
-            );
+            )?;
         }
-        None => println!("(point-cloud world: no true surface to score against)"),
+        None => say!("(point-cloud world: no true surface to score against)")?,
     }
-    println!(
+    say!(
         "time: setup {:.3} s, sweep {:.3} s, scoring {:.3} s",
         t_setup.as_secs_f64(),
         t_sweep.as_secs_f64(),
         t_score.as_secs_f64()
-    );
+    )?;
     Ok(())
 }
 
@@ -423,7 +441,7 @@ fn raycast(a: &RaycastArgs) -> Result<()> {
     let bytes: Vec<u8> = out.iter().flat_map(|d| d.to_le_bytes()).collect();
     std::fs::write(&a.out, bytes).with_context(|| format!("writing {}", a.out.display()))?;
     let hits = out.iter().filter(|d| d.is_finite()).count();
-    println!(
+    say!(
         "{} rays against {} triangles on {} thread{}: {:.3} s, {:.2} Mrays/s ({} hits)",
         rays.len(),
         n_tris,
@@ -432,12 +450,12 @@ fn raycast(a: &RaycastArgs) -> Result<()> {
         t_cast,
         rays.len() as f64 / t_cast.max(1e-12) / 1e6,
         hits
-    );
-    println!(
+    )?;
+    say!(
         "time: load {:.3} s, BVH build {:.3} s",
         t_load.as_secs_f64(),
         t_build.as_secs_f64()
-    );
+    )?;
     Ok(())
 }
 
@@ -455,12 +473,12 @@ fn raycast_fixture(a: &FixtureArgs) -> Result<()> {
     let rays_path = a.out.join("rays.bin");
     std::fs::write(&rays_path, bytes)
         .with_context(|| format!("writing {}", rays_path.display()))?;
-    println!(
+    say!(
         "{} ({} triangles), {} ({} rays)",
         mesh_path.display(),
         mesh.len(),
         rays_path.display(),
         rays.len()
-    );
+    )?;
     Ok(())
 }
