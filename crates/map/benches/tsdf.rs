@@ -23,14 +23,7 @@ use std::path::Path;
 fn sweep(world: &World, world_from_target: &Isometry3, seed: u64) -> SweepGrid {
     let scanner = Scanner::new(ScannerConfig::default()).expect("scanner");
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let scans: Vec<_> = SweepConfig::default()
-        .tilt_values(0.0, None)
-        .iter()
-        .map(|&t| {
-            let pose = world_from_target * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), t);
-            scanner.scan(world, &pose, &mut rng)
-        })
-        .collect();
+    let scans = scanner.nodding_sweep(world, world_from_target, &SweepConfig::default(), &mut rng);
     SweepGrid::from_scans(scanner.bearings_rad(), &scans).expect("sweep")
 }
 

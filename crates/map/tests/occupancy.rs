@@ -158,14 +158,7 @@ fn sweep_of(scene: &Scene, pose: &Isometry3, noise: bool, seed: u64) -> SweepGri
     config.material_range_bias = noise;
     let scanner = Scanner::new(config).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let scans: Vec<_> = SweepConfig::default()
-        .tilt_values(0.0, None)
-        .iter()
-        .map(|&t| {
-            let world_from_scanner = pose * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), t);
-            scanner.scan(scene, &world_from_scanner, &mut rng)
-        })
-        .collect();
+    let scans = scanner.nodding_sweep(scene, pose, &SweepConfig::default(), &mut rng);
     SweepGrid::from_scans(scanner.bearings_rad(), &scans).unwrap()
 }
 

@@ -2,7 +2,7 @@
 //! `occupancy.json` out; configs from TOML; bad files named in errors.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test code may panic
 
-use geom::{Isometry3, Point3, Real, Translation3, UnitQuaternion, Vector3};
+use geom::{Isometry3, Point3, Real, Translation3, UnitQuaternion};
 use map::{MapConfig, Mapper, OccupancyReport, PointSweep, SweepGrid, build_from_scans};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -21,17 +21,7 @@ fn bridge_sweep() -> SweepGrid {
         Translation3::new(0.317, 0.0, 0.7716),
         UnitQuaternion::identity(),
     );
-    let scans: Vec<_> = SweepConfig::default()
-        .tilt_values(0.0, None)
-        .iter()
-        .map(|&t| {
-            scanner.scan(
-                &world,
-                &(start * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), t)),
-                &mut rng,
-            )
-        })
-        .collect();
+    let scans = scanner.nodding_sweep(&world, &start, &SweepConfig::default(), &mut rng);
     SweepGrid::from_scans(scanner.bearings_rad(), &scans).unwrap()
 }
 

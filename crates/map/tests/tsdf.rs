@@ -24,14 +24,7 @@ fn sweep<W: RayCast>(
     config.material_range_bias = noise;
     let scanner = Scanner::new(config).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let scans: Vec<_> = SweepConfig::default()
-        .tilt_values(0.0, None)
-        .iter()
-        .map(|&t| {
-            let pose = world_from_target * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), t);
-            scanner.scan(world, &pose, &mut rng)
-        })
-        .collect();
+    let scans = scanner.nodding_sweep(world, world_from_target, &SweepConfig::default(), &mut rng);
     SweepGrid::from_scans(scanner.bearings_rad(), &scans).unwrap()
 }
 

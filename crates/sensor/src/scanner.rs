@@ -226,6 +226,28 @@ impl Scanner {
             .collect()
     }
 
+    /// A nodding sweep without a robot (a scanner on a tilt unit): one scan at
+    /// `world_from_mount · R_y(t)` for every tilt `t` of `sweep` centred on 0,
+    /// i.e. the scan plane nods about the scanner's own y axis (the ±90° ray),
+    /// as joint 5 nods it on the VM-6083 (A§5.1.1). Noise comes from `rng` in
+    /// scan order.
+    pub fn nodding_sweep<W: RayCast + ?Sized, R: Rng + ?Sized>(
+        &self,
+        world: &W,
+        world_from_mount: &Isometry3,
+        sweep: &crate::SweepConfig,
+        rng: &mut R,
+    ) -> Vec<Scan> {
+        sweep
+            .tilt_values(0.0, None)
+            .iter()
+            .map(|&t| {
+                let tilt = geom::UnitQuaternion::from_axis_angle(&Vector3::y_axis(), t);
+                self.scan(world, &(world_from_mount * tilt), rng)
+            })
+            .collect()
+    }
+
     /// Scan the world from a pose. Rays are cast in parallel; noise is drawn
     /// from `rng` in bearing order, so a seed fixes the result.
     pub fn scan<W: RayCast + ?Sized, R: Rng + ?Sized>(

@@ -34,11 +34,13 @@ fn sweep_of_a_plane_matches_the_prediction() {
     let tilts = sweep.tilt_values(0.0, None);
     assert_eq!(tilts.len(), 151);
     let mut rng = ChaCha8Rng::seed_from_u64(42);
+    let scans = scanner.nodding_sweep(&world, &Isometry3::identity(), &sweep, &mut rng);
+    assert_eq!(scans.len(), tilts.len());
     let mut predicted = 0usize;
     let mut measured = 0usize;
     let mut deviations = Vec::new();
-    for &t in &tilts {
-        let scan = scanner.scan(&world, &pose(t), &mut rng);
+    for (&t, scan) in tilts.iter().zip(&scans) {
+        assert!((scan.world_from_scanner.rotation.angle_to(&pose(t).rotation)).abs() < 1e-12);
         for (theta, ret) in scanner.bearings_rad().iter().zip(&scan.returns) {
             // Analytic: direction (cos θ sin t, −sin θ, cos θ cos t) meets z = 1 at
             // (tan t, −tan θ / cos t, 1), inside the slab when |y| ≤ 2.
