@@ -1,0 +1,166 @@
+//! Parameters of the surface model (P§2.3, P§4.3) and the tolerances derived from
+//! them.
+
+use crate::error::SurfaceError;
+use geom::Real;
+use serde::{Deserialize, Serialize};
+
+/// Parameters of the surface model. Defaults are Pudney's (P§4.3): λ = 0.05,
+/// μ = 10°, ψ = 20, φ = 0.05.
+///
+/// ```
+/// use surface::SurfaceConfig;
+/// let fine = SurfaceConfig { lambda: 0.02, ..SurfaceConfig::default() };
+/// assert_eq!(fine.mu_deg, 10.0);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SurfaceConfig {
+    /// Linear resolution λ, metres (P§2.3): gaps narrower than λ are filled, and
+    /// points must lie within λ (as a standard deviation, `s² < λ²`) of the point
+    /// or plane that represents them (P§2.2).
+    pub lambda: Real,
+    /// Angular resolution μ, degrees (P§2.3): planar polygons whose outward
+    /// normals differ by less than μ may merge; by more than μ they may share edges.
+    pub mu_deg: Real,
+    /// Redundancy count threshold ψ (P§2.9): when a failed attempt to share edges
+    /// between non-neighbours `S₁`, `S₂` (`n₁ < n₂` points) leaves `S₁` suspect,
+    /// `S₁` is redundant if `n₁ < ψ` and `n₁/n₂ < φ`.
+    pub psi: Real,
+    /// Redundancy ratio threshold φ (P§2.9): the `n₁/n₂ < φ` half of the test
+    /// above, a ratio of point counts (not a distance).
+    pub phi: Real,
+    /// Collinearity threshold as a fraction of λ (P§2.2 "collinear → point"):
+    /// points whose spread across their principal axis, `√u₂`, is below
+    /// `collinear_fraction · λ`, or below twice their spread off the plane
+    /// (`√u₂ < 2√u₁`, no well-defined plane), are represented by a point segment.
+    pub collinear_fraction: Real,
+}
+
+impl Default for SurfaceConfig {
+    fn default() -> Self {
+        Self {
+            lambda: 0.05,
+            mu_deg: 10.0,
+            psi: 20.0,
+            phi: 0.05,
+            collinear_fraction: 0.1,
+        }
+    }
+}
+
+impl SurfaceConfig {
+    /// Pudney's parameters with a different linear resolution λ.
+    pub fn with_lambda(lambda: Real) -> Self {
+        Self {
+            lambda,
+            ..Self::default()
+        }
+    }
+
+    /// Check every field's range.
+    pub fn validate(&self) -> Result<(), SurfaceError> {
+        let bad = |field: &'static str, value: Real, expected: &'static str| {
+            Err(SurfaceError::Config {
+                field,
+                value,
+                expected,
+            })
+        };
+        if !(self.lambda.is_finite() && self.lambda > 0.0) {
+            return bad("lambda", self.lambda, "a finite length > 0");
+        }
+        if !(self.mu_deg.is_finite() && self.mu_deg > 0.0 && self.mu_deg < 90.0) {
+            return bad("mu_deg", self.mu_deg, "an angle in (0, 90) degrees");
+        }
+        if !(self.psi.is_finite() && self.psi >= 0.0) {
+            return bad("psi", self.psi, "a finite count >= 0");
+        }
+        if !(self.phi.is_finite() && self.phi >= 0.0) {
+            return bad("phi", self.phi, "a finite ratio >= 0");
+        }
+        if !(self.collinear_fraction.is_finite()
+            && self.collinear_fraction > 0.0
+            && self.collinear_fraction < 1.0)
+        {
+            return bad(
+                "collinear_fraction",
+                self.collinear_fraction,
+                "a fraction in (0, 1)",
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Tolerances derived from λ and μ. Every geometric decision in the crate uses one
+/// of these, never a bare constant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Tolerances {
+    /// λ.
+    pub lambda: Real,
+    /// cos μ: normals closer than μ satisfy `n₁·n₂ > cos_mu`.
+    pub cos_mu: Real,
+    /// Coincidence length `λ·10⁻⁴`: two points closer than this are the same
+    /// vertex; perimeters must keep non-adjacent edges farther apart than this and
+    /// every edge longer than this (simplicity); contacts within it at the ends of
+    /// a sight line do not block sight.
+    pub eps: Real,
+    /// Placement tolerance `max(λ·10⁻⁵, 10⁻⁹)`: vertices lie this close to their
+    /// plane, shared-edge vertices to their intersection line, corner vertices to
+    /// their corner point. Placement is exact up to rounding, so this only absorbs
+    /// floating-point error.
+    pub place: Real,
+    /// Separation of a duplicated vertex (P§2.8): `λ·10⁻²`, capped at a quarter of
+    /// the adjoining edges.
+    pub split: Real,
+    /// Collinearity: the middle covariance eigenvalue must reach
+    /// `(collinear_fraction·λ)²` for a plane.
+    pub min_spread_sq: Real,
+    /// `sin(μ/2)`: planes whose normals are closer than μ/2 to parallel or
+    /// antiparallel have no usable intersection line for shared edges (P§2.4.4
+    /// dissolves 180° neighbours; the same guard protects near-0° ones).
+    pub sin_parallel: Real,
+    /// `sin μ`: a new plane must not contain its points' summed sensing axis to
+    /// within μ (P§2.4.1: the outside must be decidable).
+    pub sin_mu: Real,
+    /// Sine of the smallest angle between two intersection lines that still
+    /// defines a corner point (P§2.7 "must not be parallel"): `10⁻³`.
+    pub sin_corner: Real,
+}
+
+impl Tolerances {
+    pub fn new(config: &SurfaceConfig) -> Self {
+        let lambda = config.lambda;
+        let mu = config.mu_deg.to_radians();
+        let spread = config.collinear_fraction * lambda;
+        Self {
+            lambda,
+            cos_mu: mu.cos(),
+            eps: lambda * 1e-4,
+            place: (lambda * 1e-5).max(1e-9),
+            split: lambda * 1e-2,
+            min_spread_sq: spread * spread,
+            sin_parallel: (0.5 * mu).sin(),
+            sin_mu: mu.sin(),
+            sin_corner: 1e-3,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_pudneys() {
+        let c = SurfaceConfig::default();
+        assert_eq!((c.lambda, c.mu_deg, c.psi, c.phi), (0.05, 10.0, 20.0, 0.05));
+        assert!(c.validate().is_ok());
+        assert!(SurfaceConfig::with_lambda(-1.0).validate().is_err());
+        let t: SurfaceConfig = serde_json::from_str(r#"{"lambda": 0.02}"#).unwrap();
+        assert_eq!(t.lambda, 0.02);
+        assert_eq!(t.psi, 20.0);
+        assert!(serde_json::from_str::<SurfaceConfig>(r#"{"lamda": 0.02}"#).is_err());
+    }
+}

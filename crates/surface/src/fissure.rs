@@ -1,0 +1,481 @@
+//! Filling fissures (P§2.5, Fig. 15–16).
+//!
+//! Three consecutive vertices `v₁ v₂ v₃` whose edges are not shared may form
+//! fissures of type I–III; four, `v₁ v₂ v₃ v₄` with `|v₂v₃| < λ`, of type IV–VI.
+//! The external angle at a vertex is measured outside the perimeter (on the right
+//! of an anticlockwise perimeter), so "external angle < 180°" is a right turn and
+//! "< 90°" a right turn sharper than 90°:
+//!
+//! | type | condition | filled by |
+//! |---|---|---|
+//! | I | ext(v₂) < 180°, `|v₁v₃| < λ` | edge `v₁v₃`, `v₂` removed |
+//! | II | ext(v₂) < 90°, `d(v₁, v₂v₃) < λ` | `v₅` on `v₂v₃` closest to `v₁`, edge `v₁v₅` |
+//! | III | ext(v₂) < 90°, `d(v₃, v₁v₂) < λ` | `v₅` on `v₁v₂` closest to `v₃`, edge `v₅v₃` |
+//! | IV | ext(v₁v₂, v₃v₄) < 180° (total turn over `v₂ v₃` to the right), `|v₁v₄| < λ` | edge `v₁v₄`, `v₂ v₃` removed |
+//! | V | type II on `v₁ v₃ v₄` | `v₅` on `v₃v₄` closest to `v₁`, edge `v₁v₅` |
+//! | VI | type III on `v₁ v₂ v₄` | `v₅` on `v₁v₂` closest to `v₄`, edge `v₅v₄` |
+//!
+//! Each window of the perimeter is checked in the order IV, V, VI, I, II, III;
+//! the new edge's end points must sight each other. Filling one fissure may form
+//! another, so after a fill the scan steps back three vertices and continues
+//! (cascading, Fig. 16). The cascade terminates: a full pass without a fill ends
+//! it, and the number of fills is capped at `2n + 8` for a perimeter of `n`
+//! vertices (types I, IV, V and VI remove at least one vertex; II and III replace
+//! one, so the cap bounds the rare chains of those).
+//!
+//! To collapse a hole's perimeter (P§2.4.3) the restrictions on shared edges and
+//! sight are lifted, and filling continues until fewer than three vertices
+//! remain.
+
+use crate::perimeter::{PerimPoint, Poly2, param_on_segment, turn};
+use crate::segment::{Edge, EdgeKey};
+use geom::polygon2::distance_point_segment;
+use geom::{Point2, Real};
+use std::f64::consts::FRAC_PI_2;
+
+/// The six fissure types of P§2.5 (Fig. 15).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum FissureType {
+    /// Fig. 15(a).
+    I,
+    /// Fig. 15(b).
+    II,
+    /// Fig. 15(c).
+    III,
+    /// Fig. 15(d).
+    IV,
+    /// Fig. 15(e).
+    V,
+    /// Fig. 15(f).
+    VI,
+}
+
+/// Whether the restrictions of ordinary fissure filling apply.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum FissureMode {
+    /// Edges of the fissure may not be shared, the new edge's ends must sight
+    /// each other, and at least three vertices remain.
+    Restricted,
+    /// Collapsing a hole's perimeter: no restrictions.
+    Collapse,
+}
+
+/// Turns sharper than this count as turns (not collinear vertices).
+const MIN_TURN: Real = 1e-9;
+
+/// Fill fissures in `poly` (see the [module docs](self)); returns the types
+/// filled, in order.
+pub(crate) fn fill_fissures(
+    poly: &mut Poly2,
+    mode: FissureMode,
+    lambda: Real,
+    eps: Real,
+    fresh: &mut dyn FnMut() -> EdgeKey,
+) -> Vec<FissureType> {
+    let mut filled = Vec::new();
+    let cap = 2 * poly.len() + 8;
+    let mut i = 0usize;
+    let mut without_fill = 0usize;
+    while filled.len() < cap {
+        let n = poly.len();
+        if n < 3 || without_fill >= n {
+            break;
+        }
+        let at = i % n;
+        if let Some((kind, next)) = fill_window(poly, at, mode, lambda, eps, fresh) {
+            *poly = next;
+            filled.push(kind);
+            without_fill = 0;
+            let m = poly.len().max(1);
+            i = (at + 3 * m - 3) % m;
+        } else {
+            i = at + 1;
+            without_fill += 1;
+        }
+    }
+    filled
+}
+
+/// Remove vertices that lie within `eps` of the straight edge joining their
+/// neighbours (between two non-shared edges, not corner vertices). Extending a
+/// perimeter to points that lie along an edge leaves such vertices behind; they
+/// carry no shape, and every perimeter query costs time per vertex. (Our
+/// addition to P§2.5: the limit of a type I fissure whose external angle tends
+/// to 180°.) Returns the number removed.
+pub(crate) fn remove_collinear(
+    poly: &mut Poly2,
+    eps: Real,
+    fresh: &mut dyn FnMut() -> EdgeKey,
+) -> usize {
+    let mut removed = 0;
+    let mut i = 0;
+    // Each removal shortens the perimeter by one vertex; a pass without removal ends.
+    let mut without = 0;
+    while poly.len() > 3 && without < poly.len() {
+        let n = poly.len();
+        let k = i % n;
+        let (a, v, b) = (poly.pt(k + n - 1), poly.pt(k), poly.pt(k + 1));
+        let ok = !poly.is_shared(k)
+            && !poly.is_shared(k + n - 1)
+            && poly.nodes[k].corner.is_none()
+            && distance_point_segment(&v, &a, &b) <= eps
+            && (b - a).dot(&(v - a)) > 0.0
+            && (a - b).dot(&(v - b)) > 0.0;
+        if ok {
+            let prev = (k + n - 1) % n;
+            poly.nodes[prev].edge = Edge {
+                key: fresh(),
+                share: None,
+            };
+            poly.nodes.remove(k);
+            removed += 1;
+            without = 0;
+            i = k.saturating_sub(1);
+        } else {
+            i = k + 1;
+            without += 1;
+        }
+    }
+    removed
+}
+
+/// Collapse a hole's perimeter (clockwise, the polygon on its left) by filling
+/// fissures without restrictions. `true` when it collapsed.
+pub(crate) fn collapse_hole(hole: &[Point2], lambda: Real, eps: Real) -> bool {
+    let mut key = 0u32;
+    let mut fresh = || {
+        key += 1;
+        EdgeKey(key)
+    };
+    let mut poly = Poly2 {
+        nodes: hole
+            .iter()
+            .map(|p| crate::perimeter::Node2::plain(*p, EdgeKey(0)))
+            .collect(),
+    };
+    fill_fissures(&mut poly, FissureMode::Collapse, lambda, eps, &mut fresh);
+    poly.len() < 3
+}
+
+/// Try the fissure types at the window starting at vertex `i`.
+fn fill_window(
+    poly: &Poly2,
+    i: usize,
+    mode: FissureMode,
+    lambda: Real,
+    eps: Real,
+    fresh: &mut dyn FnMut() -> EdgeKey,
+) -> Option<(FissureType, Poly2)> {
+    let n = poly.len();
+    let restricted = mode == FissureMode::Restricted;
+    let min_left = if restricted { 3 } else { 0 };
+    let (v1, v2, v3, v4) = (poly.pt(i), poly.pt(i + 1), poly.pt(i + 2), poly.pt(i + 3));
+    let plain = |poly_edges_ok: bool| poly_edges_ok || !restricted;
+    let two_free = plain(!poly.is_shared(i) && !poly.is_shared(i + 1));
+    let three_free = two_free && plain(!poly.is_shared(i + 2));
+    let d12 = v2 - v1;
+    let d23 = v3 - v2;
+    let d34 = v4 - v3;
+    let mut candidates: Vec<(FissureType, PerimPoint, PerimPoint)> = Vec::new();
+    if n >= 4 && three_free && (v3 - v2).norm() < lambda {
+        // IV
+        if n >= min_left + 2
+            && turn(&d12, &d23) + turn(&d23, &d34) < -MIN_TURN
+            && (v4 - v1).norm() < lambda
+        {
+            candidates.push((
+                FissureType::IV,
+                PerimPoint::vertex(i),
+                PerimPoint::vertex(i + 3),
+            ));
+        }
+        if n > min_left {
+            // V: type II on v1 v3 v4.
+            if turn(&(v3 - v1), &d34) < -FRAC_PI_2 && distance_point_segment(&v1, &v3, &v4) < lambda
+            {
+                let t = param_on_segment(&v1, &v3, &v4);
+                candidates.push((
+                    FissureType::V,
+                    PerimPoint::vertex(i),
+                    PerimPoint {
+                        edge: (i + 2) % n,
+                        t,
+                    },
+                ));
+            }
+            // VI: type III on v1 v2 v4.
+            if turn(&d12, &(v4 - v2)) < -FRAC_PI_2 && distance_point_segment(&v4, &v1, &v2) < lambda
+            {
+                let t = param_on_segment(&v4, &v1, &v2);
+                candidates.push((
+                    FissureType::VI,
+                    PerimPoint { edge: i % n, t },
+                    PerimPoint::vertex(i + 3),
+                ));
+            }
+        }
+    }
+    if two_free {
+        let t2 = turn(&d12, &d23);
+        if n > min_left && t2 < -MIN_TURN && (v3 - v1).norm() < lambda {
+            candidates.push((
+                FissureType::I,
+                PerimPoint::vertex(i),
+                PerimPoint::vertex(i + 2),
+            ));
+        }
+        if t2 < -FRAC_PI_2 {
+            if distance_point_segment(&v1, &v2, &v3) < lambda {
+                let t = param_on_segment(&v1, &v2, &v3);
+                candidates.push((
+                    FissureType::II,
+                    PerimPoint::vertex(i),
+                    PerimPoint {
+                        edge: (i + 1) % n,
+                        t,
+                    },
+                ));
+            }
+            if distance_point_segment(&v3, &v1, &v2) < lambda {
+                let t = param_on_segment(&v3, &v1, &v2);
+                candidates.push((
+                    FissureType::III,
+                    PerimPoint { edge: i % n, t },
+                    PerimPoint::vertex(i + 2),
+                ));
+            }
+        }
+    }
+    for (kind, from, to) in candidates {
+        let removes = match kind {
+            FissureType::IV => 2,
+            FissureType::I | FissureType::V | FissureType::VI => 1,
+            FissureType::II | FissureType::III => 0,
+        };
+        if !restricted && n < 3 + removes {
+            // The hole's perimeter collapses.
+            return Some((kind, Poly2::default()));
+        }
+        let from = poly.snap(from, eps);
+        let to = poly.snap(to, eps);
+        let (a, b) = (poly.point_at(from), poly.point_at(to));
+        if (b - a).norm() <= eps && restricted {
+            continue;
+        }
+        if restricted && !poly.sight(&a, &b, eps, |_| false) {
+            continue;
+        }
+        let edge = Edge {
+            key: fresh(),
+            share: None,
+        };
+        let Ok(next) = poly.replace_section(from, to, edge, &[], fresh) else {
+            continue;
+        };
+        if next.len() >= n && !matches!(kind, FissureType::II | FissureType::III) {
+            continue;
+        }
+        if restricted {
+            if next.len() < 3 || !next.is_valid(eps) || next.area() <= poly.area() {
+                continue;
+            }
+        } else if next.len() >= 3 && next.area().abs() >= poly.area().abs() && next.len() >= n {
+            continue;
+        }
+        return Some((kind, next));
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::perimeter::Node2;
+
+    fn poly(pts: &[(Real, Real)]) -> Poly2 {
+        Poly2 {
+            nodes: pts
+                .iter()
+                .enumerate()
+                .map(|(i, &(x, y))| Node2::plain(Point2::new(x, y), EdgeKey(i as u32)))
+                .collect(),
+        }
+    }
+
+    fn fill(p: &mut Poly2) -> Vec<FissureType> {
+        let mut k = 1000;
+        let mut fresh = || {
+            k += 1;
+            EdgeKey(k)
+        };
+        fill_fissures(p, FissureMode::Restricted, 0.05, 1e-6, &mut fresh)
+    }
+
+    /// P Fig. 15(a): a narrow V notch, mouth narrower than λ.
+    #[test]
+    fn fig15a_type_i() {
+        let mut p = poly(&[
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (0.52, 1.0),
+            (0.5, 0.7),
+            (0.48, 1.0),
+            (0.0, 1.0),
+        ]);
+        let kinds = fill(&mut p);
+        assert_eq!(kinds, vec![FissureType::I]);
+        assert_eq!(p.len(), 6);
+        assert!((p.area() - 1.0).abs() < 1e-12);
+    }
+
+    /// P Fig. 15(b): a slanted slot whose first wall is close to the second edge.
+    #[test]
+    fn fig15b_type_ii() {
+        // Notch entering at (0.4, 1), bottom (0.7, 0.6), leaving at (0.75, 1.0):
+        // sharp reflex turn at the bottom, v1 within λ of edge v2v3 but |v1v3| ≥ λ.
+        let mut p = poly(&[
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (0.46, 0.9),
+            (0.5, 0.5),
+            (0.4, 1.0),
+            (0.0, 1.0),
+        ]);
+        let kinds = fill(&mut p);
+        assert_eq!(kinds.first(), Some(&FissureType::II), "{kinds:?}");
+        assert!(p.is_valid(1e-9));
+    }
+
+    /// P Fig. 15(c): mirror image of (b).
+    #[test]
+    fn fig15c_type_iii() {
+        let mut p = poly(&[
+            (1.0, 1.0),
+            (0.6, 1.0),
+            (0.5, 0.5),
+            (0.54, 0.9),
+            (0.0, 1.0),
+            (0.0, 0.0),
+            (1.0, 0.0),
+        ]);
+        let kinds = fill(&mut p);
+        assert_eq!(kinds.first(), Some(&FissureType::III), "{kinds:?}");
+        assert!(p.is_valid(1e-9));
+    }
+
+    /// P Fig. 15(d): a square-bottomed slot narrower than λ.
+    #[test]
+    fn fig15d_type_iv() {
+        let mut p = poly(&[
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (0.52, 1.0),
+            (0.52, 0.6),
+            (0.48, 0.6),
+            (0.48, 1.0),
+            (0.0, 1.0),
+        ]);
+        let kinds = fill(&mut p);
+        assert_eq!(kinds, vec![FissureType::IV]);
+        assert_eq!(p.len(), 6);
+        assert!((p.area() - 1.0).abs() < 1e-12);
+    }
+
+    /// P Fig. 15(e): a slot with a short bottom whose far wall slants back.
+    #[test]
+    fn fig15e_type_v() {
+        let mut p = poly(&[
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (0.46, 0.9),
+            (0.51, 0.5),
+            (0.49, 0.5),
+            (0.4, 1.0),
+            (0.0, 1.0),
+        ]);
+        let kinds = fill(&mut p);
+        assert_eq!(kinds.first(), Some(&FissureType::V), "{kinds:?}");
+        assert!(p.is_valid(1e-9));
+    }
+
+    /// P Fig. 15(f): mirror image of (e).
+    #[test]
+    fn fig15f_type_vi() {
+        let mut p = poly(&[
+            (1.0, 1.0),
+            (0.6, 1.0),
+            (0.51, 0.5),
+            (0.49, 0.5),
+            (0.54, 0.9),
+            (0.0, 1.0),
+            (0.0, 0.0),
+            (1.0, 0.0),
+        ]);
+        let kinds = fill(&mut p);
+        assert_eq!(kinds.first(), Some(&FissureType::VI), "{kinds:?}");
+        assert!(p.is_valid(1e-9));
+    }
+
+    /// P Fig. 16: filling one fissure forms the next (a staircase notch).
+    #[test]
+    fn fig16_cascade() {
+        // A narrow V notch with several vertices per wall: each fill exposes the
+        // next fissure one step up the notch.
+        let mut pts = vec![(0.0, 0.0), (1.0, 0.0), (1.0, 1.0)];
+        for k in (1..=4).rev() {
+            pts.push((0.5 + 0.004 * f64::from(k), 0.9 + 0.025 * f64::from(k)));
+        }
+        pts.push((0.5, 0.9));
+        for k in 1..=4 {
+            pts.push((0.5 - 0.004 * f64::from(k), 0.9 + 0.025 * f64::from(k)));
+        }
+        pts.push((0.0, 1.0));
+        let mut p = poly(&pts);
+        let kinds = fill(&mut p);
+        assert!(kinds.len() >= 3, "{kinds:?}");
+        assert!((p.area() - 1.0).abs() < 1e-9, "{:?}", p.points());
+        assert!(p.len() <= 6);
+    }
+
+    /// Shared edges are never part of a fissure; sight blocks fills that would cross.
+    #[test]
+    fn shared_edges_block_fissures() {
+        let mut p = poly(&[
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (0.52, 1.0),
+            (0.5, 0.7),
+            (0.48, 1.0),
+            (0.0, 1.0),
+        ]);
+        p.nodes[3].edge.share = Some(crate::segment::Share {
+            neighbour: crate::segment::SegmentId(9),
+            pair: crate::segment::PairId(1),
+        });
+        assert!(fill(&mut p).is_empty());
+    }
+
+    #[test]
+    fn thin_hole_collapses() {
+        // Clockwise sliver triangle, width < λ.
+        let hole = [
+            Point2::new(0.0, 0.0),
+            Point2::new(0.01, 0.3),
+            Point2::new(0.02, 0.0),
+        ];
+        assert!(collapse_hole(&hole, 0.05, 1e-6));
+        // A wide square hole does not.
+        let hole = [
+            Point2::new(0.0, 0.0),
+            Point2::new(0.0, 0.3),
+            Point2::new(0.3, 0.3),
+            Point2::new(0.3, 0.0),
+        ];
+        assert!(!collapse_hole(&hole, 0.05, 1e-6));
+    }
+}

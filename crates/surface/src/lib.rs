@@ -1,0 +1,37 @@
+#![doc = include_str!("../README.md")]
+
+pub mod changelog;
+pub mod config;
+pub mod corner;
+pub mod error;
+pub mod export;
+#[cfg(test)]
+mod figures;
+pub mod fissure;
+pub mod index;
+pub mod input;
+pub mod invariants;
+pub mod merge;
+pub mod model;
+pub mod overlay;
+pub mod perimeter;
+pub mod relations;
+pub mod reposition;
+pub mod segment;
+pub mod share;
+pub mod update;
+
+pub use changelog::{ChangeLog, Merger};
+pub use config::SurfaceConfig;
+pub use error::{InvariantViolation, SurfaceError};
+pub use export::{EdgeJson, ModelJson, ModelStats, SegmentJson, StatsJson, UpdateTimes};
+pub use fissure::FissureType;
+pub use input::{SensorSet, read_initial_segments_json, read_sets_jsonl};
+pub use merge::MergeFailure;
+pub use model::SurfaceModel;
+pub use overlay::CombineError;
+pub use segment::{
+    CornerId, Edge, EdgeKey, Node, PairId, PointSegment, Polygon, Segment, SegmentId, SegmentKind,
+    Share,
+};
+pub use share::Concavity;

@@ -1,0 +1,516 @@
+//! Perimeters in a plane's 2-D coordinates: the working form every perimeter
+//! operation uses (P§2.4–2.7 all act on "perimeter points" and "perimeter
+//! sections"). A `Poly2` is converted from a [`Polygon`] through a
+//! [`PlaneFrame`] (orthogonal projection) and back.
+
+use crate::segment::{CornerId, Edge, EdgeKey, Node, Polygon};
+use geom::polygon2::{self, SegmentIntersection};
+use geom::{PlaneFrame, Point2, Real, Vector2};
+
+/// A perimeter vertex in 2-D with its records.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Node2 {
+    pub p: Point2,
+    pub corner: Option<CornerId>,
+    pub edge: Edge,
+}
+
+impl Node2 {
+    pub fn plain(p: Point2, key: EdgeKey) -> Self {
+        Self {
+            p,
+            corner: None,
+            edge: Edge { key, share: None },
+        }
+    }
+}
+
+/// A point on a perimeter: edge index and parameter `t ∈ [0, 1)` along it
+/// (`t = 0` is the edge's start vertex).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PerimPoint {
+    pub edge: usize,
+    pub t: Real,
+}
+
+impl PerimPoint {
+    pub fn vertex(i: usize) -> Self {
+        Self { edge: i, t: 0.0 }
+    }
+
+    pub fn is_vertex(&self) -> bool {
+        self.t == 0.0
+    }
+}
+
+/// Why a perimeter edit was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum EditError {
+    /// The edit would cut a shared edge.
+    CutsSharedEdge,
+    /// The section is empty or the whole perimeter.
+    Degenerate,
+}
+
+/// A closed perimeter in 2-D; edge `i` joins node `i` to node `i + 1`.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub(crate) struct Poly2 {
+    pub nodes: Vec<Node2>,
+}
+
+impl Poly2 {
+    /// The polygon's perimeter projected into `frame`.
+    pub fn from_polygon(poly: &Polygon, frame: &PlaneFrame) -> Self {
+        Self {
+            nodes: poly
+                .nodes
+                .iter()
+                .map(|n| Node2 {
+                    p: frame.to_2d(&n.position),
+                    corner: n.corner,
+                    edge: n.edge,
+                })
+                .collect(),
+        }
+    }
+
+    /// Back to 3-D nodes on the frame's plane.
+    pub fn to_nodes(&self, frame: &PlaneFrame) -> Vec<Node> {
+        self.nodes
+            .iter()
+            .map(|n| Node {
+                position: frame.to_3d(&n.p),
+                corner: n.corner,
+                edge: n.edge,
+            })
+            .collect()
+    }
+
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    #[inline]
+    pub fn next(&self, i: usize) -> usize {
+        let n = self.nodes.len().max(1);
+        (i + 1) % n
+    }
+
+    #[inline]
+    pub fn prev(&self, i: usize) -> usize {
+        let n = self.nodes.len().max(1);
+        (i + n - 1) % n
+    }
+
+    /// Vertex `i` (modulo the count).
+    #[inline]
+    pub fn pt(&self, i: usize) -> Point2 {
+        let n = self.nodes.len();
+        if n == 0 {
+            return Point2::origin();
+        }
+        self.nodes[i % n].p
+    }
+
+    /// Edge `i` as (start, end).
+    #[inline]
+    pub fn seg(&self, i: usize) -> (Point2, Point2) {
+        (self.pt(i), self.pt(i + 1))
+    }
+
+    /// The record of edge `i` (modulo the count).
+    #[inline]
+    pub fn edge(&self, i: usize) -> Edge {
+        let n = self.nodes.len().max(1);
+        self.nodes.get(i % n).map_or(
+            Edge {
+                key: EdgeKey(u32::MAX),
+                share: None,
+            },
+            |n| n.edge,
+        )
+    }
+
+    #[inline]
+    pub fn is_shared(&self, i: usize) -> bool {
+        self.edge(i).share.is_some()
+    }
+
+    pub fn points(&self) -> Vec<Point2> {
+        self.nodes.iter().map(|n| n.p).collect()
+    }
+
+    pub fn edge_len(&self, i: usize) -> Real {
+        let (a, b) = self.seg(i);
+        (b - a).norm()
+    }
+
+    /// Signed area (positive when anticlockwise).
+    pub fn area(&self) -> Real {
+        polygon2::signed_area(&self.points())
+    }
+
+    /// Simple (with coincidence tolerance `eps`) and anticlockwise.
+    pub fn is_valid(&self, eps: Real) -> bool {
+        let pts = self.points();
+        pts.len() >= 3 && polygon2::signed_area(&pts) > 0.0 && is_simple_fast(&pts, eps)
+    }
+
+    /// The point at `pp`.
+    pub fn point_at(&self, pp: PerimPoint) -> Point2 {
+        let (a, b) = self.seg(pp.edge);
+        a + (b - a) * pp.t
+    }
+
+    /// Snap a perimeter point to a vertex when it is within `eps` of one.
+    pub fn snap(&self, pp: PerimPoint, eps: Real) -> PerimPoint {
+        let n = self.len().max(1);
+        let len = self.edge_len(pp.edge);
+        let edge = pp.edge % n;
+        if pp.t * len <= eps {
+            PerimPoint::vertex(edge)
+        } else if (1.0 - pp.t) * len <= eps {
+            PerimPoint::vertex((edge + 1) % n)
+        } else {
+            PerimPoint { edge, t: pp.t }
+        }
+    }
+
+    /// Perimeter distance from `a` anticlockwise to `b` (0 when equal).
+    pub fn arc_len(&self, a: PerimPoint, b: PerimPoint) -> Real {
+        let n = self.len();
+        if n == 0 {
+            return 0.0;
+        }
+        if a.edge == b.edge && b.t >= a.t {
+            return (b.t - a.t) * self.edge_len(a.edge);
+        }
+        let mut total = (1.0 - a.t) * self.edge_len(a.edge);
+        let mut i = self.next(a.edge);
+        let mut guard = 0;
+        while i != b.edge % n && guard < n {
+            total += self.edge_len(i);
+            i = self.next(i);
+            guard += 1;
+        }
+        total + b.t * self.edge_len(b.edge)
+    }
+
+    /// The perimeter point closest to `q`, and its distance.
+    pub fn closest(&self, q: &Point2) -> (PerimPoint, Real) {
+        let mut best = (PerimPoint::vertex(0), Real::INFINITY);
+        for i in 0..self.len() {
+            let (a, b) = self.seg(i);
+            let t = param_on_segment(q, &a, &b);
+            let d = (q - (a + (b - a) * t)).norm();
+            if d < best.1 {
+                best = (PerimPoint { edge: i, t }, d);
+            }
+        }
+        best
+    }
+
+    /// Edges whose index is in the anticlockwise section `from ..= to` of edge
+    /// indices (inclusive, cyclic).
+    pub fn edge_range(&self, from: usize, to: usize) -> Vec<usize> {
+        let n = self.len();
+        if n == 0 {
+            return Vec::new();
+        }
+        let mut out = Vec::new();
+        let mut i = from % n;
+        for _ in 0..n {
+            out.push(i);
+            if i == to % n {
+                break;
+            }
+            i = self.next(i);
+        }
+        out
+    }
+
+    /// Indices of the edges touched by the open section from `a` to `b`
+    /// (anticlockwise): the edges of which a part of positive length lies strictly
+    /// between them.
+    pub fn section_edges(&self, a: PerimPoint, b: PerimPoint) -> Vec<usize> {
+        let n = self.len();
+        if n == 0 {
+            return Vec::new();
+        }
+        let last = if b.t == 0.0 {
+            self.prev(b.edge)
+        } else {
+            b.edge % n
+        };
+        if a.edge == b.edge && b.t > a.t {
+            return vec![a.edge % n];
+        }
+        self.edge_range(a.edge, last)
+    }
+
+    /// `true` when the segment `a b` crosses none of the perimeter's edges,
+    /// except those for which `skip` holds (P§2.4.2 sight test).
+    pub fn sight(&self, a: &Point2, b: &Point2, eps: Real, skip: impl Fn(usize) -> bool) -> bool {
+        let n = self.len();
+        // Only edges whose boxes meet the sight line's box can cross it.
+        let (x0, x1) = (a.x.min(b.x) - eps, a.x.max(b.x) + eps);
+        let (y0, y1) = (a.y.min(b.y) - eps, a.y.max(b.y) + eps);
+        let edges: Vec<(Point2, Point2)> = (0..n)
+            .filter(|&i| !skip(i))
+            .map(|i| self.seg(i))
+            .filter(|(c, d)| {
+                !(c.x.max(d.x) < x0 || c.x.min(d.x) > x1 || c.y.max(d.y) < y0 || c.y.min(d.y) > y1)
+            })
+            .collect();
+        polygon2::can_sight(a, b, edges.iter().map(|(c, d)| (c, d)), eps)
+    }
+
+    /// Replace the section that runs anticlockwise from `from` to `to` by new
+    /// vertices: the result keeps the perimeter from `to` around to `from`, gives
+    /// the vertex at `from` the outgoing edge `from_edge`, then appends `inserted`
+    /// (the last inserted vertex's edge runs to `to`). Vertices are formed at
+    /// `from` and `to` unless they are vertices already (P§2.4.2 step 1); an edge
+    /// cut by them becomes a new edge (`fresh` keys).
+    pub fn replace_section(
+        &self,
+        from: PerimPoint,
+        to: PerimPoint,
+        from_edge: Edge,
+        inserted: &[Node2],
+        fresh: &mut dyn FnMut() -> EdgeKey,
+    ) -> Result<Self, EditError> {
+        let n = self.len();
+        if n < 2 {
+            return Err(EditError::Degenerate);
+        }
+        let (i, s) = (from.edge % n, from.t);
+        let (j, u) = (to.edge % n, to.t);
+        if i == j && s == u {
+            return Err(EditError::Degenerate);
+        }
+        let mut out = Vec::with_capacity(n + inserted.len() + 2);
+        // The vertex at `to`.
+        if u == 0.0 {
+            out.push(self.nodes[j]);
+        } else {
+            if self.nodes[j].edge.share.is_some() {
+                return Err(EditError::CutsSharedEdge);
+            }
+            out.push(Node2::plain(self.point_at(to), fresh()));
+        }
+        // Whole vertices after `to` up to vertex i.
+        let mut count = (i + n - j) % n;
+        if i == j && s < u {
+            count = n;
+        }
+        let mut k = j;
+        for _ in 0..count {
+            k = (k + 1) % n;
+            out.push(self.nodes[k]);
+        }
+        // The vertex at `from`.
+        if s == 0.0 {
+            // Vertex i is the `from` vertex (it is the last pushed, or `to` itself
+            // when the kept section is a single vertex).
+            let Some(last) = out.last_mut() else {
+                return Err(EditError::Degenerate);
+            };
+            last.edge = from_edge;
+        } else {
+            if self.nodes[i].edge.share.is_some() {
+                return Err(EditError::CutsSharedEdge);
+            }
+            if let Some(last) = out.last_mut() {
+                last.edge = Edge {
+                    key: fresh(),
+                    share: None,
+                };
+            }
+            out.push(Node2 {
+                p: self.point_at(from),
+                corner: None,
+                edge: from_edge,
+            });
+        }
+        out.extend_from_slice(inserted);
+        if out.len() < 3 {
+            return Err(EditError::Degenerate);
+        }
+        Ok(Self { nodes: out })
+    }
+}
+
+/// [`polygon2::is_simple`] with a bounding-box rejection in front of every
+/// edge-pair test (perimeters are checked after every operation). Pairs whose
+/// boxes, grown by `tol`, do not overlap cannot meet; the others get the exact
+/// test of `geom` on the two-edge sub-problem.
+pub(crate) fn is_simple_fast(poly: &[Point2], tol: Real) -> bool {
+    let n = poly.len();
+    if n < 3 || polygon2::signed_area(poly).abs() <= tol * tol {
+        return false;
+    }
+    let boxes: Vec<(Real, Real, Real, Real)> = (0..n)
+        .map(|i| {
+            let (a, b) = (poly[i], poly[(i + 1) % n]);
+            (
+                a.x.min(b.x) - tol,
+                a.x.max(b.x) + tol,
+                a.y.min(b.y) - tol,
+                a.y.max(b.y) + tol,
+            )
+        })
+        .collect();
+    for i in 0..n {
+        let a = &poly[i];
+        let b = &poly[(i + 1) % n];
+        if (b - a).norm() <= tol {
+            return false;
+        }
+        let bi = boxes[i];
+        for j in (i + 1)..n {
+            let bj = boxes[j];
+            if bi.1 < bj.0 || bj.1 < bi.0 || bi.3 < bj.2 || bj.3 < bi.2 {
+                continue;
+            }
+            let c = &poly[j];
+            let d = &poly[(j + 1) % n];
+            let adjacent_next = j == i + 1;
+            let adjacent_prev = i == 0 && j == n - 1;
+            // Adjacent edges that do not fold back onto each other meet only at
+            // their shared vertex.
+            if adjacent_next || adjacent_prev {
+                let (d1, d2) = if adjacent_next {
+                    (b - a, d - c)
+                } else {
+                    (d - c, b - a)
+                };
+                let cross = d1.x * d2.y - d1.y * d2.x;
+                if d1.dot(&d2) > 0.0 || cross.abs() > tol * (d1.norm() + d2.norm()) {
+                    continue;
+                }
+            }
+            match polygon2::intersect_segments(a, b, c, d, tol) {
+                SegmentIntersection::None => {}
+                SegmentIntersection::Overlap { .. } => return false,
+                SegmentIntersection::Point { s, t } => {
+                    let at_shared = (adjacent_next
+                        && s >= 1.0 - tol / (b - a).norm()
+                        && t <= tol / (d - c).norm())
+                        || (adjacent_prev
+                            && s <= tol / (b - a).norm()
+                            && t >= 1.0 - tol / (d - c).norm());
+                    if !at_shared {
+                        return false;
+                    }
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Parameter in `[0, 1]` of the point of segment `a b` closest to `q`.
+pub(crate) fn param_on_segment(q: &Point2, a: &Point2, b: &Point2) -> Real {
+    let d = b - a;
+    let len2 = d.norm_squared();
+    if len2 <= 0.0 {
+        return 0.0;
+    }
+    ((q - a).dot(&d) / len2).clamp(0.0, 1.0)
+}
+
+/// 2-D cross product.
+#[inline]
+pub(crate) fn cross2(a: &Vector2, b: &Vector2) -> Real {
+    a.x * b.y - a.y * b.x
+}
+
+/// Signed turn from direction `a` to direction `b`, in `(-π, π]` (left positive).
+pub(crate) fn turn(a: &Vector2, b: &Vector2) -> Real {
+    cross2(a, b).atan2(a.dot(b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square() -> Poly2 {
+        let pts = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
+        Poly2 {
+            nodes: pts
+                .iter()
+                .enumerate()
+                .map(|(i, &(x, y))| Node2::plain(Point2::new(x, y), EdgeKey(i as u32)))
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn replace_section_between_edge_points() {
+        let sq = square();
+        let mut next = 100;
+        let mut fresh = || {
+            next += 1;
+            EdgeKey(next)
+        };
+        // Remove the right side between (1, 0.25) and (1, 0.75), bulge out to (1.5, 0.5).
+        let from = PerimPoint { edge: 1, t: 0.25 };
+        let to = PerimPoint { edge: 1, t: 0.75 };
+        let bulge = [Node2::plain(Point2::new(1.5, 0.5), EdgeKey(50))];
+        let out = sq
+            .replace_section(
+                from,
+                to,
+                Edge {
+                    key: EdgeKey(49),
+                    share: None,
+                },
+                &bulge,
+                &mut fresh,
+            )
+            .unwrap();
+        let pts = out.points();
+        assert_eq!(pts.len(), 7);
+        assert!(out.is_valid(1e-9));
+        assert!((out.area() - 1.125).abs() < 1e-12);
+        // Kept edges keep their keys, cut ones get fresh keys.
+        assert!(out.nodes.iter().any(|n| n.edge.key == EdgeKey(2)));
+        assert!(!out.nodes.iter().any(|n| n.edge.key == EdgeKey(1)));
+        assert!((sq.arc_len(from, to) - 0.5).abs() < 1e-12);
+        assert!((sq.arc_len(to, from) - 3.5).abs() < 1e-12);
+    }
+
+    proptest::proptest! {
+        /// The fast simplicity test agrees with `geom`'s on random polygons.
+        #[test]
+        fn fast_simplicity_matches_geom(c in proptest::collection::vec(-1.0f64..1.0, 6..24)) {
+            let pts: Vec<Point2> = c.chunks_exact(2).map(|p| Point2::new(p[0], p[1])).collect();
+            proptest::prop_assert_eq!(is_simple_fast(&pts, 1e-6), polygon2::is_simple(&pts, 1e-6));
+        }
+    }
+
+    #[test]
+    fn replace_section_between_vertices() {
+        let sq = square();
+        let mut fresh = || EdgeKey(7);
+        // Remove vertex 2 (section from vertex 1 to vertex 3): a triangle remains.
+        let out = sq
+            .replace_section(
+                PerimPoint::vertex(1),
+                PerimPoint::vertex(3),
+                Edge {
+                    key: EdgeKey(9),
+                    share: None,
+                },
+                &[],
+                &mut fresh,
+            )
+            .unwrap();
+        assert_eq!(out.len(), 3);
+        assert!((out.area() - 0.5).abs() < 1e-12);
+        assert_eq!(
+            sq.section_edges(PerimPoint::vertex(1), PerimPoint::vertex(3)),
+            vec![1, 2]
+        );
+    }
+}

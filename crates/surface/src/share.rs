@@ -1,0 +1,742 @@
+//! Forming shared edges (P§2.6, Fig. 17–19) and determining concavity
+//! (P§2.6.1, Fig. 20–22).
+//!
+//! Between planar polygon segments S₁ and S₂ whose normals differ by more than μ,
+//! a section `P` of S₁'s perimeter (from `p₁` to `p₂`) and a section `Q` of S₂'s
+//! (from `q₁` to `q₂`) are both extended to a section `L = [l₁, l₂]` of the planes'
+//! intersection line, where they become a pair of corresponding shared edges.
+//! With the line directed along `d = n₁ × n₂` and parameter `t`, S₁'s new edge
+//! runs `l₁ → l₂` along `σd` and S₂'s `l₂ → l₁`, where `σ = +1` for a convex and
+//! `-1` for a concave pair (P§2.2, Fig. 2). The rules of P§2.6:
+//!
+//! * `p₁, p₂, q₁, q₂` and the vertices of `P` and `Q` lie within λ of the line and
+//!   project into `L`; `p₁` and `q₂` project to `l₁`, `p₂` and `q₁` to `l₂`; at
+//!   least one of `p₁, q₂` and one of `p₂, q₁` is a vertex (the candidate `t`
+//!   values are the projections of vertices within λ of the line);
+//! * corresponding corner vertices on the line may stand for `l₁` (or `l₂`) in
+//!   their own segment, though they do not coincide;
+//! * `l₁ ≠ l₂`, with the direction of the concavity;
+//! * `p₁` sights `l₁`, `p₂` sights `l₂` (in S₁), `q₁` sights `l₂`, `q₂` sights `l₁`
+//!   (in S₂), and `l₁` sights `l₂` relative to what remains of both perimeters;
+//! * the only shared edges on `P` and `Q` are shared between S₁ and S₂, and each
+//!   one's corresponding edge lies on the other section; some non-shared edge lies
+//!   on `P` or `Q`;
+//! * `P` and `Q` as long as possible: candidates are tried longest `L` first;
+//! * (our addition) `L` is longer than the S₁–S₂ shared edges it replaces by
+//!   [`MIN_GAIN_FRACTION`]`·λ`, so that a formation always makes progress instead
+//!   of rebuilding the same edge.
+//!
+//! A vertex at `p₁` that already lies on the line (the end of an edge S₁ shares
+//! with S₂, or a corner vertex) becomes the new edge's end itself (step 4).
+//! Attempts repeat until no valid perimeter points are found (at most
+//! [`MAX_FORM_ROUNDS`] rounds; each round converts a non-shared edge, so this is
+//! only a backstop). Afterwards local and global ordering are checked (P§2.6).
+//!
+//! Concavity (P§2.6.1): neighbours keep the concavity of their shared edges.
+//! Otherwise every pair of edges `(e₁, e₂)` whose parts within λ of the line
+//! project onto overlapping intervals with opposite directions adds the overlap
+//! length to the convex register when `e₁` runs along `d` and to the concave
+//! register otherwise; the larger register decides, and equal registers leave it
+//! undecided (no attempt in this update; redundancy check, P§2.9).
+
+use crate::model::SurfaceModel;
+use crate::perimeter::{Node2, PerimPoint, Poly2, cross2};
+use crate::relations::OrderingFix;
+use crate::segment::{Edge, EdgeKey, Node, SegmentId, Share};
+use geom::{Line3, PlaneFrame, Point2, Real, Vector2};
+
+/// Backstop on formation rounds per pair and update.
+pub const MAX_FORM_ROUNDS: usize = 8;
+
+/// Candidate section pairs examined per formation round (a backstop on the
+/// quadratic search near apexes, where many vertices lie within λ of the line).
+pub const MAX_PLAN_TRIES: usize = 512;
+
+/// A formation must lengthen the shared edges between the pair by this
+/// fraction of λ.
+pub const MIN_GAIN_FRACTION: Real = 0.1;
+
+/// The concavity decision of P§2.6.1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Concavity {
+    /// Each segment's centroid inside the other's plane (outside angle > 180°).
+    Convex,
+    /// Outside angle < 180°.
+    Concave,
+    /// Equal registers.
+    Undecided,
+}
+
+/// What an attempt to form shared edges did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ShareOutcome {
+    /// Nothing attempted (no non-shared edges near the line, or no line).
+    Skipped,
+    /// Concavity undecided.
+    Undecided,
+    /// Attempted; `n` pairs of shared edges formed.
+    Formed(usize),
+}
+
+/// One polygon's view of the line: 2-D coordinates, line origin and direction.
+struct View {
+    frame: PlaneFrame,
+    poly: Poly2,
+    origin: Point2,
+    dir: Vector2,
+}
+
+impl View {
+    fn new(model: &SurfaceModel, id: SegmentId, line: &Line3) -> Option<Self> {
+        let p = model.poly(id)?;
+        let frame = p.frame();
+        let poly = Poly2::from_polygon(p, &frame);
+        let origin = frame.to_2d(&line.point);
+        let d = Vector2::new(line.dir.dot(&frame.u), line.dir.dot(&frame.v));
+        let len = d.norm();
+        if len < 0.5 {
+            return None;
+        }
+        Some(Self {
+            frame,
+            poly,
+            origin,
+            dir: d / len,
+        })
+    }
+
+    fn t(&self, p: &Point2) -> Real {
+        (p - self.origin).dot(&self.dir)
+    }
+
+    fn h(&self, p: &Point2) -> Real {
+        cross2(&self.dir, &(p - self.origin))
+    }
+
+    fn at(&self, t: Real) -> Point2 {
+        self.origin + self.dir * t
+    }
+
+    /// The part of edge `e` within `lambda` of the line, as parameters along it.
+    fn strip_part(&self, e: usize, lambda: Real) -> Option<(Real, Real)> {
+        let (a, b) = self.poly.seg(e);
+        let (ha, hb) = (self.h(&a), self.h(&b));
+        let (mut lo, mut hi): (Real, Real) = (0.0, 1.0);
+        let dh = hb - ha;
+        if dh.abs() < 1e-300 {
+            if ha.abs() >= lambda {
+                return None;
+            }
+        } else {
+            let s1 = (lambda - ha) / dh;
+            let s2 = (-lambda - ha) / dh;
+            lo = lo.max(s1.min(s2));
+            hi = hi.min(s1.max(s2));
+        }
+        (hi > lo).then_some((lo, hi))
+    }
+}
+
+/// A section found on one perimeter.
+#[derive(Clone, Copy, Debug)]
+struct Section {
+    start: PerimPoint,
+    end: PerimPoint,
+    length: Real,
+}
+
+/// Sections of `view.poly` starting where `t = t_start` and ending where
+/// `t = t_end`, lying within λ of the line and projecting into the range.
+fn sections(view: &View, t_start: Real, t_end: Real, lambda: Real, eps: Real) -> Vec<Section> {
+    let poly = &view.poly;
+    let n = poly.len();
+    let lo = t_start.min(t_end) - eps;
+    let hi = t_start.max(t_end) + eps;
+    let in_strip = |p: &Point2| view.h(p).abs() < lambda;
+    let in_range = |p: &Point2| {
+        let t = view.t(p);
+        t >= lo && t <= hi
+    };
+    // Starts.
+    let mut starts = Vec::new();
+    for e in 0..n {
+        let (a, b) = poly.seg(e);
+        let (ta, tb) = (view.t(&a), view.t(&b));
+        if (ta - t_start).abs() <= eps {
+            if in_strip(&a) {
+                starts.push(PerimPoint::vertex(e));
+            }
+        } else if (ta - t_start) * (tb - t_start) < 0.0 && (tb - t_start).abs() > eps {
+            let u = (t_start - ta) / (tb - ta);
+            let x = a + (b - a) * u;
+            if in_strip(&x) {
+                starts.push(PerimPoint { edge: e, t: u });
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for start in starts {
+        let (mut e, mut u0) = (start.edge, start.t);
+        for step in 0..=n {
+            if step > 0 && e == start.edge && u0 <= start.t {
+                break; // back at the start
+            }
+            let (a, b) = poly.seg(e);
+            let pa = a + (b - a) * u0;
+            if !in_strip(&pa) || !in_range(&pa) {
+                break;
+            }
+            if step > 0 && (view.t(&pa) - t_end).abs() <= eps {
+                out.push(Section {
+                    start,
+                    end: PerimPoint::vertex(e),
+                    length: poly.arc_len(start, PerimPoint::vertex(e)),
+                });
+            }
+            // Largest u1 such that [u0, u1] stays in the strip and range.
+            let mut u1: Real = 1.0;
+            let (ha, hb) = (view.h(&pa), view.h(&b));
+            if hb.abs() >= lambda {
+                let target = lambda.copysign(hb);
+                let f = (target - ha) / (hb - ha);
+                u1 = u1.min(u0 + (1.0 - u0) * f * (1.0 - 1e-9));
+            }
+            let (ta, tb) = (view.t(&pa), view.t(&b));
+            if tb > hi || tb < lo {
+                let bound = if tb > hi { hi } else { lo };
+                let f = (bound - ta) / (tb - ta);
+                u1 = u1.min(u0 + (1.0 - u0) * f);
+            }
+            // Ends on this piece (skip the start itself).
+            let dt = tb - ta;
+            if dt.abs() > 0.0 {
+                let f = (t_end - ta) / dt;
+                let u = u0 + (1.0 - u0) * f;
+                if f > 0.0 && u <= u1 + 1e-12 && u < 1.0 && (ta - t_end).abs() > eps {
+                    let end = poly.snap(PerimPoint { edge: e, t: u }, eps);
+                    if !(end.edge == start.edge && (end.t - start.t).abs() < 1e-12) {
+                        out.push(Section {
+                            start,
+                            end,
+                            length: poly.arc_len(start, end),
+                        });
+                    }
+                }
+            }
+            if u1 < 1.0 {
+                break;
+            }
+            e = (e + 1) % n;
+            u0 = 0.0;
+        }
+    }
+    out.sort_by(|x, y| y.length.total_cmp(&x.length));
+    out
+}
+
+/// A candidate endpoint value of `L`: the parameter in each segment's view.
+#[derive(Clone, Copy, Debug)]
+struct Anchor {
+    t1: Real,
+    t2: Real,
+}
+
+/// What one formation changes.
+struct Plan {
+    nodes1: Vec<Node>,
+    nodes2: Vec<Node>,
+}
+
+impl SurfaceModel {
+    /// The concavity between `s1` and `s2` along `line` (directed `n₁ × n₂`),
+    /// from their shared edges when neighbours, else from the overlap registers.
+    pub(crate) fn concavity(&self, s1: SegmentId, s2: SegmentId, line: &Line3) -> Concavity {
+        if let Some(p) = self.poly(s1) {
+            let n = p.nodes.len();
+            for i in 0..n {
+                if p.nodes[i].edge.share.is_some_and(|sh| sh.neighbour == s2) {
+                    let d = p.nodes[(i + 1) % n].position - p.nodes[i].position;
+                    return if d.dot(&line.dir) > 0.0 {
+                        Concavity::Convex
+                    } else {
+                        Concavity::Concave
+                    };
+                }
+            }
+        }
+        let (Some(v1), Some(v2)) = (View::new(self, s1, line), View::new(self, s2, line)) else {
+            return Concavity::Undecided;
+        };
+        let (convex, concave) = registers(&v1, &v2, self.tol.lambda);
+        if convex > concave {
+            Concavity::Convex
+        } else if concave > convex {
+            Concavity::Concave
+        } else {
+            Concavity::Undecided
+        }
+    }
+
+    /// P§2.3 step 4 for one pair: attempt to form shared edges between `s1` and `s2`.
+    pub(crate) fn form_shared_edges(&mut self, s1: SegmentId, s2: SegmentId) -> ShareOutcome {
+        let tol = self.tol;
+        let Some(line) = self.line_between(s1, s2) else {
+            return ShareOutcome::Skipped;
+        };
+        if !self.near_line(s1, &line) || !self.near_line(s2, &line) {
+            return ShareOutcome::Skipped;
+        }
+        let sigma = match self.concavity(s1, s2, &line) {
+            Concavity::Convex => 1.0,
+            Concavity::Concave => -1.0,
+            Concavity::Undecided => return ShareOutcome::Undecided,
+        };
+        if !self.room_for_shared_edge(s1, s2, &line) {
+            return ShareOutcome::Formed(0);
+        }
+        let mut formed = 0;
+        for _ in 0..MAX_FORM_ROUNDS {
+            let Some(line) = self.line_between(s1, s2) else {
+                break;
+            };
+            let ok = self.attempt(|m| {
+                let plan = m.plan_shared_edge(s1, s2, &line, sigma)?;
+                if let Some(p) = m.poly_mut(s1) {
+                    p.nodes = plan.nodes1;
+                }
+                if let Some(p) = m.poly_mut(s2) {
+                    p.nodes = plan.nodes2;
+                }
+                m.validate_touched().ok()?;
+                Some(())
+            });
+            if ok.is_none() {
+                break;
+            }
+            formed += 1;
+            // Ordering (P§2.6): dissolve what breaks it and stop for this update.
+            let broke = self.run(|m| {
+                let a = m.enforce_ordering(s1, OrderingFix::Forming { with: s2 });
+                let b = m.enforce_ordering(s2, OrderingFix::Forming { with: s1 });
+                a || b
+            });
+            if broke {
+                self.ctx.blocked.insert((s1.min(s2), s1.max(s2)));
+                break;
+            }
+            if !self.near_line(s1, &line) || !self.near_line(s2, &line) {
+                break;
+            }
+        }
+        let _ = tol;
+        ShareOutcome::Formed(formed)
+    }
+
+    /// A necessary condition for a new pair of shared edges: along the line,
+    /// the stretch where both perimeters come within λ of it, minus the stretch
+    /// already covered by their shared edges, is at least `MIN_GAIN_FRACTION·λ`
+    /// long (every `L` lies where both perimeters project, and must add that much).
+    /// Skips the full search of [`Self::plan_shared_edge`] between neighbours
+    /// whose shared edges are complete.
+    fn room_for_shared_edge(&self, s1: SegmentId, s2: SegmentId, line: &Line3) -> bool {
+        let lambda = self.tol.lambda;
+        let (Some(v1), Some(v2)) = (View::new(self, s1, line), View::new(self, s2, line)) else {
+            return false;
+        };
+        let strip = |v: &View, shared_only: bool| -> Vec<(Real, Real)> {
+            let mut iv: Vec<(Real, Real)> = (0..v.poly.len())
+                .filter(|&e| {
+                    !shared_only
+                        || v.poly
+                            .edge(e)
+                            .share
+                            .is_some_and(|sh| sh.neighbour == s1 || sh.neighbour == s2)
+                })
+                .filter_map(|e| {
+                    let (u0, u1) = v.strip_part(e, lambda)?;
+                    let (a, b) = v.poly.seg(e);
+                    let (ta, tb) = (v.t(&(a + (b - a) * u0)), v.t(&(a + (b - a) * u1)));
+                    Some((ta.min(tb), ta.max(tb)))
+                })
+                .collect();
+            iv.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let mut merged: Vec<(Real, Real)> = Vec::new();
+            for (a, b) in iv {
+                match merged.last_mut() {
+                    Some(last) if a <= last.1 => last.1 = last.1.max(b),
+                    _ => merged.push((a, b)),
+                }
+            }
+            merged
+        };
+        let (c1, c2) = (strip(&v1, false), strip(&v2, false));
+        let shared = strip(&v1, true);
+        let mut free = 0.0;
+        for &(a0, a1) in &c1 {
+            for &(b0, b1) in &c2 {
+                let (lo, hi) = (a0.max(b0), a1.min(b1));
+                if hi <= lo {
+                    continue;
+                }
+                let covered: Real = shared
+                    .iter()
+                    .map(|&(s0, s1)| (hi.min(s1) - lo.max(s0)).max(0.0))
+                    .sum();
+                free += (hi - lo) - covered;
+            }
+        }
+        free >= MIN_GAIN_FRACTION * lambda
+    }
+
+    /// `true` when `s` has a non-shared edge within λ of `line` (P§2.3 step 4).
+    pub(crate) fn near_line(&self, s: SegmentId, line: &Line3) -> bool {
+        let Some(p) = self.poly(s) else { return false };
+        let n = p.nodes.len();
+        let lambda = self.tol.lambda;
+        (0..n).any(|i| {
+            if p.nodes[i].edge.share.is_some() {
+                return false;
+            }
+            let a = p.nodes[i].position;
+            let b = p.nodes[(i + 1) % n].position;
+            let seg = geom::Segment3::new(a, b);
+            let far = geom::Segment3::new(line.point_at(-1e6), line.point_at(1e6));
+            geom::line::distance_segment_segment(&seg, &far) < lambda
+        })
+    }
+
+    /// Find the best valid formation (rules in the [module docs](self)).
+    fn plan_shared_edge(
+        &mut self,
+        s1: SegmentId,
+        s2: SegmentId,
+        line: &Line3,
+        sigma: Real,
+    ) -> Option<Plan> {
+        let tol = self.tol;
+        let v1 = View::new(self, s1, line)?;
+        let v2 = View::new(self, s2, line)?;
+        // Anchors: vertices within λ of the line; corresponding corner pairs on it.
+        let mut anchors: Vec<Anchor> = Vec::new();
+        for v in [&v1, &v2] {
+            for node in &v.poly.nodes {
+                if v.h(&node.p).abs() < tol.lambda {
+                    let t = v.t(&node.p);
+                    anchors.push(Anchor { t1: t, t2: t });
+                }
+            }
+        }
+        for a in &v1.poly.nodes {
+            let Some(cid) = a.corner else { continue };
+            if let Some(b) = v2.poly.nodes.iter().find(|b| b.corner == Some(cid)) {
+                anchors.push(Anchor {
+                    t1: v1.t(&a.p),
+                    t2: v2.t(&b.p),
+                });
+            }
+        }
+        anchors.sort_by(|a, b| a.t1.total_cmp(&b.t1).then(a.t2.total_cmp(&b.t2)));
+        anchors.dedup_by(|a, b| (a.t1 - b.t1).abs() <= tol.eps && (a.t2 - b.t2).abs() <= tol.eps);
+        let mut candidates: Vec<(Real, Anchor, Anchor)> = Vec::new();
+        for a in &anchors {
+            for b in &anchors {
+                if sigma * (b.t1 - a.t1) > tol.eps && sigma * (b.t2 - a.t2) > tol.eps {
+                    candidates.push(((b.t1 - a.t1).abs(), *a, *b));
+                }
+            }
+        }
+        candidates.sort_by(|x, y| y.0.total_cmp(&x.0));
+        let mut tries = 0;
+        for (_, a, b) in candidates {
+            let secs1 = sections(&v1, a.t1, b.t1, tol.lambda, tol.eps);
+            if secs1.is_empty() {
+                continue;
+            }
+            let secs2 = sections(&v2, b.t2, a.t2, tol.lambda, tol.eps);
+            for sec1 in secs1.iter().take(4) {
+                for sec2 in secs2.iter().take(4) {
+                    tries += 1;
+                    if tries > MAX_PLAN_TRIES {
+                        return None;
+                    }
+                    if let Some(plan) =
+                        self.check_and_build(s1, s2, &v1, &v2, line, *sec1, *sec2, a, b)
+                    {
+                        return Some(plan);
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn check_and_build(
+        &mut self,
+        s1: SegmentId,
+        s2: SegmentId,
+        v1: &View,
+        v2: &View,
+        line: &Line3,
+        sec1: Section,
+        sec2: Section,
+        a: Anchor,
+        b: Anchor,
+    ) -> Option<Plan> {
+        let tol = self.tol;
+        let (p1, p2) = (sec1.start, sec1.end);
+        let (q1, q2) = (sec2.start, sec2.end);
+        // At least one of p₁, q₂ and one of p₂, q₁ is a vertex.
+        if !(p1.is_vertex() || q2.is_vertex()) || !(p2.is_vertex() || q1.is_vertex()) {
+            return None;
+        }
+        // Shared edges on P and Q: only with each other, whole, corresponding.
+        let edges1 = v1.poly.section_edges(p1, p2);
+        let edges2 = v2.poly.section_edges(q1, q2);
+        let mut plain = false;
+        for (view, edges, from, to, other, other_edges, other_view) in [
+            (v1, &edges1, p1, p2, s2, &edges2, v2),
+            (v2, &edges2, q1, q2, s1, &edges1, v1),
+        ] {
+            for &e in edges {
+                match view.poly.edge(e).share {
+                    None => plain = true,
+                    Some(sh) => {
+                        if sh.neighbour != other {
+                            return None;
+                        }
+                        let cut = (e == from.edge % view.poly.len() && from.t > 0.0)
+                            || (e == to.edge % view.poly.len() && to.t > 0.0);
+                        if cut {
+                            return None;
+                        }
+                        let partner = other_view
+                            .poly
+                            .nodes
+                            .iter()
+                            .position(|x| x.edge.share.is_some_and(|s| s.pair == sh.pair))?;
+                        if !other_edges.contains(&partner) {
+                            return None;
+                        }
+                    }
+                }
+            }
+        }
+        if !plain {
+            return None;
+        }
+        // Progress: the new shared edge must be longer than the S₁–S₂ shared edges
+        // it replaces by at least λ/10 (otherwise a formation could rebuild the
+        // same edge with the same connecting edges round after round).
+        let replaced: Real = edges1
+            .iter()
+            .filter(|&&e| v1.poly.is_shared(e))
+            .map(|&e| v1.poly.edge_len(e))
+            .sum();
+        if (b.t1 - a.t1).abs() < replaced + MIN_GAIN_FRACTION * tol.lambda {
+            return None;
+        }
+        // Points of L in each view.
+        let (l1a, l2a) = (v1.at(a.t1), v1.at(b.t1));
+        let (l1b, l2b) = (v2.at(a.t2), v2.at(b.t2));
+        let (xp1, xp2) = (v1.poly.point_at(p1), v1.poly.point_at(p2));
+        let (xq1, xq2) = (v2.poly.point_at(q1), v2.poly.point_at(q2));
+        // Sight of the new connecting edges.
+        let sees = |v: &View, x: &Point2, y: &Point2| v.poly.sight(x, y, tol.eps, |_| false);
+        if !sees(v1, &xp1, &l1a)
+            || !sees(v1, &xp2, &l2a)
+            || !sees(v2, &xq1, &l2b)
+            || !sees(v2, &xq2, &l1b)
+        {
+            return None;
+        }
+        // l₁ sights l₂ relative to what remains of each perimeter.
+        let kept1: Vec<usize> = (0..v1.poly.len()).filter(|e| !edges1.contains(e)).collect();
+        let kept2: Vec<usize> = (0..v2.poly.len()).filter(|e| !edges2.contains(e)).collect();
+        if !v1.poly.sight(&l1a, &l2a, tol.eps, |e| !kept1.contains(&e))
+            || !v2.poly.sight(&l1b, &l2b, tol.eps, |e| !kept2.contains(&e))
+        {
+            return None;
+        }
+        // Build.
+        let pair = self.new_pair();
+        let key1 = self.fresh_key();
+        let key2 = self.fresh_key();
+        let shared1 = Edge {
+            key: key1,
+            share: Some(Share {
+                neighbour: s2,
+                pair,
+            }),
+        };
+        let shared2 = Edge {
+            key: key2,
+            share: Some(Share {
+                neighbour: s1,
+                pair,
+            }),
+        };
+        let (t_l1a, t_l2a) = (a.t1, b.t1);
+        let (t_l1b, t_l2b) = (a.t2, b.t2);
+        let nodes1 = {
+            let mut fresh = Self::key_source(&mut self.ids.edge);
+            extend_to_line(
+                v1,
+                p1,
+                p2,
+                (t_l1a, l1a),
+                (t_l2a, l2a),
+                shared1,
+                line,
+                (tol.eps, tol.split),
+                &mut fresh,
+            )?
+        };
+        let nodes2 = {
+            let mut fresh = Self::key_source(&mut self.ids.edge);
+            extend_to_line(
+                v2,
+                q1,
+                q2,
+                (t_l2b, l2b),
+                (t_l1b, l1b),
+                shared2,
+                line,
+                (tol.eps, tol.split),
+                &mut fresh,
+            )?
+        };
+        Some(Plan { nodes1, nodes2 })
+    }
+}
+
+/// Replace the section `from → to` of `view.poly` by `from → l_from → l_to → to`
+/// with `l_from → l_to` the shared edge; vertices already on the line (within
+/// eps) are used instead of new ones. Returns 3-D nodes with the line points
+/// placed exactly on `line`.
+#[allow(clippy::too_many_arguments)]
+fn extend_to_line(
+    view: &View,
+    from: PerimPoint,
+    to: PerimPoint,
+    (t_from, l_from): (Real, Point2),
+    (t_to, l_to): (Real, Point2),
+    shared: Edge,
+    line: &Line3,
+    (eps, split): (Real, Real),
+    fresh: &mut dyn FnMut() -> EdgeKey,
+) -> Option<Vec<Node>> {
+    let poly = &view.poly;
+    let mut from_on = (poly.point_at(from) - l_from).norm() <= eps;
+    let mut to_on = (poly.point_at(to) - l_to).norm() <= eps;
+    // A vertex on the line that ends an edge shared with another neighbour cannot
+    // start this shared edge without a corner (P§2.7 forms those later): the new
+    // edge starts a short step δ along the line instead, joined by a short edge.
+    let other = shared.share.map(|s| s.neighbour);
+    let foreign = |sh: Option<Share>| sh.is_some_and(|s| Some(s.neighbour) != other);
+    let (mut t_from, mut l_from, mut t_to, mut l_to) = (t_from, l_from, t_to, l_to);
+    let step = split.min(0.25 * (t_to - t_from).abs());
+    let dir = (t_to - t_from).signum();
+    if from_on
+        && from.is_vertex()
+        && poly.nodes[from.edge % poly.len()].corner.is_none()
+        && foreign(poly.edge(poly.prev(from.edge)).share)
+    {
+        from_on = false;
+        t_from += dir * step;
+        l_from = view.at(t_from);
+    }
+    if to_on
+        && to.is_vertex()
+        && poly.nodes[to.edge % poly.len()].corner.is_none()
+        && foreign(poly.edge(to.edge).share)
+    {
+        to_on = false;
+        t_to -= dir * step;
+        l_to = view.at(t_to);
+    }
+    let mut inserted = Vec::new();
+    let from_edge;
+    if from_on {
+        from_edge = shared;
+    } else {
+        from_edge = Edge {
+            key: fresh(),
+            share: None,
+        };
+        inserted.push(Node2 {
+            p: l_from,
+            corner: None,
+            edge: shared,
+        });
+    }
+    if !to_on {
+        inserted.push(Node2::plain(l_to, fresh()));
+    }
+    let next = poly
+        .replace_section(from, to, from_edge, &inserted, fresh)
+        .ok()?;
+    if !next.is_valid(eps) {
+        return None;
+    }
+    let m = next.len();
+    let from_idx = m - inserted.len() - 1;
+    let mut nodes = next.to_nodes(&view.frame);
+    // Exact positions on the line: the shared edge's two ends.
+    let l_from_idx = if from_on { from_idx } else { from_idx + 1 };
+    let l_to_idx = if to_on { 0 } else { (l_from_idx + 1) % m };
+    let keep_corner = |n: &Node| n.corner.is_some();
+    if !(from_on && keep_corner(&nodes[l_from_idx])) {
+        nodes[l_from_idx].position = line.point_at(t_from);
+    }
+    if !(to_on && keep_corner(&nodes[l_to_idx])) {
+        nodes[l_to_idx].position = line.point_at(t_to);
+    }
+    Some(nodes)
+}
+
+/// The overlap registers of P§2.6.1: (convex, concave).
+fn registers(v1: &View, v2: &View, lambda: Real) -> (Real, Real) {
+    let parts = |v: &View| -> Vec<(Real, Real, Real)> {
+        (0..v.poly.len())
+            .filter_map(|e| {
+                let (s0, s1) = v.strip_part(e, lambda)?;
+                let (a, b) = v.poly.seg(e);
+                let (ta, tb) = (v.t(&(a + (b - a) * s0)), v.t(&(a + (b - a) * s1)));
+                let dir = (tb - ta).signum();
+                (dir != 0.0 && (tb - ta).abs() > 0.0).then_some((ta.min(tb), ta.max(tb), dir))
+            })
+            .collect()
+    };
+    let (p1, p2) = (parts(v1), parts(v2));
+    let (mut convex, mut concave) = (0.0, 0.0);
+    for &(a0, a1, da) in &p1 {
+        for &(b0, b1, db) in &p2 {
+            if da == db {
+                continue;
+            }
+            let overlap = a1.min(b1) - a0.max(b0);
+            if overlap > 0.0 {
+                if da > 0.0 {
+                    convex += overlap;
+                } else {
+                    concave += overlap;
+                }
+            }
+        }
+    }
+    (convex, concave)
+}
+
+/// The registers of two segments (figure reproductions).
+#[cfg(test)]
+pub(crate) fn registers_between(
+    model: &SurfaceModel,
+    s1: SegmentId,
+    s2: SegmentId,
+) -> Option<(Real, Real)> {
+    let line = model.line_between(s1, s2)?;
+    let v1 = View::new(model, s1, &line)?;
+    let v2 = View::new(model, s2, &line)?;
+    Some(registers(&v1, &v2, model.tol.lambda))
+}
