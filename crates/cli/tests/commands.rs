@@ -1,6 +1,7 @@
 //! The command contract, exercised through the built binary.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers may panic
 
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -432,4 +433,101 @@ fn map_sld_and_segment_follow_their_contracts() {
         &p("s.json"),
     ]);
     assert!(e.contains("six"), "{e}");
+}
+
+#[test]
+fn model_builds_one_polygon_from_a_plane_patch() {
+    let dir = tempfile::tempdir().unwrap();
+    // Eight sets of 25 points on the plane z = 0.5, seen from above, overlapping
+    // along x: one planar polygon with outward normal +z must represent them all.
+    let mut lines = String::new();
+    for s in 0..8 {
+        let mut points = Vec::new();
+        for k in 0..25 {
+            let x = 0.03 * f64::from(s) + 0.02 * f64::from(k % 5);
+            let y = 0.02 * f64::from(k / 5);
+            points.push(format!("[{x},{y},0.5]"));
+        }
+        let axes = vec!["[0,0,-1]"; points.len()];
+        writeln!(
+            lines,
+            "{{\"points\": [{}], \"axes\": [{}]}}",
+            points.join(","),
+            axes.join(",")
+        )
+        .unwrap();
+    }
+    let sets = dir.path().join("sets.jsonl");
+    std::fs::write(&sets, lines).unwrap();
+    let out = dir.path().join("model");
+    let stdout = ok(&[
+        "model",
+        "--sets",
+        sets.to_str().unwrap(),
+        "--check",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(stdout.contains("8 sets"), "{stdout}");
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("surface_model.json")).unwrap())
+            .unwrap();
+    let segments = model["segments"].as_array().unwrap();
+    assert_eq!(segments.len(), 1, "{model}");
+    let poly = &segments[0];
+    assert_eq!(poly["kind"], "polygon");
+    assert_eq!(poly["points"], 200);
+    assert_eq!(poly["initial"], false);
+    let normal: Vec<f64> = serde_json::from_value(poly["normal"].clone()).unwrap();
+    assert!((normal[2] - 1.0).abs() < 1e-9, "{normal:?}");
+    let vertices: Vec<[f64; 3]> = serde_json::from_value(poly["vertices"].clone()).unwrap();
+    assert_eq!(poly["edges"].as_array().unwrap().len(), vertices.len());
+    // Anticlockwise about +z: positive shoelace area; all vertices on the plane;
+    // the polygon spans the sampled extent (x ∈ [0, 0.29], y ∈ [0, 0.08]) within λ.
+    let area: f64 = (0..vertices.len())
+        .map(|i| {
+            let (a, b) = (vertices[i], vertices[(i + 1) % vertices.len()]);
+            0.5 * (a[0] * b[1] - b[0] * a[1])
+        })
+        .sum();
+    assert!(area > 0.5 * 0.29 * 0.08, "area {area}");
+    for v in &vertices {
+        assert!((v[2] - 0.5).abs() < 1e-9);
+        assert!(
+            v[0] > -0.05 && v[0] < 0.34 && v[1] > -0.05 && v[1] < 0.13,
+            "{v:?}"
+        );
+    }
+    assert_eq!(model["surfaces"].as_array().unwrap().len(), 1);
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("stats.json")).unwrap()).unwrap();
+    assert_eq!(stats["updates"], 8);
+    assert_eq!(stats["polygons"], 1);
+    assert_eq!(stats["segments"], 1);
+    assert_eq!(stats["points"], 0); // point segments
+    assert!(stats["update_us"]["median"].as_f64().unwrap() > 0.0);
+    let obj = std::fs::read_to_string(out.join("surface_model.obj")).unwrap();
+    assert_eq!(
+        obj.lines().filter(|l| l.starts_with("v ")).count(),
+        vertices.len()
+    );
+    assert!(obj.lines().any(|l| l.starts_with("f ")));
+
+    // A malformed set names the file and the line and writes nothing.
+    let bad = dir.path().join("bad.jsonl");
+    std::fs::write(
+        &bad,
+        "{\"points\": [[0,0,0]], \"axes\": [[0,0,-1]]}\n{\"points\": [[0,0,0]], \"axes\": []}\n",
+    )
+    .unwrap();
+    let out2 = dir.path().join("model2");
+    let err = fails(&[
+        "model",
+        "--sets",
+        bad.to_str().unwrap(),
+        "--out",
+        out2.to_str().unwrap(),
+    ]);
+    assert!(err.contains("bad.jsonl") && err.contains('2'), "{err}");
+    assert!(!out2.exists());
 }

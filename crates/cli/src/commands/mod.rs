@@ -1,6 +1,7 @@
 //! Argument definitions and the one library call behind each command.
 
 mod maps;
+mod model;
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Parser, Subcommand};
@@ -43,6 +44,8 @@ enum Command {
     Sld(maps::SldArgs),
     /// Segment a disc map into surfaces (Paul §5.3, Algorithm 1).
     Segment(maps::SegmentArgs),
+    /// Pudney's incremental surface model from a stream of sensor sets (P ch. 2).
+    Model(model::ModelArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -189,6 +192,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Map(a) => maps::map(&a),
         Command::Sld(a) => maps::sld(&a),
         Command::Segment(a) => maps::segment(&a),
+        Command::Model(a) => model::model(&a),
     }
 }
 
