@@ -146,6 +146,30 @@ impl TriMesh {
         }
     }
 
+    /// Area-weighted vertex normals: each vertex gets the unit sum of the
+    /// right-hand normals (`(b − a) × (c − a)`, twice the area) of the triangles
+    /// using it, so the winding decides the side. A vertex used by no triangle,
+    /// or whose triangles cancel, gets the zero vector.
+    pub fn vertex_normals(&self) -> Vec<Vector3> {
+        let mut sums = vec![Vector3::zeros(); self.vertices.len()];
+        for t in &self.triangles {
+            let [a, b, c] = t.map(|i| self.vertices[i as usize]);
+            let n = (b - a).cross(&(c - a));
+            for &i in t {
+                sums[i as usize] += n;
+            }
+        }
+        for n in &mut sums {
+            let len = n.norm();
+            *n = if len > 0.0 {
+                *n / len
+            } else {
+                Vector3::zeros()
+            };
+        }
+        sums
+    }
+
     /// Number of edges used by exactly one triangle (0 for a closed mesh).
     pub fn boundary_edge_count(&self) -> usize {
         let mut edges = std::collections::HashMap::<(u32, u32), u32>::new();

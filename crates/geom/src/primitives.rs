@@ -254,6 +254,48 @@ mod tests {
     use super::*;
 
     #[test]
+    fn vertex_normals_point_out_along_the_corner_diagonal() {
+        // A cuboid corner vertex touches its three faces through one or two
+        // triangles each; whatever the split, every face contributes with its
+        // triangles' area, so the normal points out of the corner octant.
+        let m = cuboid(Point3::new(-1.0, -1.0, -1.0), Point3::new(1.0, 1.0, 1.0));
+        let normals = m.vertex_normals();
+        for (v, n) in m.vertices.iter().zip(&normals) {
+            assert!((n.norm() - 1.0).abs() < 1e-12);
+            for k in 0..3 {
+                assert!(n[k] * v[k] > 0.1, "vertex {v:?} normal {n:?}");
+            }
+        }
+        // A flat patch: +z for anticlockwise triangles seen from above, −z flipped.
+        let mut patch = TriMesh::new(
+            vec![
+                Point3::new(0.0, 0.0, 2.0),
+                Point3::new(1.0, 0.0, 2.0),
+                Point3::new(1.0, 1.0, 2.0),
+                Point3::new(0.0, 1.0, 2.0),
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+            "patch",
+        )
+        .unwrap();
+        assert!(
+            patch
+                .vertex_normals()
+                .iter()
+                .all(|n| (n.z - 1.0).abs() < 1e-12)
+        );
+        patch.flip();
+        assert!(
+            patch
+                .vertex_normals()
+                .iter()
+                .all(|n| (n.z + 1.0).abs() < 1e-12)
+        );
+        let lonely = TriMesh::new(vec![Point3::origin()], vec![], "t").unwrap();
+        assert_eq!(lonely.vertex_normals(), vec![Vector3::zeros()]);
+    }
+
+    #[test]
     fn cuboid_is_closed_with_outward_normals() {
         let m = cuboid(Point3::new(-1.0, -2.0, 0.0), Point3::new(1.0, 2.0, 3.0));
         assert_eq!(m.len(), 12);

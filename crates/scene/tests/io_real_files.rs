@@ -268,8 +268,46 @@ fn pc2beam_text_cloud() {
 fn mesh_vertices_as_cloud() {
     let c = io::load_cloud_or_mesh_vertices(&data("meshes/cinder_block_meters.obj")).unwrap();
     assert_eq!(c.points.len(), 40);
+    // The OBJ's faces give every vertex a unit normal.
+    let normals = c.normals.as_ref().unwrap();
+    assert!(normals.iter().all(|n| (n.norm() - 1.0).abs() < 1e-9));
     let c = io::load_cloud_or_mesh_vertices(&data("pointclouds/pcl_milk.pcd")).unwrap();
     assert_eq!(c.points.len(), 13_704);
+    assert!(c.normals.is_none());
+}
+
+/// A PLY mesh (like `surveyor map`'s TSDF mesh) read as a cloud: its vertices
+/// in file order with the area-weighted normals of their faces, outward for a
+/// closed outward-wound mesh; a PLY cloud without faces gets no normals.
+#[test]
+fn ply_mesh_vertices_carry_face_normals() {
+    let dir = tempfile::tempdir().unwrap();
+    let centre = Point3::new(1.0, 2.0, 3.0);
+    let cube = geom::primitives::cuboid(
+        centre - geom::Vector3::repeat(0.5),
+        centre + geom::Vector3::repeat(0.5),
+    );
+    let path = dir.path().join("cube.ply");
+    io::write_mesh_ply(&path, &cube).unwrap();
+    let c = io::load_cloud_or_mesh_vertices(&path).unwrap();
+    assert_eq!(c.points, cube.vertices);
+    let normals = c.normals.unwrap();
+    for (p, n) in c.points.iter().zip(&normals) {
+        let out = (p - centre) / (p - centre).norm();
+        assert!(n.dot(&out) > 0.5, "{p:?}: {n:?}");
+    }
+    // The plain cloud reader ignores the faces.
+    assert!(io::load_cloud(&path).unwrap().normals.is_none());
+    let cloud_path = dir.path().join("cloud.ply");
+    let column = |k: usize| -> Vec<f32> { cube.vertices.iter().map(|v| v[k] as f32).collect() };
+    let (x, y, z) = (column(0), column(1), column(2));
+    io::write_ply_vertices_file(&cloud_path, &["x", "y", "z"], &[&x, &y, &z]).unwrap();
+    assert!(
+        io::load_cloud_or_mesh_vertices(&cloud_path)
+            .unwrap()
+            .normals
+            .is_none()
+    );
 }
 
 /// Load times of the real files (release build: `cargo test --release -p scene

@@ -176,12 +176,21 @@ pub fn load_cloud(path: &Path) -> Result<PointCloud, SceneError> {
 /// Load points from a cloud file, or the vertices of a mesh file (`.obj`,
 /// `.stl`), as a cloud. A `.ply` file is read as a cloud (its vertex element,
 /// with normals, labels and intensities when present), whether or not it has
-/// faces.
+/// faces. Mesh vertices without normals in the file get the area-weighted
+/// normals of their faces ([`geom::TriMesh::vertex_normals`]), which point to
+/// the side the faces' winding makes "out".
 pub fn load_cloud_or_mesh_vertices(path: &Path) -> Result<PointCloud, SceneError> {
     let ext = extension(path);
     match ext.as_deref() {
-        Some("obj" | "stl") => Ok(PointCloud::from_points(load_mesh(path, 1.0)?.vertices)),
-        Some("ply" | "pcd" | "txt" | "xyz" | "csv" | "pts") => load_cloud(path),
+        Some("obj" | "stl") => {
+            let mesh = load_mesh(path, 1.0)?;
+            let normals = mesh.vertex_normals();
+            let mut cloud = PointCloud::from_points(mesh.vertices);
+            cloud.normals = Some(normals);
+            Ok(cloud)
+        }
+        Some("ply") => ply::load_cloud_with_face_normals(path, &read_file(path)?),
+        Some("pcd" | "txt" | "xyz" | "csv" | "pts") => load_cloud(path),
         _ => Err(SceneError::Unsupported {
             path: path.to_owned(),
             expected: ANY_EXTENSIONS,

@@ -203,13 +203,37 @@ pub(super) fn load_mesh(path: &Path, bytes: &[u8], scale: Real) -> Result<TriMes
 
 /// Load a PLY point cloud from the `vertex` element.
 pub(super) fn load_cloud(path: &Path, bytes: &[u8]) -> Result<PointCloud, SceneError> {
-    let ply = parse_ply(bytes, path, Want::Cloud)?;
-    let table = ply.vertex;
-    let (x, y, z) = xyz_columns(&table, path)?;
+    cloud_of(path, &parse_ply(bytes, path, Want::Cloud)?)
+}
+
+/// Load a PLY point cloud from the `vertex` element; when the file gives no
+/// normals but has faces (a mesh, e.g. the TSDF mesh of `surveyor map`), each
+/// vertex gets the area-weighted normal of its faces
+/// ([`geom::TriMesh::vertex_normals`]: the faces' winding sets the side).
+pub(super) fn load_cloud_with_face_normals(
+    path: &Path,
+    bytes: &[u8],
+) -> Result<PointCloud, SceneError> {
+    let mut ply = parse_ply(bytes, path, Want::CloudAndFaces)?;
+    let mut cloud = cloud_of(path, &ply)?;
+    if cloud.normals.is_none() && !ply.triangles.is_empty() {
+        let mesh = TriMesh {
+            vertices: std::mem::take(&mut cloud.points),
+            triangles: std::mem::take(&mut ply.triangles),
+        };
+        cloud.normals = Some(mesh.vertex_normals());
+        cloud.points = mesh.vertices;
+    }
+    Ok(cloud)
+}
+
+fn cloud_of(path: &Path, ply: &Parsed) -> Result<PointCloud, SceneError> {
+    let table = &ply.vertex;
+    let (x, y, z) = xyz_columns(table, path)?;
     let normals = match (
-        find_column(&table, &["nx", "normal_x"]),
-        find_column(&table, &["ny", "normal_y"]),
-        find_column(&table, &["nz", "normal_z"]),
+        find_column(table, &["nx", "normal_x"]),
+        find_column(table, &["ny", "normal_y"]),
+        find_column(table, &["nz", "normal_z"]),
     ) {
         (Some(a), Some(b), Some(c)) => Some([a, b, c]),
         (None, None, None) => None,
@@ -228,8 +252,8 @@ pub(super) fn load_cloud(path: &Path, bytes: &[u8]) -> Result<PointCloud, SceneE
     let fields = Fields {
         xyz: [x, y, z],
         normals,
-        label: find_column(&table, &["label", "instance", "scalar_label"]),
-        intensity: find_column(&table, &["intensity", "scalar_intensity"]),
+        label: find_column(table, &["label", "instance", "scalar_label"]),
+        intensity: find_column(table, &["intensity", "scalar_intensity"]),
     };
     build_cloud(path, &fields, NonFinite::Reject, |i| format!("vertex {i}"))
 }
@@ -273,6 +297,8 @@ enum Want {
     Cloud,
     /// The vertex table and the triangulated faces; x y z must be finite.
     Mesh,
+    /// [`Want::Cloud`] plus the triangulated faces when the file has them.
+    CloudAndFaces,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -688,7 +714,10 @@ fn parse_ply(bytes: &[u8], path: &Path, want: Want) -> Result<Parsed, SceneError
         .map(|(i, e)| {
             let role = if i == vertex_index {
                 Role::Vertex
-            } else if e.name == "face" && want == Want::Mesh && !face_seen {
+            } else if e.name == "face"
+                && matches!(want, Want::Mesh | Want::CloudAndFaces)
+                && !face_seen
+            {
                 match e.props.iter().position(|p| {
                     matches!(p.kind, Kind::List { .. })
                         && (p.name == "vertex_indices" || p.name == "vertex_index")
@@ -714,7 +743,7 @@ fn parse_ply(bytes: &[u8], path: &Path, want: Want) -> Result<Parsed, SceneError
                     role == Role::Vertex
                         && match want {
                             Want::Table => false,
-                            Want::Cloud => coordinate || normal,
+                            Want::Cloud | Want::CloudAndFaces => coordinate || normal,
                             Want::Mesh => coordinate,
                         }
                 })
