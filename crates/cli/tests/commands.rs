@@ -390,6 +390,30 @@ fn map_sld_and_segment_follow_their_contracts() {
     let discs = csv.lines().count() - 1;
     assert!(discs > 50);
 
+    // Discs of the fused mesh face the sensor by the mesh's winding: the
+    // roof's (z = 1.52, seen from below) point down.
+    ok(&[
+        "sld",
+        "--input",
+        &p("maps/mesh.ply"),
+        "--out",
+        &p("mesh_discs.csv"),
+    ]);
+    let text = std::fs::read_to_string(dir.path().join("mesh_discs.csv")).unwrap();
+    let roof: Vec<f64> = text
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.parse().unwrap())
+                .collect::<Vec<f64>>()
+        })
+        .filter(|d| d[2] > 1.45 && d[5].abs() > 0.9)
+        .map(|d| d[5])
+        .collect();
+    assert!(roof.len() > 20, "{} roof discs", roof.len());
+    assert!(roof.iter().all(|nz| *nz < 0.0), "{roof:?}");
+
     let out = ok(&[
         "segment",
         "--discs",

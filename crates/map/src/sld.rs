@@ -55,6 +55,10 @@
 //! toward the sensor that saw the registered points (per-point sensor origins,
 //! SPEC §3.6), toward one viewpoint, along reference normals (mesh vertex
 //! normals or a file's normals), or, when nothing is known, a canonical sign.
+//! Paul makes discs from the vertices of the fused TSDF mesh (§5.1.1–5.2):
+//! `Orientation::ReferenceNormals(&mesh.vertex_normals())` orients them by
+//! the mesh's winding, which faces the sensors (`tests/fused_map.rs` runs the
+//! whole pipeline on bridge1).
 //!
 //! # Determinism and speed
 //!
@@ -72,7 +76,8 @@
 //! `cx,cy,cz,nx,ny,nz,radius,points`, optionally followed by extra numeric
 //! columns ([`ExtraColumn`]: segment, material posterior, …) that the reader
 //! ignores. [`load_points`] reads a cloud file and, for PLY scans carrying
-//! `ox oy oz` columns, the sensor origin of every point.
+//! `ox oy oz` columns, the sensor origin of every point; a mesh file's
+//! vertices come with their faces' normals.
 //!
 //! ```
 //! use geom::Point3;

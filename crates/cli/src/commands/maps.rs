@@ -12,7 +12,9 @@ use std::time::Instant;
 
 #[derive(Debug, Args)]
 pub struct SldArgs {
-    /// Point cloud (PLY — a `scan` output's `ox oy oz` orient the normals —, PCD or text).
+    /// Point cloud or mesh: PLY (a `scan` output's `ox oy oz` orient the normals
+    /// toward the sensor; a mesh such as `map`'s mesh.ply orients them by its
+    /// faces, as Paul §5.2 makes discs from the fused mesh), PCD, text, OBJ, STL.
     #[arg(long)]
     input: PathBuf,
     /// Disc radius μ, metres (also the voxel size of the hash).

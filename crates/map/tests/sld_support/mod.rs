@@ -288,3 +288,42 @@ pub fn crop_x(f: &mut Fused, half_length: Real) {
     f.points = p;
     f.origins = o;
 }
+
+/// Paul's map pipeline up to the mesh (A§5.1.1): nodding sweeps (60° at 0.4°)
+/// of bridge1 from the first `views` viewpoints fused in a TSDF of `voxel_m`,
+/// and the extracted mesh, whose triangles face the sensors.
+pub fn tsdf_mesh_bridge1(
+    config: ScannerConfig,
+    views: usize,
+    voxel_m: Real,
+    seed: u64,
+) -> (World, scene::TriMesh) {
+    let world = bridge1();
+    let scanner = Scanner::new(config).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut tsdf = map::TsdfMap::new(map::TsdfConfig::with_voxel_m(voxel_m)).unwrap();
+    for (p, dir) in viewpoints().into_iter().take(views) {
+        let scans = scanner.nodding_sweep(
+            &world,
+            &pose(p, dir, 0.0),
+            &sensor::SweepConfig::default(),
+            &mut rng,
+        );
+        let grid = map::SweepGrid::from_scans(scanner.bearings_rad(), &scans).unwrap();
+        tsdf.integrate_sweep(&grid);
+    }
+    let mesh = tsdf.extract_mesh();
+    (world, mesh)
+}
+
+/// The scene face closest to each point (within `max_m`; `u32::MAX` if none).
+pub fn closest_faces(scene: &Scene, points: &[Point3], max_m: Real) -> Vec<u32> {
+    points
+        .iter()
+        .map(|p| {
+            scene
+                .closest_point(p, max_m)
+                .map_or(u32::MAX, |(_, f, _)| f)
+        })
+        .collect()
+}
