@@ -171,6 +171,57 @@ pub fn distance_segment_segment(a: &Point2, b: &Point2, c: &Point2, d: &Point2) 
         .min(distance_point_segment(d, a, b))
 }
 
+/// How two edges of a polygon adjoin.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EdgeAdjacency {
+    /// They share no vertex.
+    Apart,
+    /// The second edge follows the first: first's end is second's start.
+    Next,
+    /// The second edge is the closing edge before the first: second's end is
+    /// first's start.
+    Prev,
+}
+
+impl EdgeAdjacency {
+    /// Of edge `i` and edge `j > i` of a polygon with `n ≥ 3` vertices.
+    pub fn of(i: usize, j: usize, n: usize) -> Self {
+        if j == i + 1 {
+            Self::Next
+        } else if i == 0 && j + 1 == n {
+            Self::Prev
+        } else {
+            Self::Apart
+        }
+    }
+}
+
+/// `true` when polygon edges `a b` and `c d` meet where the edges of a simple
+/// polygon may not: anywhere when they are apart, anywhere but their shared
+/// vertex when they adjoin (`tol` as in [`intersect_segments`]). The
+/// edge-pair test of [`is_simple`].
+pub fn edges_meet_improperly(
+    a: &Point2,
+    b: &Point2,
+    c: &Point2,
+    d: &Point2,
+    adjacency: EdgeAdjacency,
+    tol: Real,
+) -> bool {
+    match intersect_segments(a, b, c, d, tol) {
+        SegmentIntersection::None => false,
+        SegmentIntersection::Overlap { .. } => true,
+        SegmentIntersection::Point { s, t } => {
+            let at_shared = match adjacency {
+                EdgeAdjacency::Apart => false,
+                EdgeAdjacency::Next => s >= 1.0 - tol / (b - a).norm() && t <= tol / (d - c).norm(),
+                EdgeAdjacency::Prev => s <= tol / (b - a).norm() && t >= 1.0 - tol / (d - c).norm(),
+            };
+            !at_shared
+        }
+    }
+}
+
 /// `true` when the polygon is simple: at least three vertices, non-zero area, no
 /// repeated vertex, adjacent edges meet only at their shared vertex and
 /// non-adjacent edges do not meet at all (`tol` as in [`intersect_segments`]).
@@ -188,23 +239,8 @@ pub fn is_simple(poly: &[Point2], tol: Real) -> bool {
         for j in (i + 1)..n {
             let c = &poly[j];
             let d = &poly[(j + 1) % n];
-            let adjacent_next = j == i + 1;
-            let adjacent_prev = i == 0 && j == n - 1;
-            match intersect_segments(a, b, c, d, tol) {
-                SegmentIntersection::None => {}
-                SegmentIntersection::Overlap { .. } => return false,
-                SegmentIntersection::Point { s, t } => {
-                    // Adjacent edges may only meet at their shared vertex.
-                    let at_shared = (adjacent_next
-                        && s >= 1.0 - tol / (b - a).norm()
-                        && t <= tol / (d - c).norm())
-                        || (adjacent_prev
-                            && s <= tol / (b - a).norm()
-                            && t >= 1.0 - tol / (d - c).norm());
-                    if !at_shared {
-                        return false;
-                    }
-                }
+            if edges_meet_improperly(a, b, c, d, EdgeAdjacency::of(i, j, n), tol) {
+                return false;
             }
         }
     }

@@ -4,7 +4,7 @@
 //! [`PlaneFrame`] (orthogonal projection) and back.
 
 use crate::segment::{CornerId, Edge, EdgeKey, Node, Polygon};
-use geom::polygon2::{self, SegmentIntersection};
+use geom::polygon2::{self, EdgeAdjacency};
 use geom::{PlaneFrame, Point2, Real, Vector2};
 
 /// A perimeter vertex in 2-D with its records.
@@ -374,12 +374,11 @@ pub(crate) fn is_simple_fast(poly: &[Point2], tol: Real) -> bool {
             }
             let c = &poly[j];
             let d = &poly[(j + 1) % n];
-            let adjacent_next = j == i + 1;
-            let adjacent_prev = i == 0 && j == n - 1;
+            let adjacency = EdgeAdjacency::of(i, j, n);
             // Adjacent edges that do not fold back onto each other meet only at
             // their shared vertex.
-            if adjacent_next || adjacent_prev {
-                let (d1, d2) = if adjacent_next {
+            if adjacency != EdgeAdjacency::Apart {
+                let (d1, d2) = if adjacency == EdgeAdjacency::Next {
                     (b - a, d - c)
                 } else {
                     (d - c, b - a)
@@ -389,20 +388,8 @@ pub(crate) fn is_simple_fast(poly: &[Point2], tol: Real) -> bool {
                     continue;
                 }
             }
-            match polygon2::intersect_segments(a, b, c, d, tol) {
-                SegmentIntersection::None => {}
-                SegmentIntersection::Overlap { .. } => return false,
-                SegmentIntersection::Point { s, t } => {
-                    let at_shared = (adjacent_next
-                        && s >= 1.0 - tol / (b - a).norm()
-                        && t <= tol / (d - c).norm())
-                        || (adjacent_prev
-                            && s <= tol / (b - a).norm()
-                            && t >= 1.0 - tol / (d - c).norm());
-                    if !at_shared {
-                        return false;
-                    }
-                }
+            if polygon2::edges_meet_improperly(a, b, c, d, adjacency, tol) {
+                return false;
             }
         }
     }
