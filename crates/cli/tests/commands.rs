@@ -213,9 +213,34 @@ fn scan_writes_the_contracted_ply_and_scores_it() {
         "{stdout}"
     );
     let t = read_ply_columns(&out);
-    assert_eq!(t.names, ["x", "y", "z", "intensity", "ox", "oy", "oz"]);
+    assert_eq!(
+        t.names,
+        [
+            "x",
+            "y",
+            "z",
+            "intensity",
+            "ox",
+            "oy",
+            "oz",
+            "scan",
+            "ray",
+            "material"
+        ]
+    );
     let n: usize = stdout.split_whitespace().next().unwrap().parse().unwrap();
     assert_eq!(t.len(), n);
+    // The grid: 6° at 0.4° per scan is 16 scans of 342 rays, scan-major.
+    let (scans, rays) = (t.column("scan").unwrap(), t.column("ray").unwrap());
+    assert!(scans.iter().all(|s| (0.0..16.0).contains(s)));
+    assert!(rays.iter().all(|r| (0.0..342.0).contains(r)));
+    assert!(
+        scans
+            .iter()
+            .zip(rays)
+            .zip(scans.iter().zip(rays).skip(1))
+            .all(|(a, b)| a < b)
+    );
     // Ray origins are the scanner: ~5 cm above the flange at (0.317, 0, 0.72).
     let oz = t.column("oz").unwrap();
     assert!(oz.iter().all(|z| (z - 0.77).abs() < 0.05));
@@ -314,6 +339,110 @@ fn raycast_round_trip_against_a_known_plane() {
         out.to_str().unwrap(),
     ]);
     assert!(e.contains("rays.bin") && e.contains("30 bytes"), "{e}");
+}
+
+#[test]
+fn map_applies_occlusion_weights_over_the_scan_grid() {
+    // A hand-built sweep: 3 scans × 4 rays 0.36° apart, nodding 0.5° per scan
+    // about the scanner's y axis, 0.5 m above the base. Ranges (m):
+    //   scan 0: 1 1 2 2
+    //   scan 1: 1 1 2 2
+    //   scan 2: 1 1 1 1
+    // Range jumps > 0.1 m between grid neighbours: ray 1→2 in scans 0 and 1,
+    // and scan 1→2 at rays 2 and 3: four occlusion segments (Paul §4.2.1).
+    let dir = tempfile::tempdir().unwrap();
+    let step = 0.36f64.to_radians();
+    let bearings: Vec<f64> = (0..4).map(|i| (f64::from(i) - 1.5) * step).collect();
+    let poses: Vec<geom::Isometry3> = (0..3)
+        .map(|j| {
+            geom::Isometry3::from_parts(
+                geom::Translation3::new(0.0, 0.0, 0.5),
+                geom::UnitQuaternion::from_axis_angle(
+                    &geom::Vector3::y_axis(),
+                    (0.5 * f64::from(j)).to_radians(),
+                ),
+            )
+        })
+        .collect();
+    let r = |v: f64| Some(v);
+    let ranges = [
+        r(1.0),
+        r(1.0),
+        r(2.0),
+        r(2.0),
+        r(1.0),
+        r(1.0),
+        r(2.0),
+        r(2.0),
+        r(1.0),
+        r(1.0),
+        r(1.0),
+        r(1.0),
+    ];
+    let sweep = sensor::Sweep::from_range_grid(&bearings, &poses, &ranges).unwrap();
+    let file = dir.path().join("grid.ply");
+    sweep.write_ply(&file).unwrap();
+    let out = ok(&[
+        "map",
+        "--scans",
+        file.to_str().unwrap(),
+        "--voxel",
+        "0.05",
+        "--out",
+        dir.path().join("m").to_str().unwrap(),
+    ]);
+    assert!(out.contains("4 occlusion segments (scan grid)"), "{out}");
+    // Without the grid only the two jumps along a scan are recoverable.
+    let list = sensor::Sweep::from_points(
+        sweep
+            .points()
+            .iter()
+            .map(|p| sensor::SweepPoint { cell: None, ..*p })
+            .collect(),
+    )
+    .unwrap();
+    let file = dir.path().join("list.ply");
+    list.write_ply(&file).unwrap();
+    let out = ok(&[
+        "map",
+        "--scans",
+        file.to_str().unwrap(),
+        "--voxel",
+        "0.05",
+        "--out",
+        dir.path().join("m2").to_str().unwrap(),
+    ]);
+    assert!(out.contains("2 occlusion segments (no grid"), "{out}");
+
+    // A sweep wholly outside the map's regions is integrated as nothing, with
+    // a warning.
+    let far = sensor::Sweep::from_points(
+        sweep
+            .points()
+            .iter()
+            .map(|p| sensor::SweepPoint {
+                point: p.point + geom::Vector3::new(100.0, 0.0, 0.0),
+                origin: p.origin + geom::Vector3::new(100.0, 0.0, 0.0),
+                ..*p
+            })
+            .collect(),
+    )
+    .unwrap();
+    let file = dir.path().join("far.ply");
+    far.write_ply(&file).unwrap();
+    let o = surveyor(&[
+        "map",
+        "--scans",
+        file.to_str().unwrap(),
+        "--out",
+        dir.path().join("m3").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success());
+    assert!(
+        err.contains("far.ply") && err.contains("all 12 rays lie outside the map"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -11,11 +11,12 @@
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use geom::{Isometry3, Real, Translation3, UnitQuaternion, Vector3, unit};
-use map::{OccupancyConfig, OccupancyGrid, SweepGrid};
+use map::{OccupancyConfig, OccupancyGrid};
+use sensor::Sweep;
 use sensor::{ScannerConfig, SweepConfig};
 use std::hint::black_box;
 
-fn sphere_sweep() -> SweepGrid {
+fn sphere_sweep() -> Sweep {
     let bearings = ScannerConfig::default().bearings_rad();
     let centre = Translation3::new(0.0, 0.0, 0.475);
     let tilts = SweepConfig::default().tilt_values(0.0, None);
@@ -35,7 +36,7 @@ fn sphere_sweep() -> SweepGrid {
             ranges.push(Some(2.0 + ripple));
         }
     }
-    SweepGrid::new(bearings, poses, ranges).expect("sweep")
+    Sweep::from_range_grid(&bearings, &poses, &ranges).expect("sweep")
 }
 
 fn occupancy(c: &mut Criterion) {
@@ -43,7 +44,7 @@ fn occupancy(c: &mut Criterion) {
     let config = OccupancyConfig::default();
     let mut group = c.benchmark_group("occupancy_sweep_51642_rays_2m_10mm");
     group.sample_size(10);
-    group.throughput(Throughput::Elements(sweep.point_count() as u64));
+    group.throughput(Throughput::Elements(sweep.len() as u64));
     for threads in [1usize, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

@@ -12,19 +12,21 @@
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use geom::{Isometry3, Point3, Ray, Real, Translation3, UnitQuaternion, Vector3, unit};
-use map::{SweepGrid, TsdfConfig, TsdfIntegrator, TsdfMap};
+use map::{TsdfConfig, TsdfIntegrator, TsdfMap};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use scene::{RayCast, World};
+use sensor::Sweep;
 use sensor::{Scanner, ScannerConfig, SweepConfig};
 use std::hint::black_box;
 use std::path::Path;
 
-fn sweep(world: &World, world_from_target: &Isometry3, seed: u64) -> SweepGrid {
+fn sweep(world: &World, world_from_target: &Isometry3, seed: u64) -> Sweep {
     let scanner = Scanner::new(ScannerConfig::default()).expect("scanner");
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let scans = scanner.nodding_sweep(world, world_from_target, &SweepConfig::default(), &mut rng);
-    SweepGrid::from_scans(scanner.bearings_rad(), &scans).expect("sweep")
+    scanner
+        .nodding_sweep(world, world_from_target, &SweepConfig::default(), &mut rng)
+        .expect("sweep")
 }
 
 fn poses() -> Vec<Isometry3> {
@@ -67,7 +69,7 @@ fn tsdf(c: &mut Criterion) {
         .expect("bridge1")
         .build(Path::new("."))
         .expect("bridge1 builds");
-    let sweeps: Vec<SweepGrid> = poses()
+    let sweeps: Vec<Sweep> = poses()
         .iter()
         .enumerate()
         .map(|(k, p)| sweep(&world, p, 10 + k as u64))
@@ -80,7 +82,7 @@ fn tsdf(c: &mut Criterion) {
 
     let mut group = c.benchmark_group("tsdf_bridge1_10mm");
     group.sample_size(10);
-    group.throughput(Throughput::Elements(sweeps[0].point_count() as u64));
+    group.throughput(Throughput::Elements(sweeps[0].len() as u64));
     for threads in [1usize, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

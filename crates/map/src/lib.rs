@@ -7,7 +7,7 @@
 //! | [`key`] | [`VoxelKey`], [`BlockKey`]: global integer keys |
 //! | [`traverse`] | exact voxel walk of a segment ([`traverse::walk_segment`]) and its tie rule |
 //! | [`regions`] | [`RegionsConfig`]: A1 ⊂ A2 ⊂ A3 (A§4.2.1) |
-//! | [`sweep`] | [`SweepGrid`] (range matrix of A eq. 4.12), [`PointSweep`] (scan files) |
+//! | [`sweep`] | [`range_jumps`]: occlusion segments between neighbouring returns of a [`sensor::Sweep`] (A§4.2.1) |
 //! | [`occupancy`] | [`OccupancyGrid`]: tri-state grid, H1 (A eq. 4.8–4.11), H2 (eq. 4.13–4.14), prediction rays |
 //! | [`tsdf`] | [`TsdfMap`]: sparse-block TSDF fusion, marching-cubes mesh (A§5.1.1) |
 //! | [`marching_cubes`] | the consistent case table behind [`TsdfMap::extract_mesh`] |
@@ -44,5 +44,5 @@ pub use regions::{Region, RegionBox, RegionsConfig};
 pub use segment::{SegmentConfig, SegmentError, segment_discs};
 pub use sld::{Disc, Orientation, SldConfig, SldError, SldResult, generate_discs};
 pub use stats::{OccupancyReport, RegionReport};
-pub use sweep::{PointSweep, SweepGrid};
+pub use sweep::range_jumps;
 pub use tsdf::{TsdfConfig, TsdfIntegrator, TsdfMap, TsdfStats, TsdfVoxel, TsdfWeighting};

@@ -78,10 +78,11 @@ use crate::MapError;
 use crate::key::VoxelKey;
 use crate::regions::{Region, RegionsConfig};
 use crate::stats::{OccupancyReport, RegionReport};
-use crate::sweep::{SweepGrid, check_point_list, list_range_jumps};
+use crate::sweep::{check_point_list, list_range_jumps, range_jumps};
 use crate::traverse::Walk;
 use geom::{Aabb, Point3, Real, UnitVector3};
 use rayon::prelude::*;
+use sensor::Sweep;
 use serde::{Deserialize, Serialize};
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
@@ -434,6 +435,8 @@ pub struct IntegrationStats {
     pub range_jumps: usize,
     /// Unknown voxels newly flagged as occluded.
     pub newly_important: u64,
+    /// Rays that lie wholly outside the grid (A3) and changed nothing.
+    pub rays_outside: usize,
 }
 
 /// Per-shell count changes of one worker (shell = innermost region).
@@ -444,6 +447,7 @@ struct Delta {
     important_unknown: [i64; 3],
     newly_occupied: u64,
     newly_important: u64,
+    rays_outside: usize,
 }
 
 impl Delta {
@@ -455,6 +459,7 @@ impl Delta {
         }
         self.newly_occupied += o.newly_occupied;
         self.newly_important += o.newly_important;
+        self.rays_outside += o.rays_outside;
         self
     }
 }
@@ -541,6 +546,7 @@ impl Cells<'_> {
     fn integrate_ray(&self, o: &Point3, p: &Point3, hit: bool, delta: &mut Delta) {
         let g = self.geometry;
         let Some((a, b, whole)) = g.clip(g.local(o), g.local(p)) else {
+            delta.rays_outside += 1;
             return;
         };
         let end_hit = hit && whole;
@@ -750,47 +756,26 @@ impl OccupancyGrid {
         }
     }
 
-    /// Integrate a sweep on its grid: each return frees the voxels its ray
-    /// crosses and occupies its own voxel; then, when occlusion weighting is
-    /// on, the segments between grid-adjacent returns with a range jump flag
-    /// the voxels they cross that are still unknown. Rays run in parallel; the
-    /// result does not depend on the thread count.
-    pub fn integrate_sweep(&mut self, sweep: &SweepGrid) -> IntegrationStats {
-        let cells = self.cells();
-        let n = sweep.rays_per_scan();
-        let delta = (0..sweep.scan_count())
-            .into_par_iter()
-            .fold(Delta::default, |mut d, j| {
-                if let Some(o) = sweep.origin(j) {
-                    for i in 0..n {
-                        if let Some(p) = sweep.point(j, i) {
-                            cells.integrate_ray(&o, &p, true, &mut d);
-                        }
-                    }
-                }
-                d
-            })
-            .reduce(Delta::default, Delta::add);
-        let jumps = if self.config.occlusion.enabled {
-            sweep.range_jumps(self.config.occlusion.range_jump_m)
+    /// Integrate a sweep: each return frees the voxels its ray crosses and
+    /// occupies its own voxel; then, when occlusion weighting is on, the
+    /// segments between neighbouring returns with a range jump flag the
+    /// voxels they cross that are still unknown (A§4.2.1). Neighbours come
+    /// from the sweep's (scan, ray) grid when it keeps one, else from the
+    /// list order (see [`OcclusionConfig::list_neighbour_max_deg`]). Rays run
+    /// in parallel; the result does not depend on the thread count.
+    pub fn integrate_sweep(&mut self, sweep: &Sweep) -> IntegrationStats {
+        let occ = &self.config.occlusion;
+        let jumps = if occ.enabled {
+            range_jumps(sweep, occ)
         } else {
             Vec::new()
         };
-        let flag_delta = flag_segments(&cells, &jumps);
-        let total = delta.add(flag_delta);
-        let unknown_before = self.counts(Region::A3).unknown;
-        self.apply(&total);
-        IntegrationStats {
-            rays: sweep.point_count(),
-            newly_known: unknown_before - self.counts(Region::A3).unknown,
-            newly_occupied: total.newly_occupied,
-            range_jumps: jumps.len(),
-            newly_important: total.newly_important,
-        }
+        let pts = sweep.points();
+        self.integrate_checked(pts.len(), |k| (pts[k].origin, pts[k].point), &jumps)
     }
 
-    /// Integrate points measured along rays from per-point `origins` (a scan
-    /// file: no grid). Occlusion weighting uses the neighbours recoverable
+    /// Integrate points measured along rays from per-point `origins` (a plain
+    /// list: no grid). Occlusion weighting uses the neighbours recoverable
     /// from the list order (see [`OcclusionConfig::list_neighbour_max_deg`]).
     /// Fails, changing nothing, on empty or mismatched lists or non-finite
     /// coordinates.
@@ -800,17 +785,6 @@ impl OccupancyGrid {
         points: &[Point3],
     ) -> Result<IntegrationStats, MapError> {
         check_point_list("point list", origins, points)?;
-        let cells = self.cells();
-        let delta = origins
-            .par_chunks(1024)
-            .zip(points.par_chunks(1024))
-            .fold(Delta::default, |mut d, (os, ps)| {
-                for (o, p) in os.iter().zip(ps) {
-                    cells.integrate_ray(o, p, true, &mut d);
-                }
-                d
-            })
-            .reduce(Delta::default, Delta::add);
         let occ = &self.config.occlusion;
         let jumps = if occ.enabled && occ.list_neighbour_max_deg > 0.0 {
             list_range_jumps(
@@ -822,17 +796,40 @@ impl OccupancyGrid {
         } else {
             Vec::new()
         };
-        let flag_delta = flag_segments(&cells, &jumps);
+        Ok(self.integrate_checked(points.len(), |k| (origins[k], points[k]), &jumps))
+    }
+
+    /// Integrate `n` checked rays (`ray(k)` = (origin, point)) and flag the
+    /// occlusion segments `jumps`.
+    fn integrate_checked(
+        &mut self,
+        n: usize,
+        ray: impl Fn(usize) -> (Point3, Point3) + Sync,
+        jumps: &[(Point3, Point3)],
+    ) -> IntegrationStats {
+        let cells = self.cells();
+        let delta = (0..n)
+            .into_par_iter()
+            .with_min_len(1024)
+            .fold(Delta::default, |mut d, k| {
+                let (o, p) = ray(k);
+                cells.integrate_ray(&o, &p, true, &mut d);
+                d
+            })
+            .reduce(Delta::default, Delta::add);
+        let delta_outside = delta.rays_outside;
+        let flag_delta = flag_segments(&cells, jumps);
         let total = delta.add(flag_delta);
         let unknown_before = self.counts(Region::A3).unknown;
         self.apply(&total);
-        Ok(IntegrationStats {
-            rays: points.len(),
+        IntegrationStats {
+            rays: n,
             newly_known: unknown_before - self.counts(Region::A3).unknown,
             newly_occupied: total.newly_occupied,
             range_jumps: jumps.len(),
             newly_important: total.newly_important,
-        })
+            rays_outside: delta_outside,
+        }
     }
 
     /// Mark a voxel free without a measurement (the volume the manipulator

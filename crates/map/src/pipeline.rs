@@ -8,10 +8,10 @@
 use crate::MapError;
 use crate::occupancy::{IntegrationStats, OccupancyConfig, OccupancyGrid};
 use crate::stats::OccupancyReport;
-use crate::sweep::{PointSweep, SweepGrid};
 use crate::tsdf::{TsdfConfig, TsdfMap, TsdfStats};
 use geom::Real;
 use scene::TriMesh;
+use sensor::Sweep;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -75,21 +75,8 @@ impl Mapper {
         })
     }
 
-    /// Integrate a point sweep (a scan file) into both maps.
-    pub fn integrate_points(&mut self, sweep: &PointSweep) -> Result<SweepSummary, MapError> {
-        // Both calls check the same lists; the first failure leaves both maps
-        // untouched.
-        let occupancy = self
-            .occupancy
-            .integrate_points(sweep.origins(), sweep.points())?;
-        let tsdf = self
-            .tsdf
-            .integrate_points(sweep.origins(), sweep.points())?;
-        Ok(SweepSummary { occupancy, tsdf })
-    }
-
-    /// Integrate a sweep on its grid into both maps.
-    pub fn integrate_sweep(&mut self, sweep: &SweepGrid) -> SweepSummary {
+    /// Integrate a sweep into both maps.
+    pub fn integrate_sweep(&mut self, sweep: &Sweep) -> SweepSummary {
         SweepSummary {
             occupancy: self.occupancy.integrate_sweep(sweep),
             tsdf: self.tsdf.integrate_sweep(sweep),
@@ -148,23 +135,26 @@ impl MapOutputs {
 ///
 /// ```
 /// use geom::Point3;
-/// use map::{MapConfig, PointSweep, build_from_scans};
+/// use map::{MapConfig, build_from_scans};
+/// use sensor::{Sweep, SweepPoint};
 /// // One ray straight up from the first joint to a point 1 m above it.
-/// let sweep = PointSweep::new(
-///     "example",
-///     vec![Point3::new(0.0, 0.0, 0.475)],
-///     vec![Point3::new(0.0, 0.0, 1.475)],
-/// )?;
+/// let sweep = Sweep::from_points(vec![SweepPoint {
+///     point: Point3::new(0.0, 0.0, 1.475),
+///     origin: Point3::new(0.0, 0.0, 0.475),
+///     intensity: 0.0,
+///     material: None,
+///     cell: None,
+/// }])?;
 /// let config = MapConfig::default().with_voxel_m(0.05);
 /// let out = build_from_scans(&[sweep], &config)?;
 /// assert_eq!(out.report.regions[2].occupied, 1);
 /// assert_eq!(out.report.regions[2].free, 20); // 1 m at 5 cm, the hit excluded
-/// # Ok::<(), map::MapError>(())
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-pub fn build_from_scans(sweeps: &[PointSweep], config: &MapConfig) -> Result<MapOutputs, MapError> {
+pub fn build_from_scans(sweeps: &[Sweep], config: &MapConfig) -> Result<MapOutputs, MapError> {
     let mut mapper = Mapper::new(config)?;
     for s in sweeps {
-        mapper.integrate_points(s)?;
+        mapper.integrate_sweep(s);
     }
     Ok(mapper.outputs())
 }

@@ -954,44 +954,31 @@ pub fn load_points(path: &Path) -> Result<LoadedPoints, SldError> {
         line: None,
         message: e.to_string(),
     };
-    let cloud = scene::io::load_cloud_or_mesh_vertices(path).map_err(scene_err)?;
     let is_ply = path
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
-    let mut origins = None;
     if is_ply {
         let table = scene::io::read_ply_vertices(path).map_err(scene_err)?;
-        if let (Some(ox), Some(oy), Some(oz)) =
-            (table.column("ox"), table.column("oy"), table.column("oz"))
-        {
-            if ox.len() != cloud.points.len() {
-                return Err(SldError::Parse {
+        if sensor::Sweep::is_scan_table(&table) {
+            let sweep =
+                sensor::Sweep::from_ply_table(path, &table).map_err(|e| SldError::Parse {
                     source_name: path.display().to_string(),
                     line: None,
-                    message: format!(
-                        "{} sensor origins for {} points",
-                        ox.len(),
-                        cloud.points.len()
-                    ),
-                });
-            }
-            let o: Vec<Point3> = (0..ox.len())
-                .map(|i| Point3::new(ox[i], oy[i], oz[i]))
-                .collect();
-            if let Some(i) = o
-                .iter()
-                .position(|p| !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()))
-            {
-                return Err(SldError::Parse {
-                    source_name: path.display().to_string(),
-                    line: None,
-                    message: format!("vertex {i}: sensor origin is not finite"),
-                });
-            }
-            origins = Some(o);
+                    message: match e {
+                        sensor::SensorError::ScanFile { message, .. } => message,
+                        other => other.to_string(),
+                    },
+                })?;
+            return Ok(LoadedPoints {
+                points: sweep.positions(),
+                origins: Some(sweep.origins()),
+                normals: None,
+            });
         }
     }
+    let cloud = scene::io::load_cloud_or_mesh_vertices(path).map_err(scene_err)?;
+    let origins = None;
     Ok(LoadedPoints {
         points: cloud.points,
         origins,

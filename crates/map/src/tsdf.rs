@@ -45,11 +45,12 @@ use crate::MapError;
 use crate::hash::FxHashMap;
 use crate::key::{BlockKey, VoxelKey};
 use crate::marching_cubes::{EDGES, case_table, corner_offset};
-use crate::sweep::{SweepGrid, check_point_list};
+use crate::sweep::check_point_list;
 use crate::traverse::{MAX_VOXEL_COORD, Walk, to_voxel_units};
 use geom::{Point3, Real, Vector3};
 use rayon::prelude::*;
 use scene::TriMesh;
+use sensor::Sweep;
 use serde::{Deserialize, Serialize};
 
 /// How much a single observation counts.
@@ -270,10 +271,9 @@ impl TsdfMap {
         Some(self.blocks[*b as usize].voxels[local_index(key, shift)])
     }
 
-    /// Integrate a sweep on its grid (every return along its ray).
-    pub fn integrate_sweep(&mut self, sweep: &SweepGrid) -> TsdfStats {
-        let (origins, points): (Vec<Point3>, Vec<Point3>) = sweep.rays().into_iter().unzip();
-        self.integrate_checked(&origins, &points)
+    /// Integrate a sweep (every return along its ray).
+    pub fn integrate_sweep(&mut self, sweep: &Sweep) -> TsdfStats {
+        self.integrate_checked(&sweep.origins(), &sweep.positions())
     }
 
     /// Integrate points measured along rays from per-point `origins`. Fails,

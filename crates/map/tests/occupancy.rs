@@ -7,11 +7,12 @@ use geom::{Isometry3, Point3, Real, Translation3, UnitQuaternion, Vector3, unit}
 use map::traverse::segment_voxels;
 use map::{
     MapError, OcclusionConfig, OccupancyConfig, OccupancyGrid, Region, RegionBox, RegionsConfig,
-    SweepGrid, VoxelKey, VoxelState,
+    VoxelKey, VoxelState,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use scene::{MaterialId, Scene, TriMesh, default_materials, primitives::cuboid};
+use sensor::Sweep;
 use sensor::{Scanner, ScannerConfig, SweepConfig};
 use std::f64::consts::LN_2;
 
@@ -152,14 +153,15 @@ fn slab(z: Real, y_min: Real) -> TriMesh {
     cuboid(Point3::new(-2.0, y_min, z), Point3::new(2.0, 2.0, z + 0.05))
 }
 
-fn sweep_of(scene: &Scene, pose: &Isometry3, noise: bool, seed: u64) -> SweepGrid {
+fn sweep_of(scene: &Scene, pose: &Isometry3, noise: bool, seed: u64) -> Sweep {
     let mut config = ScannerConfig::default();
     config.noise.enabled = noise;
     config.material_range_bias = noise;
     let scanner = Scanner::new(config).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let scans = scanner.nodding_sweep(scene, pose, &SweepConfig::default(), &mut rng);
-    SweepGrid::from_scans(scanner.bearings_rad(), &scans).unwrap()
+    scanner
+        .nodding_sweep(scene, pose, &SweepConfig::default(), &mut rng)
+        .unwrap()
 }
 
 fn room_config(voxel_m: Real, occlusion: bool) -> OccupancyConfig {
@@ -245,7 +247,7 @@ fn occlusion_importance_raises_voxels_between_points_across_a_range_jump() {
     }
     // Flagged voxels are unknown and lie on a segment between the two points of
     // a jump: between the walls, behind the near wall's edge (y ≈ 0).
-    let jumps = sweep.range_jumps(weighted.config().occlusion.range_jump_m);
+    let jumps = map::range_jumps(&sweep, &weighted.config().occlusion);
     let mut on_segments = std::collections::HashSet::new();
     for (p, q) in &jumps {
         on_segments.extend(segment_voxels(p, q, 0.05));
@@ -289,14 +291,38 @@ fn range_jumps_use_both_grid_directions() {
     let poses = vec![Isometry3::identity(), Isometry3::identity()];
     let r = |v: Real| Some(v);
     let ranges = vec![r(1.0), r(1.0), r(3.0), r(1.0), None, r(1.05)];
-    let sweep = SweepGrid::new(bearings, poses, ranges).unwrap();
-    let jumps = sweep.range_jumps(0.1);
+    let sweep = Sweep::from_range_grid(&bearings, &poses, &ranges).unwrap();
+    // Rays 0.1 rad (5.7°) apart count as list neighbours; 0.2 rad do not.
+    let occ = OcclusionConfig {
+        range_jump_m: 0.1,
+        list_neighbour_max_deg: 10.0,
+        ..OcclusionConfig::default()
+    };
+    let jumps = map::range_jumps(&sweep, &occ);
     // Along scan 0: ray 1 → 2 (1 → 3). Across scans: ray 2 of scan 0 → 1 (3 → 1.05).
+    let at = |scan, ray| sweep.points()[sweep.find(sensor::GridCell { scan, ray }).unwrap()].point;
+    // The point of ray 2 in scan 0, by A eq. 4.7: 3·(0, −sin 0.1, cos 0.1).
+    assert!((at(0, 2) - Point3::new(0.0, -3.0 * 0.1f64.sin(), 3.0 * 0.1f64.cos())).norm() < 1e-12);
     assert_eq!(jumps.len(), 2);
-    assert_eq!(jumps[0].0, sweep.point(0, 1).unwrap());
-    assert_eq!(jumps[0].1, sweep.point(0, 2).unwrap());
-    assert_eq!(jumps[1].0, sweep.point(0, 2).unwrap());
-    assert_eq!(jumps[1].1, sweep.point(1, 2).unwrap());
+    assert_eq!(jumps[0], (at(0, 1), at(0, 2)));
+    assert_eq!(jumps[1], (at(0, 2), at(1, 2)));
+
+    // The same grid through a scan file keeps its grid, hence its jumps; the
+    // same points without their cells lose the jump across scans.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("grid.ply");
+    sweep.write_ply(&path).unwrap();
+    let back = Sweep::read_ply(&path).unwrap();
+    assert_eq!(map::range_jumps(&back, &occ).len(), 2);
+    let list = Sweep::from_points(
+        sweep
+            .points()
+            .iter()
+            .map(|p| sensor::SweepPoint { cell: None, ..*p })
+            .collect(),
+    )
+    .unwrap();
+    assert_eq!(map::range_jumps(&list, &occ).len(), 1);
 }
 
 #[test]
@@ -400,23 +426,29 @@ fn bad_input_is_an_error_and_changes_nothing() {
 
     // Sweep grids are checked on construction.
     let id = Isometry3::identity();
-    let e = SweepGrid::new(vec![0.0, 0.1], vec![id], vec![Some(1.0)]).unwrap_err();
+    let e = Sweep::from_range_grid(&[0.0, 0.1], &[id], &[Some(1.0)]).unwrap_err();
     assert!(
         e.to_string()
             .contains("1 ranges given for 1 scans of 2 rays"),
         "{e}"
     );
-    let e = SweepGrid::new(vec![0.0], vec![id], vec![Some(Real::NAN)]).unwrap_err();
+    let e = Sweep::from_range_grid(&[0.0], &[id], &[Some(Real::NAN)]).unwrap_err();
     assert!(e.to_string().contains("scan 0, ray 0"), "{e}");
-    let e = SweepGrid::new(vec![0.0], vec![id], vec![Some(-1.0)]).unwrap_err();
+    let e = Sweep::from_range_grid(&[0.0], &[id], &[Some(-1.0)]).unwrap_err();
     assert!(e.to_string().contains("non-negative"), "{e}");
-    let e = SweepGrid::new(vec![], vec![], vec![]).unwrap_err();
-    assert!(e.to_string().contains("empty sweep"), "{e}");
+    let e = Sweep::from_range_grid(&[], &[], &[]).unwrap_err();
+    assert!(e.to_string().contains("no bearings"), "{e}");
+    // A scan that hit nothing is an empty sweep, and integrates to nothing.
+    let empty = Sweep::from_range_grid(&[0.0], &[id], &[None]).unwrap();
+    assert!(empty.is_empty());
+    let before = grid.counts(Region::A3);
+    assert_eq!(grid.integrate_sweep(&empty).rays, 0);
+    assert_eq!(grid.counts(Region::A3), before);
     let bad_pose = Isometry3::from_parts(
         Translation3::new(Real::INFINITY, 0.0, 0.0),
         UnitQuaternion::identity(),
     );
-    let e = SweepGrid::new(vec![0.0], vec![bad_pose], vec![None]).unwrap_err();
+    let e = Sweep::from_range_grid(&[0.0], &[bad_pose], &[Some(1.0)]).unwrap_err();
     assert!(e.to_string().contains("scan 0"), "{e}");
 
     // Configs are checked.
@@ -495,8 +527,8 @@ fn point_lists_recover_neighbours_along_a_scan() {
         .map(|i| (f64::from(i) - 2.0) * 0.36f64.to_radians())
         .collect();
     let ranges = vec![Some(1.0), Some(1.0), Some(2.0), Some(2.0), Some(1.0)];
-    let sweep = SweepGrid::new(bearings, vec![Isometry3::identity()], ranges).unwrap();
-    let (origins, points): (Vec<Point3>, Vec<Point3>) = sweep.rays().into_iter().unzip();
+    let sweep = Sweep::from_range_grid(&bearings, &[Isometry3::identity()], &ranges).unwrap();
+    let (origins, points) = (sweep.origins(), sweep.positions());
     let cfg = room_config(0.05, true);
     let mut from_grid = OccupancyGrid::new(cfg).unwrap();
     let mut from_list = OccupancyGrid::new(cfg).unwrap();

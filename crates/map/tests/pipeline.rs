@@ -3,14 +3,15 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test code may panic
 
 use geom::{Isometry3, Point3, Real, Translation3, UnitQuaternion};
-use map::{MapConfig, Mapper, OccupancyReport, PointSweep, SweepGrid, build_from_scans};
+use map::{MapConfig, Mapper, OccupancyReport, build_from_scans};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+use sensor::Sweep;
 use sensor::{Scanner, ScannerConfig, SweepConfig};
 use std::path::Path;
 
 /// A bridge1 sweep from the start pose, looking up.
-fn bridge_sweep() -> SweepGrid {
+fn bridge_sweep() -> Sweep {
     let world = scene::builtin::scene("bridge1")
         .unwrap()
         .build(Path::new("."))
@@ -21,8 +22,9 @@ fn bridge_sweep() -> SweepGrid {
         Translation3::new(0.317, 0.0, 0.7716),
         UnitQuaternion::identity(),
     );
-    let scans = scanner.nodding_sweep(&world, &start, &SweepConfig::default(), &mut rng);
-    SweepGrid::from_scans(scanner.bearings_rad(), &scans).unwrap()
+    scanner
+        .nodding_sweep(&world, &start, &SweepConfig::default(), &mut rng)
+        .unwrap()
 }
 
 /// Write points as `surveyor scan` does: float x y z intensity ox oy oz.
@@ -46,17 +48,13 @@ fn write_scan(path: &Path, origins: &[Point3], points: &[Point3]) {
 fn scan_files_to_mesh_and_report() {
     let dir = tempfile::tempdir().unwrap();
     let sweep = bridge_sweep();
-    let (origins, points): (Vec<Point3>, Vec<Point3>) = sweep.rays().into_iter().unzip();
+    let (origins, points) = (sweep.origins(), sweep.positions());
     let half = points.len() / 2;
     let (a, b) = (dir.path().join("a.ply"), dir.path().join("b.ply"));
     write_scan(&a, &origins[..half], &points[..half]);
     write_scan(&b, &origins[half..], &points[half..]);
-    let sweeps = [
-        PointSweep::read_ply(&a).unwrap(),
-        PointSweep::read_ply(&b).unwrap(),
-    ];
+    let sweeps = [Sweep::read_ply(&a).unwrap(), Sweep::read_ply(&b).unwrap()];
     assert_eq!(sweeps[0].len() + sweeps[1].len(), points.len());
-    assert!(sweeps[0].source().ends_with("a.ply"));
 
     let config = MapConfig::default().with_voxel_m(0.02);
     let out = build_from_scans(&sweeps, &config).unwrap();
@@ -84,7 +82,7 @@ fn scan_files_to_mesh_and_report() {
     // Per-sweep calls give the same maps as the one-shot call.
     let mut mapper = Mapper::new(&config).unwrap();
     for s in &sweeps {
-        let summary = mapper.integrate_points(s).unwrap();
+        let summary = mapper.integrate_sweep(s);
         assert_eq!(summary.occupancy.rays, s.len());
     }
     assert_eq!(mapper.outputs(), out);
@@ -100,7 +98,7 @@ fn bad_scan_files_are_named_in_errors() {
     let no_origin = dir.path().join("no_origin.ply");
     scene::io::write_ply_vertices_file(&no_origin, &["x", "y", "z"], &[&[0.0], &[0.0], &[1.0]])
         .unwrap();
-    let e = PointSweep::read_ply(&no_origin).unwrap_err().to_string();
+    let e = Sweep::read_ply(&no_origin).unwrap_err().to_string();
     assert!(e.contains("no_origin.ply") && e.contains("`ox`"), "{e}");
 
     // A NaN coordinate.
@@ -110,7 +108,7 @@ fn bad_scan_files_are_named_in_errors() {
         &[o[0], o[0]],
         &[p[0], Point3::new(0.0, Real::NAN, 1.0)],
     );
-    let e = PointSweep::read_ply(&nan).unwrap_err().to_string();
+    let e = Sweep::read_ply(&nan).unwrap_err().to_string();
     assert!(
         e.contains("nan.ply") && e.contains("vertex 1") && e.contains("`y`"),
         "{e}"
@@ -119,23 +117,14 @@ fn bad_scan_files_are_named_in_errors() {
     // No points.
     let empty = dir.path().join("empty.ply");
     write_scan(&empty, &[], &[]);
-    let e = PointSweep::read_ply(&empty).unwrap_err().to_string();
-    assert!(e.contains("empty.ply") && e.contains("no points"), "{e}");
+    // No points: an empty sweep (a scan that hit nothing), not an error.
+    assert!(Sweep::read_ply(&empty).unwrap().is_empty());
 
     // Missing file.
-    let e = PointSweep::read_ply(&dir.path().join("missing.ply"))
+    let e = Sweep::read_ply(&dir.path().join("missing.ply"))
         .unwrap_err()
         .to_string();
     assert!(e.contains("missing.ply"), "{e}");
-
-    // Mismatched lists.
-    let e = PointSweep::new("list", vec![o[0]; 2], p.to_vec())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.contains("list") && e.contains("2 origins for 1 points"),
-        "{e}"
-    );
 }
 
 #[test]

@@ -3,29 +3,26 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test code may panic
 
 use geom::{Isometry3, Point3, Real, Translation3, UnitQuaternion, Vector3};
-use map::{SweepGrid, TsdfConfig, TsdfIntegrator, TsdfMap};
+use map::{TsdfConfig, TsdfIntegrator, TsdfMap};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use scene::{MaterialId, RayCast, Scene, TriMesh, default_materials, primitives::cuboid};
+use sensor::Sweep;
 use sensor::{Scanner, ScannerConfig, SweepConfig};
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 /// A nodding sweep (151 scans over 60° about the scanner's y axis) from
 /// `world_from_target`: world_from_scanner = world_from_target · R_y(tilt).
-fn sweep<W: RayCast>(
-    world: &W,
-    world_from_target: &Isometry3,
-    noise: bool,
-    seed: u64,
-) -> SweepGrid {
+fn sweep<W: RayCast>(world: &W, world_from_target: &Isometry3, noise: bool, seed: u64) -> Sweep {
     let mut config = ScannerConfig::default();
     config.noise.enabled = noise;
     config.material_range_bias = noise;
     let scanner = Scanner::new(config).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let scans = scanner.nodding_sweep(world, world_from_target, &SweepConfig::default(), &mut rng);
-    SweepGrid::from_scans(scanner.bearings_rad(), &scans).unwrap()
+    scanner
+        .nodding_sweep(world, world_from_target, &SweepConfig::default(), &mut rng)
+        .unwrap()
 }
 
 fn pose(x: Real, y: Real, z: Real, r: UnitQuaternion) -> Isometry3 {
@@ -239,7 +236,7 @@ fn fusion_is_deterministic_and_grid_equals_list() {
     let a = run(1);
     let b = run(2);
     assert_eq!(a, b);
-    let (origins, points): (Vec<Point3>, Vec<Point3>) = s.rays().into_iter().unzip();
+    let (origins, points) = (s.origins(), s.positions());
     let mut from_list = TsdfMap::new(TsdfConfig::default()).unwrap();
     from_list.integrate_points(&origins, &points).unwrap();
     assert_eq!(from_list.extract_mesh(), a);

@@ -80,7 +80,8 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use crate::scanner::{Scan, Scanner, ScannerConfig};
+use crate::scanner::{Scanner, ScannerConfig};
+use crate::sweep::Sweep;
 use geom::{
     Isometry3, Matrix3, Point3, Ray, Real, Translation3, UnitQuaternion, UnitVector3, Vector3,
 };
@@ -310,30 +311,23 @@ pub struct Observation {
 }
 
 impl Observation {
-    /// The returns of `scans` (taken with `scanner`) whose measured point
-    /// lies within `patch_radius_m` of `target`.
-    pub fn from_scans(
-        scans: &[Scan],
-        scanner: &Scanner,
-        target: &Point3,
-        patch_radius_m: Real,
-    ) -> Self {
-        let mut returns = Vec::new();
-        for scan in scans {
-            let rays = scanner.rays(&scan.world_from_scanner);
-            for (ray, ret) in rays.iter().zip(&scan.returns) {
-                if let Some(r) = ret
-                    && (r.point - target).norm() <= patch_radius_m
-                {
-                    returns.push(ObservedReturn {
-                        origin: ray.origin,
-                        direction: ray.dir,
-                        range_m: r.range_m,
-                        intensity: r.intensity,
-                    });
-                }
-            }
-        }
+    /// The returns of a sweep whose measured point lies within
+    /// `patch_radius_m` of `target`.
+    pub fn from_sweep(sweep: &Sweep, target: &Point3, patch_radius_m: Real) -> Self {
+        let returns = sweep
+            .points()
+            .iter()
+            .filter(|p| (p.point - target).norm() <= patch_radius_m)
+            .filter_map(|p| {
+                let (direction, range_m) = UnitVector3::try_new_and_get(p.point - p.origin, 1e-12)?;
+                Some(ObservedReturn {
+                    origin: p.origin,
+                    direction,
+                    range_m,
+                    intensity: p.intensity,
+                })
+            })
+            .collect();
         Self {
             returns,
             target: Some(*target),

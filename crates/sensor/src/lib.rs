@@ -7,12 +7,14 @@
 //! | [`range_finder`] | [`RangeFinder`], [`SensorPoint`] |
 //! | [`scanner`] | [`Scanner`], [`ScannerConfig`], [`Scan`], [`ScanReturn`], [`RangeNoise`] |
 //! | [`reflection`] | [`reflection::ReflectionModel`]: intensity and range bias versus incidence |
-//! | [`sweep`] | [`SweepConfig`]: the tilt angles of a 3-D sweep |
+//! | [`sweep`] | [`SweepConfig`] (the tilt angles of a 3-D sweep), [`Sweep`] (its returns on the (scan, ray) grid), [`SweepBuilder`], [`beam_direction`] |
+//! | [`scan_file`] | [`Sweep::read_ply`], [`Sweep::write_ply`]: the scan PLY |
 //! | [`classifier`] | [`Lrc`], [`LrcConfig`], [`Observation`]: the material classifier of A App. B |
 
 pub mod classifier;
 pub mod range_finder;
 pub mod reflection;
+pub mod scan_file;
 pub mod scanner;
 pub mod sweep;
 
@@ -20,7 +22,9 @@ pub use classifier::{Classification, ClassifyError, Lrc, LrcConfig, LrcError, Ob
 pub use range_finder::{RangeFinder, SensorPoint};
 pub use reflection::ReflectionModel;
 pub use scanner::{RangeNoise, Scan, ScanReturn, Scanner, ScannerConfig};
-pub use sweep::SweepConfig;
+pub use sweep::{
+    GridCell, GridShape, Sweep, SweepBuilder, SweepConfig, SweepPoint, beam_direction,
+};
 
 /// Errors of sensor configuration.
 #[derive(Debug, thiserror::Error)]
@@ -35,4 +39,21 @@ pub enum SensorError {
         /// What was given.
         got: String,
     },
+    /// A sweep's data break its invariants (see [`Sweep`]).
+    #[error("sweep: {message}")]
+    Sweep {
+        /// What is wrong.
+        message: String,
+    },
+    /// A scan file is malformed.
+    #[error("{path}: {message}")]
+    ScanFile {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A scan file could not be read or written.
+    #[error(transparent)]
+    Scene(#[from] scene::SceneError),
 }

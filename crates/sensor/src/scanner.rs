@@ -172,6 +172,36 @@ pub struct Scan {
     pub returns: Vec<Option<ScanReturn>>,
 }
 
+impl Scan {
+    /// Ranges, intensities and ground-truth materials per bearing, as a
+    /// scanner driver would report them.
+    pub fn readings(&self) -> (Vec<Option<Real>>, Vec<Real>, Vec<Option<MaterialId>>) {
+        let ranges = self.returns.iter().map(|r| r.map(|r| r.range_m)).collect();
+        let intensities = self
+            .returns
+            .iter()
+            .map(|r| r.map_or(0.0, |r| r.intensity))
+            .collect();
+        let materials = self
+            .returns
+            .iter()
+            .map(|r| r.and_then(|r| r.material))
+            .collect();
+        (ranges, intensities, materials)
+    }
+
+    /// Append this scan to a sweep under construction.
+    pub fn push_to(&self, builder: &mut crate::SweepBuilder) -> Result<(), SensorError> {
+        let (ranges, intensities, materials) = self.readings();
+        builder.push_scan(
+            &self.world_from_scanner,
+            &ranges,
+            &intensities,
+            Some(&materials),
+        )
+    }
+}
+
 /// A URG-04LX model ready to scan.
 #[derive(Clone, Debug)]
 pub struct Scanner {
@@ -188,7 +218,7 @@ impl Scanner {
         let bearings = config.bearings_rad();
         let dirs = bearings
             .iter()
-            .map(|t| UnitVector3::new_unchecked(Vector3::new(0.0, -t.sin(), t.cos())))
+            .map(|t| UnitVector3::new_unchecked(crate::sweep::beam_direction(*t)))
             .collect();
         let fallback_material = default_materials()
             .into_iter()
@@ -230,22 +260,22 @@ impl Scanner {
     /// `world_from_mount · R_y(t)` for every tilt `t` of `sweep` centred on 0,
     /// i.e. the scan plane nods about the scanner's own y axis (the ±90° ray),
     /// as joint 5 nods it on the VM-6083 (A§5.1.1). Noise comes from `rng` in
-    /// scan order.
+    /// scan order. Fails when the sweep configuration is invalid.
     pub fn nodding_sweep<W: RayCast + ?Sized, R: Rng + ?Sized>(
         &self,
         world: &W,
         world_from_mount: &Isometry3,
         sweep: &crate::SweepConfig,
         rng: &mut R,
-    ) -> Vec<Scan> {
-        sweep
-            .tilt_values(0.0, None)
-            .iter()
-            .map(|&t| {
-                let tilt = geom::UnitQuaternion::from_axis_angle(&Vector3::y_axis(), t);
-                self.scan(world, &(world_from_mount * tilt), rng)
-            })
-            .collect()
+    ) -> Result<crate::Sweep, SensorError> {
+        sweep.validate()?;
+        let mut builder = crate::SweepBuilder::new(&self.bearings)?;
+        for t in sweep.tilt_values(0.0, None) {
+            let tilt = geom::UnitQuaternion::from_axis_angle(&Vector3::y_axis(), t);
+            let scan = self.scan(world, &(world_from_mount * tilt), rng);
+            scan.push_to(&mut builder)?;
+        }
+        builder.finish()
     }
 
     /// Scan the world from a pose. Rays are cast in parallel; noise is drawn

@@ -1,9 +1,13 @@
-//! The tilt angles of a 3-D sweep: one joint (joint 5 of the VM-6083 by
-//! default) nods the 2-D scanner through α while scans are taken at a fixed
-//! tilt step (A§5.1.1, Fig. 5.2; α = 60° in A Table 6.1).
+//! Tilt sweeps: one joint (joint 5 of the VM-6083 by default) nods the 2-D
+//! scanner through α while scans are taken at a fixed tilt step (A§5.1.1,
+//! Fig. 5.2; α = 60° in A Table 6.1). [`SweepConfig`] gives the tilt angles;
+//! [`Sweep`] holds the returns on their (scan, ray) grid; [`SweepBuilder`]
+//! makes one scan by scan from what a scanner reports.
 
 use crate::SensorError;
-use geom::Real;
+use geom::math::is_finite_point;
+use geom::{Isometry3, Point3, Real, Vector3};
+use scene::MaterialId;
 use serde::{Deserialize, Serialize};
 
 /// How to sweep.
@@ -75,6 +79,351 @@ impl SweepConfig {
             .map(|k| start + step * k as Real)
             .collect()
     }
+}
+
+/// A cell of the range grid `R_{θ,α}` (A eq. 4.12): scan `j` (the tilt step,
+/// a row) and ray `i` (the bearing, a column).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct GridCell {
+    /// Scan index `j` (row).
+    pub scan: u32,
+    /// Ray index `i` (column).
+    pub ray: u32,
+}
+
+/// One return of a sweep.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SweepPoint {
+    /// The measured point, world frame.
+    pub point: Point3,
+    /// Origin of the ray that measured it (the scanner), world frame.
+    pub origin: Point3,
+    /// Return intensity (0 when the source did not report one).
+    pub intensity: Real,
+    /// Ground-truth material of the surface hit, where known (simulation).
+    pub material: Option<MaterialId>,
+    /// Where the return sits on the (scan, ray) grid, where known.
+    pub cell: Option<GridCell>,
+}
+
+impl SweepPoint {
+    /// Measured range: the distance from the ray's origin to the point.
+    #[inline]
+    pub fn range_m(&self) -> Real {
+        (self.point - self.origin).norm()
+    }
+}
+
+/// A tilt sweep: every return with the origin of its ray, its intensity, its
+/// ground-truth material where known, and (for sweeps taken by a scanner or
+/// read from a file that keeps it) its cell of the (scan, ray) grid of A eq.
+/// 5.1 / 4.12. This is the one sweep type of the workspace: the simulator and
+/// drivers produce it, scan files hold it, maps and the classifier consume it.
+///
+/// A sweep may be empty (a scan that hit nothing). Invariants, checked by
+/// every constructor: every coordinate finite; either every point has a grid cell or none has, and
+/// cells are strictly increasing in scan-major order (so each cell holds at
+/// most one return and grid neighbours can be found by search).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sweep {
+    points: Vec<SweepPoint>,
+    shape: Option<GridShape>,
+    scanner_poses: Vec<Isometry3>,
+    bearings_rad: Vec<Real>,
+}
+
+/// The size of a sweep's grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GridShape {
+    /// Scans (rows).
+    pub scans: u32,
+    /// Rays per scan (columns).
+    pub rays_per_scan: u32,
+}
+
+/// The unit direction, in the scanner frame, of the ray at bearing `θ`:
+/// `(0, −sin θ, cos θ)` (A eq. 4.7; `z` is the centre ray, `y` the +90° side,
+/// `x` the normal of the scan plane). The one place this formula lives.
+#[inline]
+pub fn beam_direction(bearing_rad: Real) -> Vector3 {
+    let (s, c) = bearing_rad.sin_cos();
+    Vector3::new(0.0, -s, c)
+}
+
+fn sweep_error(message: impl Into<String>) -> SensorError {
+    SensorError::Sweep {
+        message: message.into(),
+    }
+}
+
+impl Sweep {
+    /// A sweep from its points. Fails when a coordinate or intensity is not
+    /// finite, or grid cells are given for some points but not
+    /// others, or not strictly increasing in scan-major order.
+    pub fn from_points(points: Vec<SweepPoint>) -> Result<Self, SensorError> {
+        for (k, p) in points.iter().enumerate() {
+            if !is_finite_point(&p.point) {
+                return Err(sweep_error(format!(
+                    "point {k} has a non-finite coordinate"
+                )));
+            }
+            if !is_finite_point(&p.origin) {
+                return Err(sweep_error(format!(
+                    "the ray origin of point {k} has a non-finite coordinate"
+                )));
+            }
+            if !p.intensity.is_finite() {
+                return Err(sweep_error(format!(
+                    "point {k}: intensity {} is not finite",
+                    p.intensity
+                )));
+            }
+        }
+        let with_cells = points.iter().filter(|p| p.cell.is_some()).count();
+        let shape = if with_cells == 0 {
+            None
+        } else if with_cells < points.len() {
+            return Err(sweep_error(format!(
+                "{with_cells} of {} points have a (scan, ray) cell: give a cell for every point or for none",
+                points.len()
+            )));
+        } else {
+            let mut rays = 0;
+            let mut prev: Option<GridCell> = None;
+            for (k, p) in points.iter().enumerate() {
+                let Some(c) = p.cell else { continue };
+                if let Some(q) = prev
+                    && c <= q
+                {
+                    return Err(sweep_error(format!(
+                        "point {k}: cell (scan {}, ray {}) follows (scan {}, ray {}); cells must be strictly increasing, scan-major",
+                        c.scan, c.ray, q.scan, q.ray
+                    )));
+                }
+                rays = rays.max(c.ray + 1);
+                prev = Some(c);
+            }
+            let scans = prev.map_or(0, |c| c.scan + 1);
+            Some(GridShape {
+                scans,
+                rays_per_scan: rays,
+            })
+        };
+        Ok(Self {
+            points,
+            shape,
+            scanner_poses: Vec::new(),
+            bearings_rad: Vec::new(),
+        })
+    }
+
+    /// A sweep from a range grid: bearings `θ_i`, the `world_from_scanner`
+    /// pose of each scan, and the ranges in scan-major order
+    /// (`ranges_m[j·n + i]` is ray `i` of scan `j`; `None` = no return). The
+    /// point of a return is `world_from_scanner_j · r·`[`beam_direction`]`(θ_i)`
+    /// (A eq. 4.7); intensities are 0 and materials unknown.
+    pub fn from_range_grid(
+        bearings_rad: &[Real],
+        scanner_poses: &[Isometry3],
+        ranges_m: &[Option<Real>],
+    ) -> Result<Self, SensorError> {
+        let n = bearings_rad.len();
+        if ranges_m.len() != n * scanner_poses.len() {
+            return Err(sweep_error(format!(
+                "{} ranges given for {} scans of {n} rays (expected {})",
+                ranges_m.len(),
+                scanner_poses.len(),
+                n * scanner_poses.len()
+            )));
+        }
+        let mut b = SweepBuilder::new(bearings_rad)?;
+        let zeros = vec![0.0; n];
+        for (pose, row) in scanner_poses.iter().zip(ranges_m.chunks(n.max(1))) {
+            b.push_scan(pose, row, &zeros, None)?;
+        }
+        b.finish()
+    }
+
+    /// The returns, scan-major when the sweep has a grid, else in source order.
+    pub fn points(&self) -> &[SweepPoint] {
+        &self.points
+    }
+
+    /// Number of returns.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// `true` when no ray returned.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// The grid's size, when the sweep keeps its grid.
+    pub fn grid_shape(&self) -> Option<GridShape> {
+        self.shape
+    }
+
+    /// `world_from_scanner` of every scan, where the sweep was taken by a
+    /// scanner in this process (empty for sweeps read from files).
+    pub fn scanner_poses(&self) -> &[Isometry3] {
+        &self.scanner_poses
+    }
+
+    /// The ray bearings `θ_i`, where known (empty for sweeps read from files).
+    pub fn bearings_rad(&self) -> &[Real] {
+        &self.bearings_rad
+    }
+
+    /// The measured points alone.
+    pub fn positions(&self) -> Vec<Point3> {
+        self.points.iter().map(|p| p.point).collect()
+    }
+
+    /// The ray origins alone.
+    pub fn origins(&self) -> Vec<Point3> {
+        self.points.iter().map(|p| p.origin).collect()
+    }
+
+    /// Index of the return in `cell`, if any (binary search on the grid).
+    pub fn find(&self, cell: GridCell) -> Option<usize> {
+        self.shape?;
+        self.points
+            .binary_search_by(|p| p.cell.cmp(&Some(cell)))
+            .ok()
+    }
+
+    /// Pairs `(k, l)` of returns that are neighbours on the grid: the next
+    /// ray of the same scan (`|r_{i,j} − r_{i+1,j}|` of A§4.2.1) and the same
+    /// ray of the next scan (`|r_{i,j} − r_{i,j+1}|`). Empty without a grid.
+    pub fn grid_neighbours(&self) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        if self.shape.is_none() {
+            return out;
+        }
+        for (k, p) in self.points.iter().enumerate() {
+            let Some(c) = p.cell else { continue };
+            if let Some(q) = self.points.get(k + 1).and_then(|q| q.cell)
+                && q.scan == c.scan
+                && q.ray == c.ray + 1
+            {
+                out.push((k, k + 1));
+            }
+            if let Some(l) = self.find(GridCell {
+                scan: c.scan + 1,
+                ray: c.ray,
+            }) {
+                out.push((k, l));
+            }
+        }
+        out
+    }
+}
+
+/// Builds a [`Sweep`] scan by scan from what a scanner reports (ranges per
+/// bearing and the pose the scan was taken from), so simulated and real
+/// scanners make sweeps the same way.
+#[derive(Clone, Debug)]
+pub struct SweepBuilder {
+    bearings_rad: Vec<Real>,
+    dirs: Vec<Vector3>,
+    points: Vec<SweepPoint>,
+    poses: Vec<Isometry3>,
+}
+
+impl SweepBuilder {
+    /// A builder for scans with these bearings `θ_i` (radians, finite, at
+    /// least one).
+    pub fn new(bearings_rad: &[Real]) -> Result<Self, SensorError> {
+        if bearings_rad.is_empty() {
+            return Err(sweep_error("no bearings: a scan needs at least one ray"));
+        }
+        if let Some(i) = bearings_rad.iter().position(|b| !b.is_finite()) {
+            return Err(sweep_error(format!("bearing {i} is not finite")));
+        }
+        Ok(Self {
+            bearings_rad: bearings_rad.to_vec(),
+            dirs: bearings_rad.iter().map(|b| beam_direction(*b)).collect(),
+            points: Vec::new(),
+            poses: Vec::new(),
+        })
+    }
+
+    /// Add the next scan: one range per bearing (`None`: no return), the
+    /// intensities (one per bearing), and ground-truth materials where known.
+    /// Fails, adding nothing, on a length mismatch, a non-finite pose, or a
+    /// range that is not a finite non-negative distance.
+    pub fn push_scan(
+        &mut self,
+        world_from_scanner: &Isometry3,
+        ranges_m: &[Option<Real>],
+        intensities: &[Real],
+        materials: Option<&[Option<MaterialId>]>,
+    ) -> Result<(), SensorError> {
+        let n = self.bearings_rad.len();
+        let j = self.poses.len();
+        if ranges_m.len() != n || intensities.len() != n || materials.is_some_and(|m| m.len() != n)
+        {
+            return Err(sweep_error(format!(
+                "scan {j}: {} ranges, {} intensities{} for {n} bearings",
+                ranges_m.len(),
+                intensities.len(),
+                materials.map_or(String::new(), |m| format!(", {} materials", m.len()))
+            )));
+        }
+        if !is_finite_pose(world_from_scanner) {
+            return Err(sweep_error(format!(
+                "scanner pose of scan {j} is not finite"
+            )));
+        }
+        if let Some(i) = ranges_m
+            .iter()
+            .position(|r| r.is_some_and(|r| !(r.is_finite() && r >= 0.0)))
+        {
+            return Err(sweep_error(format!(
+                "range of scan {j}, ray {i} is {:?}: expected a finite, non-negative distance",
+                ranges_m[i]
+            )));
+        }
+        let origin = Point3::from(world_from_scanner.translation.vector);
+        for (i, r) in ranges_m.iter().enumerate() {
+            let Some(r) = r else { continue };
+            self.points.push(SweepPoint {
+                point: origin + world_from_scanner.rotation * (self.dirs[i] * *r),
+                origin,
+                intensity: intensities[i],
+                material: materials.and_then(|m| m[i]),
+                cell: Some(GridCell {
+                    scan: j as u32,
+                    ray: i as u32,
+                }),
+            });
+        }
+        self.poses.push(*world_from_scanner);
+        Ok(())
+    }
+
+    /// Scans added so far.
+    pub fn scan_count(&self) -> usize {
+        self.poses.len()
+    }
+
+    /// The sweep (empty when no ray returned).
+    pub fn finish(self) -> Result<Sweep, SensorError> {
+        let mut sweep = Sweep::from_points(self.points)?;
+        sweep.shape = Some(GridShape {
+            scans: self.poses.len() as u32,
+            rays_per_scan: self.bearings_rad.len() as u32,
+        });
+        sweep.scanner_poses = self.poses;
+        sweep.bearings_rad = self.bearings_rad;
+        Ok(sweep)
+    }
+}
+
+fn is_finite_pose(p: &Isometry3) -> bool {
+    p.translation.vector.iter().all(|v| v.is_finite())
+        && p.rotation.coords.iter().all(|v| v.is_finite())
 }
 
 #[cfg(test)]

@@ -254,14 +254,17 @@ fn features_follow_the_appendix_b_curves() {
 
 #[test]
 fn observations_from_scans_and_training_determinism() {
-    // Observation::from_scans keeps the returns on the target patch.
+    // Observation::from_sweep keeps the returns on the target patch.
     let world = sensor_plane();
     let scanner = Scanner::new(ScannerConfig::default()).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     let pose = geom::Isometry3::translation(0.0, 0.0, 0.5);
     let scan = scanner.scan(&world, &pose, &mut rng);
+    let mut builder = sensor::SweepBuilder::new(scanner.bearings_rad()).unwrap();
+    scan.push_to(&mut builder).unwrap();
+    let sweep = builder.finish().unwrap();
     let target = Point3::new(0.0, 0.0, 1.0);
-    let obs = Observation::from_scans(&[scan], &scanner, &target, 0.1);
+    let obs = Observation::from_sweep(&sweep, &target, 0.1);
     assert!(!obs.returns.is_empty());
     assert!(
         obs.returns

@@ -34,32 +34,47 @@ fn sweep_of_a_plane_matches_the_prediction() {
     let tilts = sweep.tilt_values(0.0, None);
     assert_eq!(tilts.len(), 151);
     let mut rng = ChaCha8Rng::seed_from_u64(42);
-    let scans = scanner.nodding_sweep(&world, &Isometry3::identity(), &sweep, &mut rng);
-    assert_eq!(scans.len(), tilts.len());
+    let swept = scanner
+        .nodding_sweep(&world, &Isometry3::identity(), &sweep, &mut rng)
+        .unwrap();
+    let shape = swept.grid_shape().unwrap();
+    assert_eq!(shape.scans as usize, tilts.len());
+    assert_eq!(shape.rays_per_scan as usize, scanner.ray_count());
+    assert_eq!(swept.scanner_poses().len(), tilts.len());
+    for (&t, p) in tilts.iter().zip(swept.scanner_poses()) {
+        assert!((p.rotation.angle_to(&pose(t).rotation)).abs() < 1e-12);
+    }
     let mut predicted = 0usize;
-    let mut measured = 0usize;
     let mut deviations = Vec::new();
-    for (&t, scan) in tilts.iter().zip(&scans) {
-        assert!((scan.world_from_scanner.rotation.angle_to(&pose(t).rotation)).abs() < 1e-12);
-        for (theta, ret) in scanner.bearings_rad().iter().zip(&scan.returns) {
+    for &t in &tilts {
+        for theta in scanner.bearings_rad() {
             // Analytic: direction (cos θ sin t, −sin θ, cos θ cos t) meets z = 1 at
             // (tan t, −tan θ / cos t, 1), inside the slab when |y| ≤ 2.
             let y = -theta.tan() / t.cos();
             let lambda = 1.0 / (theta.cos() * t.cos());
-            let hits = y.abs() <= 2.0 && lambda <= 4.0;
-            predicted += usize::from(hits);
-            if let Some(r) = ret {
-                measured += 1;
-                assert!(hits, "return where none is predicted: t={t}, θ={theta}");
-                assert!((r.true_range_m - lambda).abs() < 1e-6);
-                deviations.push(r.range_m - lambda);
-                // The point lies on the ray at the measured range.
-                let dir = Vector3::new(theta.cos() * t.sin(), -theta.sin(), theta.cos() * t.cos());
-                assert!((r.point - Point3::from(dir * r.range_m)).norm() < 1e-9);
-                assert_eq!(r.material, Some(MaterialId(0)));
-                assert!(r.intensity > 0.0);
-            }
+            predicted += usize::from(y.abs() <= 2.0 && lambda <= 4.0);
         }
+    }
+    let measured = swept.len();
+    for p in swept.points() {
+        let c = p.cell.unwrap();
+        let (t, theta) = (
+            tilts[c.scan as usize],
+            scanner.bearings_rad()[c.ray as usize],
+        );
+        let y = -theta.tan() / t.cos();
+        let lambda = 1.0 / (theta.cos() * t.cos());
+        assert!(
+            y.abs() <= 2.0 && lambda <= 4.0,
+            "return where none is predicted: t={t}, θ={theta}"
+        );
+        deviations.push(p.range_m() - lambda);
+        // The point lies on the ray at the measured range.
+        let dir = Vector3::new(theta.cos() * t.sin(), -theta.sin(), theta.cos() * t.cos());
+        assert!((p.point - Point3::from(dir * p.range_m())).norm() < 1e-9);
+        assert_eq!(p.origin, Point3::origin());
+        assert_eq!(p.material, Some(MaterialId(0)));
+        assert!(p.intensity > 0.0);
     }
     assert_eq!(measured, predicted);
     assert!(predicted > 45_000, "{predicted}");

@@ -6,7 +6,7 @@
 //! |---|---|
 //! | [`scenario`] | [`Scenario`] (TOML), [`scenario::builtin_scenario`], [`LoadedScenario`] |
 //! | [`rig`] | the hardware traits [`Arm`], [`LineScanner`], [`RangeSensors`]; [`SimRig`] |
-//! | [`sweep`] | [`tilt_sweep`]: nod the scanner, points on the (scan, ray) grid |
+//! | [`sweep`] | [`tilt_sweep`]: nod the scanner through the hardware traits into a [`sensor::Sweep`] |
 //! | [`metrics`] | [`metrics::coverage`], [`metrics::accuracy`] against the ground truth |
 //! | [`safety`] | [`safety::robot_contacts`]: the robot's link shapes against the scene |
 //! | [`scan_job`] | the `surveyor scan` job as library calls |
@@ -20,7 +20,7 @@ pub mod sweep;
 
 pub use rig::{Arm, LineScanner, RangeSensors, ScanReadings, SimRig};
 pub use scenario::{LoadedScenario, Scenario};
-pub use sweep::{Sweep, SweepPoint, tilt_sweep};
+pub use sweep::tilt_sweep;
 
 use geom::Real;
 
@@ -60,13 +60,5 @@ pub enum SimError {
     JointLimits {
         /// The pose.
         joints: Vec<Real>,
-    },
-    /// A scanner returned a scan of the wrong length.
-    #[error("the scanner returned {got} readings, expected {expected}")]
-    ScanLength {
-        /// Rays per scan.
-        expected: usize,
-        /// Readings received.
-        got: usize,
     },
 }

@@ -8,11 +8,11 @@ use crate::rig::SimRig;
 use crate::safety::{Contact, robot_contacts};
 use crate::scenario::MetricsConfig;
 use crate::scenario::{LoadedScenario, build_robot, mount_scanner};
-use crate::sweep::{Sweep, tilt_sweep};
+use crate::sweep::tilt_sweep;
 use geom::{Aabb, Isometry3, Point3, Real};
 use robot::Robot;
 use scene::{PointCloudWorld, SceneError, World};
-use sensor::{Scanner, ScannerConfig, SweepConfig};
+use sensor::{Scanner, ScannerConfig, Sweep, SweepConfig};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -197,32 +197,4 @@ impl ScanSetup {
             accuracy: accuracy(scene, &points, 0.5),
         })
     }
-}
-
-/// Write a sweep as PLY with float vertex properties `x y z intensity ox oy oz`
-/// (world frame; `o` = origin of the ray that measured the point).
-pub fn write_sweep_ply(path: &Path, sweep: &Sweep) -> Result<(), SimError> {
-    let n = sweep.points.len();
-    let mut cols: Vec<Vec<f32>> = (0..7).map(|_| Vec::with_capacity(n)).collect();
-    for p in &sweep.points {
-        let v = [
-            p.point.x,
-            p.point.y,
-            p.point.z,
-            p.intensity,
-            p.origin.x,
-            p.origin.y,
-            p.origin.z,
-        ];
-        for (c, x) in cols.iter_mut().zip(v) {
-            c.push(x as f32);
-        }
-    }
-    let refs: Vec<&[f32]> = cols.iter().map(Vec::as_slice).collect();
-    scene::io::write_ply_vertices_file(
-        path,
-        &["x", "y", "z", "intensity", "ox", "oy", "oz"],
-        &refs,
-    )?;
-    Ok(())
 }

@@ -65,9 +65,10 @@ fn bridge1_start_sweep_sees_roof_webs_and_flanges_with_materials() {
     let outcome = setup.run(&mut |_, _| {}).unwrap();
     assert!(outcome.contacts.is_empty(), "{:?}", outcome.contacts);
     let sweep = &outcome.sweep;
-    assert_eq!(sweep.tilts_rad.len(), 151);
-    assert_eq!(sweep.rays_per_scan(), 342);
-    assert_eq!(sweep.ranges.len(), 151 * 342);
+    let shape = sweep.grid_shape().unwrap();
+    assert_eq!(shape.scans, 151);
+    assert_eq!(shape.rays_per_scan, 342);
+    assert_eq!(sweep.scanner_poses().len(), 151);
     let scene = setup.world.as_scene().unwrap();
     let name_of = |p: &Point3| {
         let (_, face, _) = scene.closest_point(p, 0.2).unwrap();
@@ -78,7 +79,7 @@ fn bridge1_start_sweep_sees_roof_webs_and_flanges_with_materials() {
     let mut roof = 0;
     let (mut left_web, mut right_web, mut left_flange, mut right_flange) = (0, 0, 0, 0);
     let mut disagree = 0;
-    for p in &sweep.points {
+    for p in sweep.points() {
         let mat = &scene
             .material(p.material.expect("simulated material"))
             .unwrap()
@@ -113,7 +114,7 @@ fn bridge1_start_sweep_sees_roof_webs_and_flanges_with_materials() {
         }
     }
     assert!(
-        disagree * 1000 < sweep.points.len(),
+        disagree * 1000 < sweep.len(),
         "{disagree} material mismatches"
     );
     assert!(roof > 1000, "roof {roof}");

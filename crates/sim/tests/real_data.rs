@@ -45,7 +45,7 @@ fn real_meshes_are_scanned_by_the_arm() {
     )
     .unwrap();
     let out = setup.run(&mut |_, _| {}).unwrap();
-    assert!(out.sweep.points.len() > 1000, "{}", out.sweep.points.len());
+    assert!(out.sweep.len() > 1000, "{}", out.sweep.len());
     let scene = setup.world.as_scene().unwrap();
     let acc = sim::metrics::accuracy(scene, &out.sweep.positions(), 0.5);
     assert!(acc.mean_m < 0.03, "{acc:?}");

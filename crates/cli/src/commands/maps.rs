@@ -6,7 +6,8 @@ use clap::Args;
 use geom::Real;
 use map::segment::{SegmentConfig, load_poses_csv, save_segments_json, segment_discs};
 use map::sld::{SldConfig, generate_discs, load_discs_csv, load_points, save_discs_csv};
-use map::{MapConfig, Mapper, PointSweep};
+use map::{MapConfig, Mapper};
+use sensor::Sweep;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -118,7 +119,8 @@ pub fn segment(a: &SegmentArgs) -> Result<()> {
 
 #[derive(Debug, Args)]
 pub struct MapArgs {
-    /// Sweeps written by `surveyor scan` (PLY with per-point ray origins `ox oy oz`).
+    /// Sweeps written by `surveyor scan` (PLY with per-point ray origins `ox oy oz`
+    /// and the `scan ray` grid cell, which the occlusion weights of Paul §4.2.1 use).
     #[arg(long, num_args = 1.., required = true)]
     scans: Vec<PathBuf>,
     /// Scenario (built-in name or file) whose regions of interest A1 ⊂ A2 ⊂ A3
@@ -144,17 +146,40 @@ pub fn map(a: &MapArgs) -> Result<()> {
     }
     let mut mapper = Mapper::new(&config)?;
     for path in &a.scans {
-        let sweep = PointSweep::read_ply(path)?;
+        let sweep = Sweep::read_ply(path)?;
         let t0 = Instant::now();
-        let summary = mapper.integrate_points(&sweep)?;
+        let summary = mapper.integrate_sweep(&sweep);
         say!(
-            "{}: {} points integrated in {:.1} ms ({} voxels newly known, {} TSDF voxel updates)",
+            "{}: {} points integrated in {:.1} ms ({} voxels newly known, {} occlusion segments ({}), {} TSDF voxel updates)",
             path.display(),
             sweep.len(),
             1000.0 * t0.elapsed().as_secs_f64(),
             summary.occupancy.newly_known,
+            summary.occupancy.range_jumps,
+            if sweep.grid_shape().is_some() {
+                "scan grid"
+            } else {
+                "no grid in the file: list neighbours only"
+            },
             summary.tsdf.voxel_updates
         )?;
+        if sweep.is_empty() {
+            eprintln!("warning: {} holds no points", path.display());
+        } else if summary.occupancy.rays_outside == sweep.len() {
+            let b = mapper.occupancy().geometry().aabb();
+            eprintln!(
+                "warning: {}: all {} rays lie outside the map (A3 = [{:.2}, {:.2}] × [{:.2}, {:.2}] × [{:.2}, {:.2}] m): \
+                 nothing was integrated; check the scan's frame or pass --scenario with its regions",
+                path.display(),
+                sweep.len(),
+                b.min.x,
+                b.max.x,
+                b.min.y,
+                b.max.y,
+                b.min.z,
+                b.max.z
+            );
+        }
     }
     let t0 = Instant::now();
     let outputs = mapper.outputs();

@@ -10,7 +10,7 @@ use geom::math::isometry_to_rows;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use sim::LoadedScenario;
-use sim::scan_job::{ScanSetup, write_sweep_ply};
+use sim::scan_job::ScanSetup;
 use sim::scenario::{BUILTIN_NAMES, Scenario, builtin_scenario};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -311,14 +311,20 @@ fn scan(a: &ScanArgs) -> Result<()> {
     let outcome = setup.run(&mut |done, _| pb.set_position(done as u64))?;
     pb.finish_and_clear();
     let t_sweep = t1.elapsed();
-    write_sweep_ply(&a.out, &outcome.sweep)
+    outcome
+        .sweep
+        .write_ply(&a.out)
         .with_context(|| format!("writing {}", a.out.display()))?;
     let sweep = &outcome.sweep;
+    let shape = sweep.grid_shape().unwrap_or(sensor::GridShape {
+        scans: 0,
+        rays_per_scan: 0,
+    });
     say!(
         "{} points from {} scans × {} rays ({:.0}° tilt) → {}",
-        sweep.points.len(),
-        sweep.tilts_rad.len(),
-        sweep.rays_per_scan(),
+        sweep.len(),
+        shape.scans,
+        shape.rays_per_scan,
         setup.sweep.tilt_deg,
         a.out.display()
     )?;

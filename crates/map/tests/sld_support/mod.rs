@@ -303,13 +303,14 @@ pub fn tsdf_mesh_bridge1(
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut tsdf = map::TsdfMap::new(map::TsdfConfig::with_voxel_m(voxel_m)).unwrap();
     for (p, dir) in viewpoints().into_iter().take(views) {
-        let scans = scanner.nodding_sweep(
-            &world,
-            &pose(p, dir, 0.0),
-            &sensor::SweepConfig::default(),
-            &mut rng,
-        );
-        let grid = map::SweepGrid::from_scans(scanner.bearings_rad(), &scans).unwrap();
+        let grid = scanner
+            .nodding_sweep(
+                &world,
+                &pose(p, dir, 0.0),
+                &sensor::SweepConfig::default(),
+                &mut rng,
+            )
+            .unwrap();
         tsdf.integrate_sweep(&grid);
     }
     let mesh = tsdf.extract_mesh();
