@@ -108,11 +108,19 @@ impl Moments {
     /// Principal component analysis by symmetric eigen-decomposition of the
     /// covariance. `None` when empty or when the sums are not finite.
     pub fn pca(&self) -> Option<Pca> {
-        let cov = self.covariance()?;
+        Pca::from_covariance(self.centroid()?, &self.covariance()?)
+    }
+}
+
+impl Pca {
+    /// The principal axes of a covariance matrix about `centroid`: its
+    /// symmetric eigen-decomposition, eigenvalues sorted ascending (clamped at
+    /// 0), axes a right-handed frame. `None` when an entry is not finite.
+    pub fn from_covariance(centroid: Point3, cov: &Matrix3) -> Option<Self> {
         if !cov.iter().all(|v| v.is_finite()) {
             return None;
         }
-        let eig = nalgebra::SymmetricEigen::new(cov);
+        let eig = nalgebra::SymmetricEigen::new(*cov);
         let mut order = [0usize, 1, 2];
         order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
         let axis = |i: usize| -> Option<UnitVector3> { unit(eig.eigenvectors.column(i).into()) };
@@ -120,8 +128,8 @@ impl Moments {
         let a1 = axis(order[1])?;
         // Right-handed frame: axes[2] = axes[0] × axes[1] (same eigen-line).
         let a2 = unit(a0.cross(&a1))?;
-        Some(Pca {
-            centroid: self.centroid()?,
+        Some(Self {
+            centroid,
             eigenvalues: [
                 eig.eigenvalues[order[0]].max(0.0),
                 eig.eigenvalues[order[1]].max(0.0),
@@ -129,6 +137,37 @@ impl Moments {
             ],
             axes: [a0, a1, a2],
         })
+    }
+
+    /// PCA of points given as offsets from a reference point (two passes:
+    /// mean, then covariance about it, population normalisation). Working
+    /// relative to a nearby reference keeps full precision far from the
+    /// origin, where raw moment sums cancel; the result's `centroid` is the
+    /// mean offset (add the reference back). `None` when empty or not finite.
+    pub fn of_offsets(offsets: &[Vector3]) -> Option<Self> {
+        if offsets.is_empty() {
+            return None;
+        }
+        let n = offsets.len() as Real;
+        let mean = offsets.iter().sum::<Vector3>() / n;
+        let mut cov = Matrix3::zeros();
+        for d in offsets {
+            let c = d - mean;
+            cov += c * c.transpose();
+        }
+        Self::from_covariance(Point3::from(mean), &(cov / n))
+    }
+
+    /// The plane-of-best-fit normal when the points span a plane: `None` for
+    /// collinear or coincident points (`λ_mid ≤ 10⁻⁹ λ_max`, or nothing
+    /// spread) and when `λ_mid < min_ratio · λ_min` (a planarity test such as
+    /// Paul's dimensionality reduction, A§5.2).
+    pub fn plane_normal(&self, min_ratio: Real) -> Option<UnitVector3> {
+        let [l0, l1, l2] = self.eigenvalues;
+        if l2.is_nan() || l2 <= 0.0 || l1 <= 1e-9 * l2 || l1 < min_ratio * l0 {
+            return None;
+        }
+        Some(self.axes[0])
     }
 }
 
@@ -171,6 +210,31 @@ mod tests {
         assert!((merged.sum - all.sum).norm() < 1e-15);
         assert!((merged.covariance().unwrap() - all.covariance().unwrap()).norm() < 1e-12);
         assert!(Moments::default().pca().is_none());
+        // The two-pass PCA of offsets agrees, and keeps precision 10 km out.
+        let far = Vector3::new(1e4, -2e4, 3e3);
+        let offsets: Vec<Vector3> = a.iter().chain(b.iter()).map(|p| p.coords).collect();
+        let pca = Pca::of_offsets(&offsets).unwrap();
+        let direct = all.pca().unwrap();
+        for k in 0..3 {
+            assert!((pca.eigenvalues[k] - direct.eigenvalues[k]).abs() < 1e-12);
+        }
+        let shifted: Vec<Point3> = a.iter().chain(b.iter()).map(|p| p + far).collect();
+        let rel: Vec<Vector3> = shifted.iter().map(|p| p - shifted[0]).collect();
+        let two_pass = Pca::of_offsets(&rel).unwrap();
+        let err = |p: &Pca| {
+            (0..3)
+                .map(|k| (p.eigenvalues[k] - direct.eigenvalues[k]).abs())
+                .fold(0.0, Real::max)
+        };
+        assert!(err(&two_pass) < 1e-9, "{}", err(&two_pass));
+        // Collinear points have no plane; a flat patch has one.
+        let line: Vec<Vector3> = (0..5).map(|i| Vector3::new(i as Real, 0.0, 0.0)).collect();
+        assert!(Pca::of_offsets(&line).unwrap().plane_normal(1.0).is_none());
+        let n = Pca::of_offsets(&offsets[..3])
+            .unwrap()
+            .plane_normal(1.0)
+            .unwrap();
+        assert!(n.dot(&(a[1] - a[0])).abs() < 1e-12);
     }
 
     #[test]

@@ -83,6 +83,36 @@ impl Plane {
     }
 }
 
+/// The intersection line of two planes, directed along `n_a × n_b`; `None`
+/// when the planes are within `sin_min` of parallel (`|n_a × n_b| < sin_min`).
+pub fn line_of_planes(a: &Plane, b: &Plane, sin_min: Real) -> Option<Line3> {
+    if a.normal.cross(&b.normal).norm() < sin_min {
+        return None;
+    }
+    a.intersect_plane(b)
+}
+
+/// The point where three planes meet; `None` when the lines of `b` with `a`
+/// and with `c` are within `sin_min` of parallel (the corner is ill-defined),
+/// or the result is not finite.
+pub fn corner_of_planes(a: &Plane, b: &Plane, c: &Plane, sin_min: Real) -> Option<Point3> {
+    let na = a.normal.into_inner();
+    let nb = b.normal.into_inner();
+    let nc = c.normal.into_inner();
+    let l1 = unit(nb.cross(&na))?;
+    let l2 = unit(nb.cross(&nc))?;
+    if l1.cross(&l2).norm() < sin_min {
+        return None;
+    }
+    let det = na.dot(&nb.cross(&nc));
+    if det.abs() < 1e-300 {
+        return None;
+    }
+    let p = (nb.cross(&nc) * a.offset + nc.cross(&na) * b.offset + na.cross(&nb) * c.offset) / det;
+    let p = Point3::from(p);
+    crate::math::is_finite_point(&p).then_some(p)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -119,6 +149,28 @@ mod tests {
             assert!(b.signed_distance(&q).abs() < 1e-12);
         }
         assert!(a.intersect_plane(&a.flipped()).is_none());
+    }
+
+    #[test]
+    fn corner_of_three_planes_by_hand() {
+        // x = 1, y = 2, x + y + z = 6 (normalised) meet at (1, 2, 3).
+        let a = Plane::from_point_normal(&Point3::new(1.0, 0.0, 0.0), Vector3::x_axis());
+        let b = Plane::from_point_normal(&Point3::new(0.0, 2.0, 0.0), Vector3::y_axis());
+        let c = Plane::from_point_normal(
+            &Point3::new(6.0, 0.0, 0.0),
+            unit(Vector3::new(1.0, 1.0, 1.0)).unwrap(),
+        );
+        let p = corner_of_planes(&a, &b, &c, 0.1).unwrap();
+        assert!((p - Point3::new(1.0, 2.0, 3.0)).norm() < 1e-12);
+        // Two planes 2° apart: their line with the third is ill-defined at 0.1.
+        let tilt = unit(Vector3::new(1.0, 0.0, 2f64.to_radians().tan())).unwrap();
+        let a2 = Plane::from_point_normal(&Point3::new(1.0, 0.0, 0.0), tilt);
+        assert!(corner_of_planes(&a, &b, &a2, 0.1).is_none());
+        assert!(corner_of_planes(&a, &b, &a2, 0.01).is_some());
+        // The line of two planes lies on both; near-parallel planes have none.
+        let l = line_of_planes(&a, &b, 0.1).unwrap();
+        assert!((l.dir.into_inner() - Vector3::z()).norm() < 1e-12);
+        assert!(line_of_planes(&a, &a2, 0.1).is_none());
     }
 
     #[test]

@@ -94,7 +94,7 @@
 //! # Ok::<(), map::sld::SldError>(())
 //! ```
 
-use geom::{Matrix3, Plane, Point3, Real, UnitVector3, Vector3, unit};
+use geom::{Pca, Plane, Point3, Real, UnitVector3, Vector3, unit};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -539,28 +539,6 @@ fn canonical(n: Vector3) -> Vector3 {
     if c < 0.0 { -n } else { n }
 }
 
-/// Unit normal of the smallest eigenvalue of a covariance, if the
-/// neighbourhood is planar enough (see [`SldConfig::min_eigen_ratio`]).
-fn pca_normal(cov: &Matrix3, min_ratio: Real) -> Option<Vector3> {
-    let eig = nalgebra::SymmetricEigen::new(*cov);
-    let ev = eig.eigenvalues;
-    let mut order = [0usize, 1, 2];
-    order.sort_unstable_by(|&a, &b| ev[a].total_cmp(&ev[b]));
-    let (l0, l1, l2) = (
-        ev[order[0]].max(0.0),
-        ev[order[1]].max(0.0),
-        ev[order[2]].max(0.0),
-    );
-    // No plane through collinear or coincident points.
-    if l2.is_nan() || l2 <= 0.0 || l1 <= 1e-9 * l2 {
-        return None;
-    }
-    if l1 < min_ratio * l0 {
-        return None;
-    }
-    Some(eig.eigenvectors.column(order[0]).into_owned())
-}
-
 /// Generate Scale-Like Discs from `points` (a fused cloud or mesh vertices)
 /// following Paul §5.2 (see the [module docs](self) for the steps).
 ///
@@ -656,17 +634,14 @@ pub fn generate_discs(
 
             // Eq. 5.5–5.9: PCA about the mean (computed relative to the home
             // point for precision far from the origin).
-            let count = near.len() as Real;
-            let mean = offsets.iter().sum::<Vector3>() / count;
-            let mut cov = Matrix3::zeros();
-            for d in &offsets {
-                let c = d - mean;
-                cov += c * c.transpose();
-            }
-            cov /= count;
-            let Some(normal) = pca_normal(&cov, cfg.min_eigen_ratio) else {
+            let Some(pca) = Pca::of_offsets(&offsets) else {
                 continue;
             };
+            let mean = pca.centroid.coords;
+            let Some(normal) = pca.plane_normal(cfg.min_eigen_ratio) else {
+                continue;
+            };
+            let normal = normal.into_inner();
 
             // Fig. 5.5d: register the points within ±tol of the plane.
             let mut members = 0usize;

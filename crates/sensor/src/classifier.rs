@@ -83,7 +83,7 @@
 use crate::scanner::{Scanner, ScannerConfig};
 use crate::sweep::Sweep;
 use geom::{
-    Isometry3, Matrix3, Point3, Ray, Real, Translation3, UnitQuaternion, UnitVector3, Vector3,
+    Isometry3, Matrix3, Pca, Point3, Ray, Real, Translation3, UnitQuaternion, UnitVector3, Vector3,
 };
 use nalgebra::Matrix4;
 use rand::{Rng, RngExt, SeedableRng};
@@ -488,29 +488,16 @@ pub fn extract_features(
     // 1. Plane of the patch (PCA about the centroid, relative to the first
     //    point for precision), normal toward the sensors.
     let base = obs.returns[0].point();
-    let mut mean = Vector3::zeros();
-    let mut origin = Vector3::zeros();
-    for r in &obs.returns {
-        mean += r.point() - base;
-        origin += r.origin.coords;
-    }
-    mean /= n as Real;
-    let origin = Point3::from(origin / n as Real);
-    let centroid = base + mean;
-    let mut cov = Matrix3::zeros();
-    for r in &obs.returns {
-        let d = r.point() - centroid;
-        cov += d * d.transpose();
-    }
-    cov /= n as Real;
-    let eig = nalgebra::SymmetricEigen::new(cov);
-    let mut order = [0usize, 1, 2];
-    order.sort_unstable_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-    let (mid, top) = (eig.eigenvalues[order[1]], eig.eigenvalues[order[2]]);
+    let offsets: Vec<Vector3> = obs.returns.iter().map(|r| r.point() - base).collect();
+    let origin =
+        Point3::from(obs.returns.iter().map(|r| r.origin.coords).sum::<Vector3>() / n as Real);
+    let pca = Pca::of_offsets(&offsets).ok_or(ClassifyError::Degenerate)?;
+    let centroid = base + pca.centroid.coords;
+    let (mid, top) = (pca.eigenvalues[1], pca.eigenvalues[2]);
     if mid.is_nan() || mid <= 1e-12 * top.max(1e-300) {
         return Err(ClassifyError::Degenerate);
     }
-    let mut normal: Vector3 = eig.eigenvectors.column(order[0]).into_owned();
+    let mut normal: Vector3 = pca.axes[0].into_inner();
     if normal.dot(&(origin - centroid)) < 0.0 {
         normal = -normal;
     }

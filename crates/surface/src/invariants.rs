@@ -24,24 +24,12 @@
 //! segment with its current bounds.
 
 use crate::error::InvariantViolation;
-use crate::model::{SurfaceModel, line_of_planes};
+use crate::model::{Scope, SurfaceModel};
 use crate::perimeter::Poly2;
 use crate::segment::{EdgeKey, PairId, SegmentId, SegmentKind};
 use geom::Real;
+use geom::plane::line_of_planes;
 use std::collections::{BTreeMap, BTreeSet};
-
-/// How much of a segment [`SurfaceModel::check_segment`] checks.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) enum Scope {
-    /// Everything.
-    #[default]
-    Full,
-    /// Moments, plane, perimeter simplicity and orientation only: for operations
-    /// that cannot change shared edges, corners or their order (a merger
-    /// involving a point segment extends a section without shared edges and
-    /// keeps every other record).
-    Geometry,
-}
 
 /// Longest neighbour cycle around a corner (P§2.7); walks stop here.
 pub const MAX_CORNER_CYCLE: usize = 16;

@@ -114,7 +114,7 @@ impl SurfaceModel {
             return Ok(self.replace_by(s1, s2, moments, kind, false));
         }
         let id = self.attempt(|m| {
-            m.set_scope(crate::invariants::Scope::Geometry);
+            m.set_scope(crate::model::Scope::Geometry);
             Some(m.replace_by(s1, s2, moments, kind, false))
         });
         id.ok_or(MergeFailure::Projection)

@@ -15,6 +15,7 @@ use crate::index::Grid;
 use crate::segment::{
     CornerId, Edge, EdgeKey, Node, PairId, Polygon, Segment, SegmentId, SegmentKind,
 };
+use geom::plane::{corner_of_planes, line_of_planes};
 use geom::polygon3::newell_normal;
 use geom::{Line3, Moments, Plane, PlaneFrame, Point3, Real, Vector3, polygon2, unit};
 use std::collections::{BTreeMap, BTreeSet};
@@ -41,7 +42,7 @@ pub(crate) struct Journal {
     /// Shared edges re-pointed at a merger result: (segment, pair, old neighbour).
     pub relinks: Vec<(SegmentId, PairId, SegmentId)>,
     /// What validation checks at the end of the transaction.
-    pub scope: crate::invariants::Scope,
+    pub scope: Scope,
 }
 
 /// Bookkeeping of the update in progress.
@@ -410,7 +411,7 @@ impl SurfaceModel {
             modified: self.ctx.modified.clone(),
             pending: self.ctx.pending.clone(),
             relinks: Vec::new(),
-            scope: crate::invariants::Scope::Full,
+            scope: Scope::Full,
         });
     }
 
@@ -519,8 +520,8 @@ impl SurfaceModel {
         Ok(())
     }
 
-    /// Limit the open transaction's validation (see [`crate::invariants::Scope`]).
-    pub(crate) fn set_scope(&mut self, scope: crate::invariants::Scope) {
+    /// Limit the open transaction's validation (see [`Scope`]).
+    pub(crate) fn set_scope(&mut self, scope: Scope) {
         if let Some(j) = self.journal.as_mut() {
             j.scope = scope;
         }
@@ -569,34 +570,17 @@ impl SurfaceModel {
     }
 }
 
-/// Intersection line of two planes, directed along `n_a × n_b`; `None` when
-/// `|n_a × n_b| < sin_min`.
-pub(crate) fn line_of_planes(a: &Plane, b: &Plane, sin_min: Real) -> Option<Line3> {
-    let dir = a.normal.cross(&b.normal);
-    if dir.norm() < sin_min {
-        return None;
-    }
-    a.intersect_plane(b)
-}
-
-/// Intersection point of three planes; `None` when the lines of `b` with `a`
-/// and with `c` are within `sin_min` of parallel.
-pub(crate) fn corner_of_planes(a: &Plane, b: &Plane, c: &Plane, sin_min: Real) -> Option<Point3> {
-    let na = a.normal.into_inner();
-    let nb = b.normal.into_inner();
-    let nc = c.normal.into_inner();
-    let l1 = unit(nb.cross(&na))?;
-    let l2 = unit(nb.cross(&nc))?;
-    if l1.cross(&l2).norm() < sin_min {
-        return None;
-    }
-    let det = na.dot(&nb.cross(&nc));
-    if det.abs() < 1e-300 {
-        return None;
-    }
-    let p = (nb.cross(&nc) * a.offset + nc.cross(&na) * b.offset + na.cross(&nb) * c.offset) / det;
-    let p = Point3::from(p);
-    geom::math::is_finite_point(&p).then_some(p)
+/// How much of a segment [`SurfaceModel::check_segment`] checks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum Scope {
+    /// Everything.
+    #[default]
+    Full,
+    /// Moments, plane, perimeter simplicity and orientation only: for operations
+    /// that cannot change shared edges, corners or their order (a merger
+    /// involving a point segment extends a section without shared edges and
+    /// keeps every other record).
+    Geometry,
 }
 
 #[cfg(test)]
