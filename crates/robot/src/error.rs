@@ -31,6 +31,23 @@ pub enum RobotError {
         /// The offending value.
         value: Real,
     },
+    /// A joint value outside its joint's limits. The message gives revolute
+    /// values in degrees and radians, prismatic ones in metres.
+    #[error("joint {joint} (q[{index}]) is {}, outside its limits [{}, {}]", show(*.revolute, *.value), show(*.revolute, *.min), show(*.revolute, *.max))]
+    OutsideLimits {
+        /// Name of the joint.
+        joint: String,
+        /// Index in the joint vector.
+        index: usize,
+        /// The value (radians or metres).
+        value: Real,
+        /// Lower limit.
+        min: Real,
+        /// Upper limit.
+        max: Real,
+        /// `true` for a revolute joint (radians), `false` for prismatic (metres).
+        revolute: bool,
+    },
     /// A query point that is NaN or infinite.
     #[error("point {index} is not finite: ({x}, {y}, {z})")]
     NonFinitePoint {
@@ -209,6 +226,16 @@ pub enum RobotError {
         /// What is wrong.
         message: String,
     },
+}
+
+/// A joint value in the user's units: degrees (and radians) for a revolute
+/// joint, metres for a prismatic one.
+fn show(revolute: bool, v: Real) -> String {
+    if revolute {
+        format!("{:.4}° ({v:.6} rad)", v.to_degrees())
+    } else {
+        format!("{v:.6} m")
+    }
 }
 
 #[cfg(test)]

@@ -397,6 +397,50 @@ impl Robot {
         Ok(())
     }
 
+    /// [`Robot::check_joints`], then every value within its joint's limits:
+    /// the first one outside is an [`RobotError::OutsideLimits`] naming it.
+    pub fn check_within_limits(&self, q: &[Real]) -> Result<(), RobotError> {
+        self.check_joints(q)?;
+        for (index, (j, &v)) in self.actuated().zip(q).enumerate() {
+            if let Some(l) = j.limits
+                && !l.contains(v)
+            {
+                return Err(RobotError::OutsideLimits {
+                    joint: j.name.clone(),
+                    index,
+                    value: v,
+                    min: l.min,
+                    max: l.max,
+                    revolute: matches!(j.kind, JointKind::Revolute),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The joints of `q` outside their limits, as [`RobotError::OutsideLimits`]
+    /// (empty when `q` is within limits or invalid).
+    pub fn limit_violations(&self, q: &[Real]) -> Vec<RobotError> {
+        if self.check_joints(q).is_err() {
+            return Vec::new();
+        }
+        self.actuated()
+            .zip(q)
+            .enumerate()
+            .filter_map(|(index, (j, &v))| {
+                let l = j.limits?;
+                (!l.contains(v)).then(|| RobotError::OutsideLimits {
+                    joint: j.name.clone(),
+                    index,
+                    value: v,
+                    min: l.min,
+                    max: l.max,
+                    revolute: matches!(j.kind, JointKind::Revolute),
+                })
+            })
+            .collect()
+    }
+
     /// `true` when `q` is valid ([`Robot::check_joints`]) and every value lies
     /// within its joint's limits.
     pub fn within_limits(&self, q: &[Real]) -> bool {

@@ -22,8 +22,6 @@ pub use rig::{Arm, LineScanner, RangeSensors, ScanReadings, SimRig};
 pub use scenario::{LoadedScenario, Scenario};
 pub use sweep::tilt_sweep;
 
-use geom::Real;
-
 /// What can go wrong running a scenario.
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
@@ -54,11 +52,5 @@ pub enum SimError {
         joint: usize,
         /// Joints the robot has.
         dof: usize,
-    },
-    /// A commanded pose is outside the joint limits.
-    #[error("joint values {joints:?} are outside the joint limits")]
-    JointLimits {
-        /// The pose.
-        joints: Vec<Real>,
     },
 }

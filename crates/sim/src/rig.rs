@@ -118,10 +118,7 @@ impl Arm for SimRig {
     }
 
     fn move_to(&mut self, q: &[Real]) -> Result<(), SimError> {
-        self.robot.check_joints(q)?;
-        if !self.robot.within_limits(q) {
-            return Err(SimError::JointLimits { joints: q.to_vec() });
-        }
+        self.robot.check_within_limits(q)?;
         self.robot.fk_into(q, &mut self.frames)?;
         self.q.clear();
         self.q.extend_from_slice(q);

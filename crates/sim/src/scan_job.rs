@@ -7,7 +7,7 @@ use crate::metrics::{AccuracyReport, CoverageReport, accuracy, coverage};
 use crate::rig::SimRig;
 use crate::safety::{Contact, robot_contacts};
 use crate::scenario::MetricsConfig;
-use crate::scenario::{LoadedScenario, build_robot, mount_scanner};
+use crate::scenario::{LoadedScenario, mount_scanner, robot_by_name_or_urdf};
 use crate::sweep::tilt_sweep;
 use geom::{Aabb, Isometry3, Point3, Real};
 use robot::Robot;
@@ -107,7 +107,7 @@ impl ScanSetup {
             sweep.tilt_deg = t;
         }
         let joints = joints.unwrap_or_else(|| s.robot.start_joints.clone());
-        robot.check_joints(&joints)?;
+        robot.check_within_limits(&joints)?;
         Ok(Self {
             robot,
             world,
@@ -121,24 +121,22 @@ impl ScanSetup {
     }
 
     /// From a scene file (geometry placed as-is in the world frame) and a robot
-    /// preset or URDF standing at `world_from_base`. Coverage is scored within
+    /// preset or URDF (with an optional tip link, see
+    /// [`robot_by_name_or_urdf`]) standing at `world_from_base`. Coverage is scored within
     /// reach of the scanner: a box of half-size max range + 1 m around the base.
     pub fn from_scene_file(
         scene_file: &Path,
         robot_name_or_urdf: &str,
+        tip: Option<&str>,
         world_from_base: Isometry3,
         joints: Vec<Real>,
         tilt_deg: Option<Real>,
         seed: u64,
     ) -> Result<Self, SimError> {
         let world = Arc::new(world_from_file(scene_file)?);
-        let mut robot = if robot_name_or_urdf.to_ascii_lowercase().ends_with(".urdf") {
-            build_robot(None, Some(Path::new(robot_name_or_urdf)), None)?
-        } else {
-            build_robot(Some(robot_name_or_urdf), None, None)?
-        };
+        let mut robot = robot_by_name_or_urdf(robot_name_or_urdf, tip)?;
         mount_scanner(&mut robot, None);
-        robot.check_joints(&joints)?;
+        robot.check_within_limits(&joints)?;
         let mut sweep = SweepConfig::default();
         if let Some(t) = tilt_deg {
             sweep.tilt_deg = t;

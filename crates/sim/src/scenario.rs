@@ -319,6 +319,25 @@ pub fn build_robot(
     }
 }
 
+/// A robot named on a command line: a built-in name (`denso-vm6083`, `point3`,
+/// `arm4`) or a URDF file (a path ending in `.urdf`, any case), whose chain
+/// ends at `tip` when given (the chain's leaf otherwise). `tip` with a built-in
+/// robot is an error.
+pub fn robot_by_name_or_urdf(name_or_path: &str, tip: Option<&str>) -> Result<Robot, SimError> {
+    if name_or_path.to_ascii_lowercase().ends_with(".urdf") {
+        build_robot(None, Some(Path::new(name_or_path)), tip)
+    } else if let Some(tip) = tip {
+        Err(SimError::Scenario {
+            source_name: "robot".into(),
+            message: format!(
+                "a tip link (`{tip}`) applies to URDF robots only; `{name_or_path}` is a built-in robot"
+            ),
+        })
+    } else {
+        build_robot(Some(name_or_path), None, None)
+    }
+}
+
 /// Give the robot a scanner: `tool_from_scanner` when given, else keep a
 /// built-in mount, else the tool frame itself.
 pub fn mount_scanner(robot: &mut Robot, tool_from_scanner: Option<&PoseSpec>) {

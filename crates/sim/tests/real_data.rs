@@ -38,6 +38,7 @@ fn real_meshes_are_scanned_by_the_arm() {
     let setup = ScanSetup::from_scene_file(
         &data("meshes/truss_bridge_meters.obj"),
         "denso-vm6083",
+        None,
         geom::Isometry3::identity(),
         deg([0.0, -55.0, 165.0, 0.0, -110.0, 0.0]),
         Some(20.0),

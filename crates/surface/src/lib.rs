@@ -16,6 +16,7 @@ pub mod model;
 pub mod overlay;
 pub mod perimeter;
 pub mod relations;
+pub mod replay;
 pub mod reposition;
 pub mod segment;
 pub mod share;
@@ -30,6 +31,7 @@ pub use input::{SensorSet, read_initial_segments_json, read_sets_jsonl};
 pub use merge::MergeFailure;
 pub use model::SurfaceModel;
 pub use overlay::CombineError;
+pub use replay::{Replay, ReplayError, ReplayOptions, replay};
 pub use segment::{
     CornerId, Edge, EdgeKey, Node, PairId, PointSegment, Polygon, Segment, SegmentId, SegmentKind,
     Share,

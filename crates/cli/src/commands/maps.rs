@@ -1,6 +1,10 @@
 //! `surveyor map`, `sld` and `segment`: occupancy + TSDF maps from scan files
 //! (Paul §4.2, §5.1.1), Scale-Like Discs and map segmentation (§5.2–5.3).
+//!
+//! Each stage's whole configuration comes from its library `*Config`
+//! (`Default`, or `--config FILE.toml`); the flags override single fields.
 
+use super::output::{Staged, config_toml, load_config};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use geom::Real;
@@ -16,41 +20,59 @@ pub struct SldArgs {
     /// Point cloud or mesh: PLY (a `scan` output's `ox oy oz` orient the normals
     /// toward the sensor; a mesh such as `map`'s mesh.ply orients them by its
     /// faces, as Paul §5.2 makes discs from the fused mesh), PCD, text, OBJ, STL.
+    #[arg(long, required_unless_present = "print_config")]
+    input: Option<PathBuf>,
+    /// The whole SLD configuration (TOML, fields of `SldConfig`; see --print-config).
     #[arg(long)]
-    input: PathBuf,
-    /// Disc radius μ, metres (also the voxel size of the hash).
-    #[arg(long, default_value_t = 0.04)]
-    radius: Real,
-    /// Points a disc needs (n_min).
-    #[arg(long, default_value_t = 8)]
-    min_points: usize,
+    config: Option<PathBuf>,
+    /// Print the configuration in effect as TOML and exit.
+    #[arg(long)]
+    print_config: bool,
+    /// Disc radius μ, metres (also the voxel size of the hash) [config: radius_m].
+    #[arg(long, allow_negative_numbers = true)]
+    radius: Option<Real>,
+    /// Points a disc needs, n_min [config: min_points].
+    #[arg(long)]
+    min_points: Option<usize>,
     /// Seed of the home-point draws.
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Output CSV (`cx,cy,cz,nx,ny,nz,radius,points`).
-    #[arg(long)]
-    out: PathBuf,
+    #[arg(long, required_unless_present = "print_config")]
+    out: Option<PathBuf>,
 }
 
 pub fn sld(a: &SldArgs) -> Result<()> {
-    let loaded = load_points(&a.input)?;
-    let cfg = SldConfig {
-        radius_m: a.radius,
-        min_points: a.min_points,
-        ..SldConfig::default()
+    let mut cfg: SldConfig = load_config(a.config.as_deref())?;
+    if let Some(r) = a.radius {
+        cfg.radius_m = r;
+    }
+    if let Some(n) = a.min_points {
+        cfg.min_points = n;
+    }
+    if a.print_config {
+        print!("{}", config_toml(&cfg)?);
+        return Ok(());
+    }
+    let (Some(input), Some(out)) = (&a.input, &a.out) else {
+        bail!("--input and --out are required");
     };
+    cfg.validate()?;
+    let loaded = load_points(input)?;
     let t0 = Instant::now();
     let result = generate_discs(&loaded.points, loaded.orientation(), &cfg, a.seed)?;
     let elapsed = t0.elapsed().as_secs_f64();
-    save_discs_csv(&a.out, &result.discs, &[])
-        .with_context(|| format!("writing {}", a.out.display()))?;
+    let mut staged = Staged::new();
+    save_discs_csv(&staged.file(out)?, &result.discs, &[])
+        .with_context(|| format!("writing {}", out.display()))?;
+    staged.commit()?;
     say!(
         "{} discs from {} points ({:.2} % registered) in {:.1} ms → {}",
         result.discs.len(),
         loaded.points.len(),
         100.0 * result.registered_fraction(),
         1000.0 * elapsed,
-        a.out.display()
+        out.display()
     )?;
     Ok(())
 }
@@ -58,52 +80,71 @@ pub fn sld(a: &SldArgs) -> Result<()> {
 #[derive(Debug, Args)]
 pub struct SegmentArgs {
     /// Discs CSV written by `surveyor sld`.
-    #[arg(long)]
-    discs: PathBuf,
+    #[arg(long, required_unless_present = "print_config")]
+    discs: Option<PathBuf>,
     /// One manipulator pose per disc (CSV `q1,...,q6`, radians): enables the τq graph.
     #[arg(long)]
     poses: Option<PathBuf>,
-    /// τθ: largest angle between linked discs' normals, degrees.
-    #[arg(long, default_value_t = 5.0)]
-    tau_theta_deg: Real,
-    /// τd: largest distance between linked discs' centres, metres.
-    #[arg(long, default_value_t = 0.2)]
-    tau_d: Real,
-    /// τp: largest centre-to-plane distance between linked discs, metres.
-    #[arg(long, default_value_t = 0.05)]
-    tau_p: Real,
-    /// τq: largest joint difference per joint between linked discs' poses, degrees.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        num_args = 1,
-        default_value = "8,10,14,20,20,20"
-    )]
-    tau_q_deg: Vec<Real>,
-    /// Output JSON (`{"segments": [[disc index, ...], ...]}`).
+    /// The whole segmentation configuration (TOML, fields of `SegmentConfig`).
     #[arg(long)]
-    out: PathBuf,
+    config: Option<PathBuf>,
+    /// Print the configuration in effect as TOML and exit.
+    #[arg(long)]
+    print_config: bool,
+    /// τθ: largest angle between linked discs' normals, degrees [config: tau_theta_deg].
+    #[arg(long, allow_negative_numbers = true)]
+    tau_theta_deg: Option<Real>,
+    /// τd: largest distance between linked discs' centres, metres [config: tau_d_m].
+    #[arg(long, allow_negative_numbers = true)]
+    tau_d: Option<Real>,
+    /// τp: largest centre-to-plane distance between linked discs, metres [config: tau_p_m].
+    #[arg(long, allow_negative_numbers = true)]
+    tau_p: Option<Real>,
+    /// τq: largest joint difference per joint between linked discs' poses,
+    /// degrees, six comma-separated values [config: tau_q_deg].
+    #[arg(long, value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
+    tau_q_deg: Option<Vec<Real>>,
+    /// Output JSON (`{"segments": [[disc index, ...], ...]}`).
+    #[arg(long, required_unless_present = "print_config")]
+    out: Option<PathBuf>,
 }
 
 pub fn segment(a: &SegmentArgs) -> Result<()> {
-    let discs = load_discs_csv(&a.discs)?;
+    let mut cfg: SegmentConfig = load_config(a.config.as_deref())?;
+    if let Some(v) = a.tau_theta_deg {
+        cfg.tau_theta_deg = v;
+    }
+    if let Some(v) = a.tau_d {
+        cfg.tau_d_m = v;
+    }
+    if let Some(v) = a.tau_p {
+        cfg.tau_p_m = v;
+    }
+    if let Some(q) = &a.tau_q_deg {
+        let Ok(q) = <[Real; 6]>::try_from(q.as_slice()) else {
+            bail!(
+                "--tau-q-deg takes six comma-separated angles, got {}",
+                q.len()
+            );
+        };
+        cfg.tau_q_deg = q;
+    }
+    if a.print_config {
+        print!("{}", config_toml(&cfg)?);
+        return Ok(());
+    }
+    let (Some(discs_path), Some(out)) = (&a.discs, &a.out) else {
+        bail!("--discs and --out are required");
+    };
+    cfg.validate()?;
+    let discs = load_discs_csv(discs_path)?;
     let poses = a.poses.as_deref().map(load_poses_csv).transpose()?;
-    let Ok(tau_q_deg) = <[Real; 6]>::try_from(a.tau_q_deg.as_slice()) else {
-        bail!(
-            "--tau-q-deg takes six comma-separated angles, got {}",
-            a.tau_q_deg.len()
-        );
-    };
-    let cfg = SegmentConfig {
-        tau_theta_deg: a.tau_theta_deg,
-        tau_d_m: a.tau_d,
-        tau_p_m: a.tau_p,
-        tau_q_deg,
-    };
     let t0 = Instant::now();
     let segments = segment_discs(&discs, poses.as_deref(), &cfg)?;
     let elapsed = t0.elapsed().as_secs_f64();
-    save_segments_json(&a.out, &segments)?;
+    let mut staged = Staged::new();
+    save_segments_json(&staged.file(out)?, &segments)?;
+    staged.commit()?;
     let largest = segments.iter().map(Vec::len).max().unwrap_or(0);
     say!(
         "{} segments from {} discs (largest {} discs{}) in {:.1} ms → {}",
@@ -112,7 +153,7 @@ pub fn segment(a: &SegmentArgs) -> Result<()> {
         largest,
         if poses.is_some() { ", with poses" } else { "" },
         1000.0 * elapsed,
-        a.out.display()
+        out.display()
     )?;
     Ok(())
 }
@@ -121,22 +162,32 @@ pub fn segment(a: &SegmentArgs) -> Result<()> {
 pub struct MapArgs {
     /// Sweeps written by `surveyor scan` (PLY with per-point ray origins `ox oy oz`
     /// and the `scan ray` grid cell, which the occlusion weights of Paul §4.2.1 use).
-    #[arg(long, num_args = 1.., required = true)]
+    #[arg(long, num_args = 1.., required_unless_present = "print_config")]
     scans: Vec<PathBuf>,
     /// Scenario (built-in name or file) whose regions of interest A1 ⊂ A2 ⊂ A3
-    /// bound the grid (default: the bridge scenarios' regions).
+    /// bound the grid (default: the config's, which are the bridge scenarios').
     #[arg(long)]
     scenario: Option<String>,
-    /// Voxel edge of both maps, metres.
-    #[arg(long, default_value_t = 0.01)]
-    voxel: Real,
-    /// Folder for `mesh.ply` and `occupancy.json`.
+    /// The whole map configuration (TOML, fields of `MapConfig`: [occupancy], [tsdf]).
     #[arg(long)]
-    out: PathBuf,
+    config: Option<PathBuf>,
+    /// Print the configuration in effect as TOML and exit.
+    #[arg(long)]
+    print_config: bool,
+    /// Voxel edge of both maps, metres (the TSDF truncation follows at four
+    /// voxels) [config: occupancy.voxel_m, tsdf.voxel_m].
+    #[arg(long, allow_negative_numbers = true)]
+    voxel: Option<Real>,
+    /// Folder for `mesh.ply` and `occupancy.json`.
+    #[arg(long, required_unless_present = "print_config")]
+    out: Option<PathBuf>,
 }
 
 pub fn map(a: &MapArgs) -> Result<()> {
-    let mut config = MapConfig::default().with_voxel_m(a.voxel);
+    let mut config: MapConfig = load_config(a.config.as_deref())?;
+    if let Some(v) = a.voxel {
+        config = config.with_voxel_m(v);
+    }
     if let Some(name) = &a.scenario {
         let loaded = sim::Scenario::load(name)?;
         match loaded.scenario.regions {
@@ -144,6 +195,13 @@ pub fn map(a: &MapArgs) -> Result<()> {
             None => bail!("scenario {name} defines no regions of interest"),
         }
     }
+    if a.print_config {
+        print!("{}", config_toml(&config)?);
+        return Ok(());
+    }
+    let Some(out) = &a.out else {
+        bail!("--out is required");
+    };
     let mut mapper = Mapper::new(&config)?;
     for path in &a.scans {
         let sweep = Sweep::read_ply(path)?;
@@ -184,14 +242,20 @@ pub fn map(a: &MapArgs) -> Result<()> {
     let t0 = Instant::now();
     let outputs = mapper.outputs();
     let t_mesh = t0.elapsed().as_secs_f64();
-    outputs.write(&a.out)?;
+    let mut staged = Staged::new();
+    staged.ensure_dir(out)?;
+    scene::io::write_mesh_ply(&staged.file_in(out, "mesh.ply")?, &outputs.mesh)?;
+    let json = staged.file_in(out, "occupancy.json")?;
+    std::fs::write(&json, outputs.report.to_json() + "\n")
+        .with_context(|| format!("writing {}", out.join("occupancy.json").display()))?;
+    staged.commit()?;
     let r = &outputs.report;
     say!(
         "mesh: {} vertices, {} triangles (extracted in {:.1} ms) → {}",
         outputs.mesh.vertices.len(),
         outputs.mesh.len(),
         1000.0 * t_mesh,
-        a.out.join("mesh.ply").display()
+        out.join("mesh.ply").display()
     )?;
     for region in &r.regions {
         say!(
@@ -207,7 +271,7 @@ pub fn map(a: &MapArgs) -> Result<()> {
         "H1 {:.1} nats (eq. 4.10), weighted {:.1} (eq. 4.11) → {}",
         r.h1_unweighted,
         r.h1_weighted,
-        a.out.join("occupancy.json").display()
+        out.join("occupancy.json").display()
     )?;
     Ok(())
 }

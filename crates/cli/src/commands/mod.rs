@@ -2,23 +2,30 @@
 
 mod maps;
 mod model;
+mod output;
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Parser, Subcommand};
 use geom::Real;
 use geom::math::isometry_to_rows;
 use indicatif::{ProgressBar, ProgressStyle};
+use output::Staged;
 use serde::Serialize;
 use sim::LoadedScenario;
 use sim::scan_job::ScanSetup;
-use sim::scenario::{BUILTIN_NAMES, Scenario, builtin_scenario};
+use sim::scenario::{BUILTIN_NAMES, Scenario, builtin_scenario, robot_by_name_or_urdf};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Explore an unknown structure with a robot and range sensors, and build a model
 /// of its surfaces (Pudney 1994 surface following; Paul 2010 AXBAM exploration).
 #[derive(Debug, Parser)]
-#[command(name = "surveyor", version, propagate_version = true)]
+#[command(
+    name = "surveyor",
+    version,
+    propagate_version = true,
+    args_override_self = true
+)]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -100,43 +107,40 @@ struct FkArgs {
 
 #[derive(Debug, Args)]
 struct ScanArgs {
-    /// Built-in scenario name or scenario file.
-    #[arg(long, conflicts_with = "scene")]
+    /// Built-in scenario name or scenario file (its robot, base pose and
+    /// scanner; --robot, --tip and --base-* belong to --scene).
+    #[arg(
+        long,
+        conflicts_with_all = ["scene", "robot", "tip", "base_xyz", "base_rpy_deg"]
+    )]
     scenario: Option<String>,
     /// A mesh (OBJ, STL, PLY) or point cloud (PCD, PLY, text) placed as-is in the
     /// world frame, instead of a scenario.
     #[arg(long)]
     scene: Option<PathBuf>,
     /// With --scene: built-in robot name or URDF file (default denso-vm6083).
-    #[arg(long, requires = "scene")]
+    #[arg(long)]
     robot: Option<String>,
+    /// With --scene and a URDF --robot: the link to treat as the tip (default:
+    /// the chain's leaf); the scanner is mounted on it.
+    #[arg(long)]
+    tip: Option<String>,
     /// With --scene: where the robot base stands in the world, metres.
-    #[arg(
-        long,
-        requires = "scene",
-        value_delimiter = ',',
-        allow_hyphen_values = true,
-        num_args = 1
-    )]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, num_args = 1)]
     base_xyz: Option<Vec<Real>>,
     /// With --scene: base orientation, roll/pitch/yaw in degrees (fixed axes x, y, z).
-    #[arg(
-        long,
-        requires = "scene",
-        value_delimiter = ',',
-        allow_hyphen_values = true,
-        num_args = 1
-    )]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, num_args = 1)]
     base_rpy_deg: Option<Vec<Real>>,
     #[command(flatten)]
     joints: JointArgs,
     /// Total tilt of the sweep, degrees (default: the scenario's, 60).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     tilt_deg: Option<Real>,
     /// Seed of the sensor noise.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Output PLY (vertex properties x y z intensity ox oy oz).
+    /// Output PLY (vertex properties x y z intensity ox oy oz scan ray material;
+    /// see `sensor::scan_file`). A missing folder is created.
     #[arg(long)]
     out: PathBuf,
 }
@@ -152,7 +156,7 @@ struct RaycastArgs {
     /// Output: one little-endian f32 per ray, the first-hit distance, +inf on a miss.
     #[arg(long)]
     out: PathBuf,
-    /// Worker threads (default: all cores).
+    /// Worker threads, 1 to 256 (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
 }
@@ -162,13 +166,19 @@ struct FixtureArgs {
     /// Folder to write `structure.ply` and `rays.bin` into.
     #[arg(long)]
     out: PathBuf,
-    /// Number of rays.
+    /// Number of rays (at most 50 000 000: 1.2 GB of rays.bin).
     #[arg(long, default_value_t = 1_000_000)]
     rays: usize,
     /// Seed of the ray directions and origins.
     #[arg(long, default_value_t = 1)]
     seed: u64,
 }
+
+/// Most worker threads `raycast` starts.
+const MAX_THREADS: usize = 256;
+
+/// Most rays `raycast-fixture` writes (1.2 GB).
+const MAX_FIXTURE_RAYS: usize = 50_000_000;
 
 /// Run a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
@@ -208,17 +218,23 @@ struct FkOutput {
     frames: Vec<NamedPose>,
     #[serde(skip_serializing_if = "Option::is_none")]
     sensor: Option<[[Real; 4]; 4]>,
+    /// Joints outside their limits (empty when the pose is within them).
+    outside_limits: Vec<LimitViolation>,
+}
+
+/// A joint value outside its limits (radians, or metres for prismatic joints).
+#[derive(Serialize)]
+struct LimitViolation {
+    joint: String,
+    index: usize,
+    value: Real,
+    min: Real,
+    max: Real,
+    message: String,
 }
 
 fn fk(a: &FkArgs) -> Result<()> {
-    let robot = if a.robot.to_ascii_lowercase().ends_with(".urdf") {
-        robot::Robot::from_urdf_file(Path::new(&a.robot), a.tip.as_deref())?
-    } else {
-        if a.tip.is_some() {
-            bail!("--tip applies to URDF robots only");
-        }
-        robot::builtin(&a.robot)?
-    };
+    let robot = robot_by_name_or_urdf(&a.robot, a.tip.as_deref())?;
     let q = a
         .joints
         .values()
@@ -236,6 +252,28 @@ fn fk(a: &FkArgs) -> Result<()> {
             })
             .collect(),
         sensor: robot.scanner_pose(&q)?.map(|p| isometry_to_rows(&p)),
+        outside_limits: robot
+            .limit_violations(&q)
+            .into_iter()
+            .filter_map(|e| match &e {
+                robot::RobotError::OutsideLimits {
+                    joint,
+                    index,
+                    value,
+                    min,
+                    max,
+                    ..
+                } => Some(LimitViolation {
+                    joint: joint.clone(),
+                    index: *index,
+                    value: *value,
+                    min: *min,
+                    max: *max,
+                    message: e.to_string(),
+                }),
+                _ => None,
+            })
+            .collect(),
     };
     if a.json {
         say!("{}", serde_json::to_string(&out)?)?;
@@ -258,8 +296,8 @@ fn fk(a: &FkArgs) -> Result<()> {
         if let Some(s) = &out.sensor {
             show("scanner", s)?;
         }
-        if !robot.within_limits(&q) {
-            say!("warning: the pose is outside the joint limits")?;
+        for v in &out.outside_limits {
+            say!("warning: {}", v.message)?;
         }
     }
     Ok(())
@@ -283,24 +321,36 @@ fn scan(a: &ScanArgs) -> Result<()> {
                 .values()
                 .ok_or_else(|| anyhow!("--joints is required with --scene"))?;
             let robot = a.robot.as_deref().unwrap_or("denso-vm6083");
-            let three = |v: &Option<Vec<Real>>, flag: &str| -> Result<[Real; 3]> {
-                match v.as_deref() {
-                    None => Ok([0.0; 3]),
-                    Some([x, y, z]) => Ok([*x, *y, *z]),
-                    Some(other) => bail!(
-                        "{flag} takes three comma-separated values, got {}",
-                        other.len()
-                    ),
-                }
-            };
             let base = scene::PoseSpec {
-                translation: three(&a.base_xyz, "--base-xyz")?,
-                rpy_deg: three(&a.base_rpy_deg, "--base-rpy-deg")?,
+                translation: three(a.base_xyz.as_deref(), "--base-xyz", "metres", 1e6)?,
+                rpy_deg: three(a.base_rpy_deg.as_deref(), "--base-rpy-deg", "degrees", 1e6)?,
             };
-            ScanSetup::from_scene_file(file, robot, base.isometry(), q, a.tilt_deg, a.seed)?
+            ScanSetup::from_scene_file(
+                file,
+                robot,
+                a.tip.as_deref(),
+                base.isometry(),
+                q,
+                a.tilt_deg,
+                a.seed,
+            )?
         }
         (Some(name), None) => {
             let loaded: LoadedScenario = Scenario::load(name)?;
+            if loaded.scenario.scanner.is_none()
+                && matches!(
+                    loaded.scenario.robot.preset.as_deref(),
+                    Some("point3" | "arm4")
+                )
+            {
+                bail!(
+                    "{name} is a surface-following scenario (Pudney): its {} robot carries \
+                     single-point range finders, not a laser scanner. It is for `surveyor \
+                     follow`; `scan` sweeps the scanner of the AXBAM scenarios (bridge1, \
+                     bridge2, bridge3) or of a robot on a --scene",
+                    loaded.scenario.robot.preset.as_deref().unwrap_or("")
+                );
+            }
             ScanSetup::from_scenario(&loaded, a.joints.values(), a.tilt_deg, a.seed)?
         }
         (None, None) => bail!("give --scenario NAME|FILE or --scene FILE"),
@@ -311,10 +361,12 @@ fn scan(a: &ScanArgs) -> Result<()> {
     let outcome = setup.run(&mut |done, _| pb.set_position(done as u64))?;
     pb.finish_and_clear();
     let t_sweep = t1.elapsed();
+    let mut staged = Staged::new();
     outcome
         .sweep
-        .write_ply(&a.out)
+        .write_ply(&staged.file(&a.out)?)
         .with_context(|| format!("writing {}", a.out.display()))?;
+    staged.commit()?;
     let sweep = &outcome.sweep;
     let shape = sweep.grid_shape().unwrap_or(sensor::GridShape {
         scans: 0,
@@ -388,6 +440,28 @@ fn scan(a: &ScanArgs) -> Result<()> {
     Ok(())
 }
 
+/// Three comma-separated values of `flag`, each finite and within `±limit`
+/// (`[0, 0, 0]` when the flag is absent).
+fn three(v: Option<&[Real]>, flag: &str, unit: &str, limit: Real) -> Result<[Real; 3]> {
+    match v {
+        None => Ok([0.0; 3]),
+        Some(&[x, y, z]) => {
+            for (axis, value) in ["first", "second", "third"].iter().zip([x, y, z]) {
+                if !(value.is_finite() && value.abs() <= limit) {
+                    bail!(
+                        "{flag}: the {axis} value is {value}; expected a finite number of {unit} within ±{limit:e}"
+                    );
+                }
+            }
+            Ok([x, y, z])
+        }
+        Some(other) => bail!(
+            "{flag} takes three comma-separated values, got {}",
+            other.len()
+        ),
+    }
+}
+
 fn read_rays(path: &Path) -> Result<Vec<[f32; 6]>> {
     let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
     if bytes.len() % 24 != 0 {
@@ -440,7 +514,11 @@ fn raycast(a: &RaycastArgs) -> Result<()> {
     let t_build = t1.elapsed();
     let rays = read_rays(&a.rays)?;
     let mut out = vec![0f32; rays.len()];
-    let threads = a.threads.unwrap_or_else(rayon::current_num_threads).max(1);
+    let threads = match a.threads {
+        None => rayon::current_num_threads().max(1),
+        Some(t @ 1..=MAX_THREADS) => t,
+        Some(t) => bail!("--threads {t}: expected 1 to {MAX_THREADS}"),
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -449,7 +527,10 @@ fn raycast(a: &RaycastArgs) -> Result<()> {
     pool.install(|| scene.cast_rays_f32(&rays, f32::INFINITY, &mut out));
     let t_cast = t2.elapsed().as_secs_f64();
     let bytes: Vec<u8> = out.iter().flat_map(|d| d.to_le_bytes()).collect();
-    std::fs::write(&a.out, bytes).with_context(|| format!("writing {}", a.out.display()))?;
+    let mut staged = Staged::new();
+    std::fs::write(staged.file(&a.out)?, bytes)
+        .with_context(|| format!("writing {}", a.out.display()))?;
+    staged.commit()?;
     let hits = out.iter().filter(|d| d.is_finite()).count();
     say!(
         "{} rays against {} triangles on {} thread{}: {:.3} s, {:.2} Mrays/s ({} hits)",
@@ -470,10 +551,17 @@ fn raycast(a: &RaycastArgs) -> Result<()> {
 }
 
 fn raycast_fixture(a: &FixtureArgs) -> Result<()> {
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    if a.rays > MAX_FIXTURE_RAYS {
+        bail!(
+            "--rays {}: at most {MAX_FIXTURE_RAYS} rays (24 bytes each in rays.bin)",
+            a.rays
+        );
+    }
+    let mut staged = Staged::new();
+    staged.ensure_dir(&a.out)?;
     let mesh = scene::fixtures::benchmark_structure();
     let mesh_path = a.out.join("structure.ply");
-    scene::io::write_mesh_ply(&mesh_path, &mesh)?;
+    scene::io::write_mesh_ply(&staged.file(&mesh_path)?, &mesh)?;
     let rays = scene::fixtures::incoherent_rays(a.rays, a.seed);
     let bytes: Vec<u8> = rays
         .iter()
@@ -481,8 +569,9 @@ fn raycast_fixture(a: &FixtureArgs) -> Result<()> {
         .flat_map(|v| v.to_le_bytes())
         .collect();
     let rays_path = a.out.join("rays.bin");
-    std::fs::write(&rays_path, bytes)
+    std::fs::write(staged.file(&rays_path)?, bytes)
         .with_context(|| format!("writing {}", rays_path.display()))?;
+    staged.commit()?;
     say!(
         "{} ({} triangles), {} ({} rays)",
         mesh_path.display(),

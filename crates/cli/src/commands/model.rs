@@ -1,36 +1,43 @@
 //! `surveyor model`: Pudney's incremental surface model (P ch. 2) fed from a
-//! file of sensor sets, with per-update timing.
+//! file of sensor sets, with per-update timing ([`surface::replay`]).
 
-use anyhow::{Context, Result, anyhow};
+use super::output::{Staged, config_toml, load_config};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use geom::Real;
 use std::fs::File;
 use std::io::BufReader;
 use std::path::PathBuf;
-use std::time::Instant;
 use surface::{
-    SurfaceConfig, SurfaceModel, UpdateTimes, read_initial_segments_json, read_sets_jsonl,
+    ReplayError, ReplayOptions, SurfaceConfig, read_initial_segments_json, read_sets_jsonl,
 };
 
 #[derive(Debug, Args)]
 pub struct ModelArgs {
     /// Sensor sets, one JSON object per line:
     /// `{"points": [[x,y,z], ...], "axes": [[ax,ay,az], ...]}`.
+    #[arg(long, required_unless_present = "print_config")]
+    sets: Option<PathBuf>,
+    /// The whole model configuration (TOML, fields of `SurfaceConfig`).
     #[arg(long)]
-    sets: PathBuf,
-    /// Linear resolution λ, metres.
-    #[arg(long, default_value_t = 0.05)]
-    lambda: Real,
-    /// Angular resolution μ, degrees.
-    #[arg(long, default_value_t = 10.0)]
-    mu_deg: Real,
+    config: Option<PathBuf>,
+    /// Print the configuration in effect as TOML and exit.
+    #[arg(long)]
+    print_config: bool,
+    /// Linear resolution λ, metres [config: lambda].
+    #[arg(long, allow_negative_numbers = true)]
+    lambda: Option<Real>,
+    /// Angular resolution μ, degrees [config: mu_deg].
+    #[arg(long, allow_negative_numbers = true)]
+    mu_deg: Option<Real>,
     /// Redundancy count ψ (P§2.9): a segment S₁ that fails to share edges with a
-    /// larger S₂ is deleted if it holds fewer than ψ points ...
-    #[arg(long, default_value_t = 20.0)]
-    psi: Real,
-    /// ... and fewer than φ times S₂'s points (P§2.9; a ratio, not a distance).
-    #[arg(long, default_value_t = 0.05)]
-    phi: Real,
+    /// larger S₂ is deleted if it holds fewer than ψ points ... [config: psi]
+    #[arg(long, allow_negative_numbers = true)]
+    psi: Option<Real>,
+    /// ... and fewer than φ times S₂'s points (P§2.9; a ratio, not a distance)
+    /// [config: phi].
+    #[arg(long, allow_negative_numbers = true)]
+    phi: Option<Real>,
     /// A-priori segments (P§4.3): `{"segments": [[[x,y,z], ...], ...]}`, each
     /// anticlockwise about its outward normal.
     #[arg(long)]
@@ -39,59 +46,76 @@ pub struct ModelArgs {
     #[arg(long)]
     check: bool,
     /// Folder for surface_model.json, surface_model.obj and stats.json.
-    #[arg(long)]
-    out: PathBuf,
+    #[arg(long, required_unless_present = "print_config")]
+    out: Option<PathBuf>,
 }
 
 pub fn model(a: &ModelArgs) -> Result<()> {
-    let file = File::open(&a.sets).with_context(|| format!("opening {}", a.sets.display()))?;
-    let sets = read_sets_jsonl(BufReader::new(file), &a.sets.display().to_string())?;
-    let config = SurfaceConfig {
-        lambda: a.lambda,
-        mu_deg: a.mu_deg,
-        psi: a.psi,
-        phi: a.phi,
-        ..SurfaceConfig::default()
+    let mut config: SurfaceConfig = load_config(a.config.as_deref())?;
+    for (flag, field) in [
+        (a.lambda, &mut config.lambda),
+        (a.mu_deg, &mut config.mu_deg),
+        (a.psi, &mut config.psi),
+        (a.phi, &mut config.phi),
+    ] {
+        if let Some(v) = flag {
+            *field = v;
+        }
+    }
+    if a.print_config {
+        print!("{}", config_toml(&config)?);
+        return Ok(());
+    }
+    let (Some(sets_path), Some(out)) = (&a.sets, &a.out) else {
+        bail!("--sets and --out are required");
     };
-    let mut model = SurfaceModel::new(config)?;
-    if let Some(path) = &a.initial {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        for (k, vertices) in read_initial_segments_json(&text, &path.display().to_string())?
-            .iter()
-            .enumerate()
-        {
-            model
-                .add_initial_segment(vertices)
-                .with_context(|| format!("{}: initial segment {k}", path.display()))?;
+    config.validate()?;
+    let file = File::open(sets_path).with_context(|| format!("opening {}", sets_path.display()))?;
+    let sets = read_sets_jsonl(BufReader::new(file), &sets_path.display().to_string())?;
+    let initial = match &a.initial {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("reading {}", path.display()))?;
+            read_initial_segments_json(&text, &path.display().to_string())?
         }
-    }
+        None => Vec::new(),
+    };
     let pb = super::progress_bar(sets.len() as u64, "modelling");
-    let mut times_us = Vec::with_capacity(sets.len());
-    for (k, set) in sets.iter().enumerate() {
-        let t0 = Instant::now();
-        model
-            .update(set)
-            .with_context(|| format!("{}: set on line {}", a.sets.display(), k + 1))?;
-        times_us.push(1e6 * t0.elapsed().as_secs_f64());
-        if a.check {
-            model
-                .check_invariants()
-                .map_err(|e| anyhow!("invariant violated after the set on line {}: {e}", k + 1))?;
-        }
-        pb.set_position(k as u64 + 1);
-    }
+    let options = ReplayOptions {
+        check_invariants: a.check,
+    };
+    let replayed = surface::replay(config, &initial, &sets, options, &mut |done| {
+        pb.set_position(done as u64);
+    });
     pb.finish_and_clear();
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let json = serde_json::to_string_pretty(&model.to_model_json())?;
-    write(&a.out.join("surface_model.json"), json.as_bytes())?;
-    write(&a.out.join("surface_model.obj"), model.to_obj().as_bytes())?;
-    let times = UpdateTimes::from_micros(&times_us);
-    let stats = model.stats().to_json(times);
-    write(
-        &a.out.join("stats.json"),
-        serde_json::to_string_pretty(&stats)?.as_bytes(),
-    )?;
+    let replayed = replayed.map_err(|e| match e {
+        ReplayError::Initial { index, source } => anyhow::anyhow!(
+            "{}: initial segment {index}: {source}",
+            a.initial.as_deref().unwrap_or(sets_path).display()
+        ),
+        ReplayError::Set { index, source } => {
+            anyhow::anyhow!(
+                "{}: set on line {}: {source}",
+                sets_path.display(),
+                index + 1
+            )
+        }
+        ReplayError::Invariant { index, message } => anyhow::anyhow!(
+            "invariant violated after the set on line {}: {message}",
+            index + 1
+        ),
+        other => other.into(),
+    })?;
+    let mut staged = Staged::new();
+    staged.ensure_dir(out)?;
+    for (name, text) in replayed.outputs()? {
+        let path = staged.file_in(out, name)?;
+        std::fs::write(&path, text)
+            .with_context(|| format!("writing {}", out.join(name).display()))?;
+    }
+    staged.commit()?;
+    let times = replayed.times();
+    let stats = replayed.stats();
     say!(
         "{} sets → {} segments ({} polygons, {} points), {} shared-edge pairs, {} corner vertices → {}",
         sets.len(),
@@ -100,7 +124,7 @@ pub fn model(a: &ModelArgs) -> Result<()> {
         stats.points,
         stats.shared_edge_pairs,
         stats.corner_vertices,
-        a.out.display()
+        out.display()
     )?;
     say!(
         "update time: median {:.1} µs, 95th percentile {:.1} µs, max {:.1} µs{}",
@@ -114,8 +138,4 @@ pub fn model(a: &ModelArgs) -> Result<()> {
         }
     )?;
     Ok(())
-}
-
-fn write(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
-    std::fs::write(path, bytes).with_context(|| format!("writing {}", path.display()))
 }

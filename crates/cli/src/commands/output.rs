@@ -1,0 +1,111 @@
+//! Outputs appear whole or not at all: every command writes its files under
+//! temporary names next to their destination and renames them into place
+//! only when the whole command has succeeded. On failure (or Ctrl-C before
+//! the commit) nothing new is left behind: temporary files are removed, and
+//! so is an output folder the command created.
+
+use anyhow::{Context, Result};
+use std::path::{Path, PathBuf};
+
+/// A set of output files staged under temporary names.
+#[derive(Debug, Default)]
+pub struct Staged {
+    /// (temporary, final) pairs.
+    files: Vec<(PathBuf, PathBuf)>,
+    /// Folders this command created (deepest last), removed on failure.
+    created: Vec<PathBuf>,
+    committed: bool,
+}
+
+impl Staged {
+    /// Nothing staged yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Make sure `dir` exists, creating it (and missing parents) if needed;
+    /// folders created here are removed again unless the outputs are committed.
+    pub fn ensure_dir(&mut self, dir: &Path) -> Result<()> {
+        let mut missing = Vec::new();
+        let mut d = Some(dir);
+        while let Some(p) = d {
+            if p.as_os_str().is_empty() || p.exists() {
+                break;
+            }
+            missing.push(p.to_owned());
+            d = p.parent();
+        }
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        self.created.extend(missing.into_iter().rev());
+        Ok(())
+    }
+
+    /// The temporary path to write `dest` under (its folder is created if
+    /// missing). The file appears at `dest` on [`Staged::commit`].
+    pub fn file(&mut self, dest: &Path) -> Result<PathBuf> {
+        if let Some(parent) = dest.parent() {
+            self.ensure_dir(parent)?;
+        }
+        let name = dest
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        // Keep the extension last: writers choose the format by it.
+        let tmp = dest.with_file_name(format!(".{}-{name}", tag()));
+        self.files.push((tmp.clone(), dest.to_owned()));
+        Ok(tmp)
+    }
+
+    /// The temporary path for `name` inside the output folder `dir`.
+    pub fn file_in(&mut self, dir: &Path, name: &str) -> Result<PathBuf> {
+        self.file(&dir.join(name))
+    }
+
+    /// Move every staged file into place.
+    pub fn commit(mut self) -> Result<()> {
+        for (tmp, dest) in &self.files {
+            std::fs::rename(tmp, dest)
+                .with_context(|| format!("moving the output into place at {}", dest.display()))?;
+        }
+        self.committed = true;
+        Ok(())
+    }
+}
+
+/// A name part unique to this process.
+fn tag() -> String {
+    format!("surveyor-tmp-{}", std::process::id())
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if self.committed {
+            return;
+        }
+        for (tmp, _) in &self.files {
+            let _ = std::fs::remove_file(tmp);
+        }
+        // Only folders that are empty again (remove_dir refuses others).
+        for dir in self.created.iter().rev() {
+            let _ = std::fs::remove_dir(dir);
+        }
+    }
+}
+
+/// Read a `--config` TOML file into a config struct (`T::default()` when no
+/// file is given). Unknown fields and wrong types are errors naming the file,
+/// the line and the field.
+pub fn load_config<T: serde::de::DeserializeOwned + Default>(path: Option<&Path>) -> Result<T> {
+    let Some(path) = path else {
+        return Ok(T::default());
+    };
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    toml::from_str(&text)
+        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))
+}
+
+/// A config as TOML (for `--print-config`).
+pub fn config_toml<T: serde::Serialize>(config: &T) -> Result<String> {
+    toml::to_string(config).context("formatting the configuration as TOML")
+}
