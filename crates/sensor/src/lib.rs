@@ -19,8 +19,8 @@ pub mod sweep;
 pub use classifier::{Classification, ClassifyError, Lrc, LrcConfig, LrcError, Observation};
 pub use range_finder::{RangeFinder, SensorPoint};
 pub use reflection::ReflectionModel;
-pub use scanner::{RangeNoise, Scan, ScanReturn, Scanner, ScannerConfig};
-pub use sweep::SweepConfig;
+pub use scanner::{MAX_RAYS_PER_SCAN, RangeNoise, Scan, ScanReturn, Scanner, ScannerConfig};
+pub use sweep::{MAX_RAYS_PER_SWEEP, MAX_SCANS_PER_SWEEP, SweepConfig};
 
 /// Errors of sensor configuration.
 #[derive(Debug, thiserror::Error)]
@@ -34,5 +34,21 @@ pub enum SensorError {
         expected: &'static str,
         /// What was given.
         got: String,
+    },
+    /// A field asks for more work or memory than the crate's stated budget.
+    #[error(
+        "sensor config `{field}` = {value} gives {count} {what}, more than the limit of {limit}"
+    )]
+    Budget {
+        /// The field.
+        field: &'static str,
+        /// Its value.
+        value: String,
+        /// What it would cost.
+        count: usize,
+        /// What is counted (`rays per scan`, `scans per sweep`, ...).
+        what: &'static str,
+        /// The budget ([`MAX_RAYS_PER_SCAN`], [`MAX_SCANS_PER_SWEEP`], [`MAX_RAYS_PER_SWEEP`]).
+        limit: usize,
     },
 }
