@@ -188,14 +188,16 @@ impl ScanSetup {
     }
 
     /// Coverage and accuracy against a mesh ground truth (`None` for point-cloud
-    /// worlds, whose true surface is unknown).
-    pub fn score(&self, sweep: &Sweep) -> Option<ScanScores> {
-        let scene = self.world.as_scene()?;
+    /// worlds, whose true surface is unknown); an error for invalid metrics settings.
+    pub fn score(&self, sweep: &Sweep) -> Result<Option<ScanScores>, SimError> {
+        let Some(scene) = self.world.as_scene() else {
+            return Ok(None);
+        };
         let points = sweep.positions();
-        Some(ScanScores {
-            coverage: coverage(scene, &points, &self.metrics),
+        Ok(Some(ScanScores {
+            coverage: coverage(scene, &points, &self.metrics)?,
             accuracy: accuracy(scene, &points, 0.5),
-        })
+        }))
     }
 }
 

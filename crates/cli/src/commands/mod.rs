@@ -336,6 +336,7 @@ fn scan(a: &ScanArgs) -> Result<()> {
     spinner.enable_steady_tick(std::time::Duration::from_millis(100));
     let scores = setup.score(sweep);
     spinner.finish_and_clear();
+    let scores = scores?;
     let t_score = t2.elapsed();
     match scores {
         Some(s) => {
@@ -363,13 +364,13 @@ fn scan(a: &ScanArgs) -> Result<()> {
                     m.samples
                 )?;
             }
-            say!(
-                "accuracy: mean {:.1} mm, 95th percentile {:.1} mm, max {:.1} mm over {} points",
-                1000.0 * s.accuracy.mean_m,
-                1000.0 * s.accuracy.p95_m,
-                1000.0 * s.accuracy.max_m,
-                s.accuracy.points
-            )?;
+            if cov.density_capped {
+                say!(
+                    "  (sampled at {:.0} per m², lowered to keep within metrics.sampling.max_samples)",
+                    cov.samples_per_m2
+                )?;
+            }
+            say!("accuracy: {}", s.accuracy)?;
         }
         None => say!("(point-cloud world: no true surface to score against)")?,
     }
@@ -464,11 +465,12 @@ fn raycast(a: &RaycastArgs) -> Result<()> {
 }
 
 fn raycast_fixture(a: &FixtureArgs) -> Result<()> {
+    // Checked before anything is written, so a refused count leaves no files.
+    let rays = scene::fixtures::incoherent_rays_checked(a.rays, a.seed)?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let mesh = scene::fixtures::benchmark_structure();
     let mesh_path = a.out.join("structure.ply");
     scene::io::write_mesh_ply(&mesh_path, &mesh)?;
-    let rays = scene::fixtures::incoherent_rays(a.rays, a.seed);
     let bytes: Vec<u8> = rays
         .iter()
         .flatten()
