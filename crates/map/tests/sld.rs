@@ -160,7 +160,8 @@ fn discs_from_surface_samples_like_mesh_vertices() {
             region: Some(region),
             ..scene::SamplingConfig::default()
         },
-    );
+    )
+    .unwrap();
     let points: Vec<Point3> = samples.iter().map(|s| s.point).collect();
     let normals: Vec<Vector3> = samples.iter().map(|s| s.normal.into_inner()).collect();
     let faces: Vec<u32> = samples.iter().map(|s| s.face).collect();

@@ -6,6 +6,7 @@
 //! deterministic, so the same workload can be written to files
 //! (`surveyor raycast` formats) and run through other engines.
 
+use crate::error::SceneError;
 use crate::mesh::TriMesh;
 use crate::primitives::{IBeamSection, cuboid, i_beam};
 use geom::{Point3, Real, Vector3};
@@ -92,8 +93,34 @@ pub fn benchmark_structure() -> TriMesh {
     m
 }
 
+/// Most rays [`incoherent_rays_checked`] makes: ten times the benchmark's
+/// million, 240 MB as `[f32; 6]` (and as much again as a `rays.bin` buffer).
+pub const MAX_FIXTURE_RAYS: usize = 10_000_000;
+
+/// [`incoherent_rays`] for a count from the user: more than
+/// [`MAX_FIXTURE_RAYS`] is refused before allocating.
+///
+/// ```
+/// let err = scene::fixtures::incoherent_rays_checked(100_000_000_000, 1).unwrap_err();
+/// assert!(err.to_string().starts_with("rays: expected at most 10000000"));
+/// assert_eq!(scene::fixtures::incoherent_rays_checked(3, 1).unwrap().len(), 3);
+/// ```
+pub fn incoherent_rays_checked(n: usize, seed: u64) -> Result<Vec<[f32; 6]>, SceneError> {
+    if n > MAX_FIXTURE_RAYS {
+        return Err(SceneError::invalid(
+            "rays",
+            format!(
+                "expected at most {MAX_FIXTURE_RAYS} rays (MAX_FIXTURE_RAYS, 24 bytes each), got {n}"
+            ),
+        ));
+    }
+    Ok(incoherent_rays(n, seed))
+}
+
 /// `n` rays with origins uniform in the 6 m box around the structure and
 /// directions uniform on the sphere: six f32 per ray (origin, unit direction).
+/// Allocates `24 n` bytes; for a count from the user, use
+/// [`incoherent_rays_checked`].
 pub fn incoherent_rays(n: usize, seed: u64) -> Vec<[f32; 6]> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     (0..n)

@@ -32,6 +32,12 @@ pub use error::SceneError;
 pub use geom::mesh::{self, TriMesh};
 pub use geom::primitives;
 pub use material::{Material, MaterialId, default_materials};
-pub use sampling::{SamplingConfig, SurfaceSample, sample_surfaces};
-pub use spec::{CloudSpec, ObjectSpec, PoseSpec, SceneSpec, ShapeSpec, World};
+pub use sampling::{
+    DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLE_CHUNK, SamplingConfig, SurfaceSample, SurfaceSampler,
+    sample_surfaces,
+};
+pub use spec::{
+    CloudSpec, MAX_COORDINATE_M, MAX_PRIMITIVE_SEGMENTS, ObjectSpec, PoseSpec, SceneSpec,
+    ShapeSpec, World,
+};
 pub use world::{Hit, RayCast, Scene, SceneObject};

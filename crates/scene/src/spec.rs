@@ -15,6 +15,18 @@ use geom::{Isometry3, Point2, Point3, Ray, Real, Vector3};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+/// Most sides a cylinder's `segments` may ask for, and most vertices a prism
+/// profile may have: the cap triangulation (ear clipping) costs O(n²), under a
+/// second at this size even in a debug build, and 4 096 sides put the facets
+/// within 3·10⁻⁷ × radius of the true cylinder. Larger values are refused before any mesh is allocated.
+pub const MAX_PRIMITIVE_SEGMENTS: u32 = 4096;
+
+/// Largest accepted magnitude of a coordinate or translation in a scene file,
+/// metres (10 000 km, more than UTM northings). Beyond it, squared distances
+/// lose the precision surveyor's tolerances need, and `1e308` would overflow
+/// to infinity in the first squared norm.
+pub const MAX_COORDINATE_M: Real = 1e7;
+
 /// The ground truth of a scenario: objects with materials, or a point cloud.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -59,6 +71,29 @@ pub struct PoseSpec {
 }
 
 impl PoseSpec {
+    /// Check the numbers: every translation component finite and within
+    /// ±[`MAX_COORDINATE_M`], every angle finite. `what` names the pose in the
+    /// error (`object \`beam\` pose`), which then names the component.
+    pub fn validate(&self, what: &str) -> Result<(), SceneError> {
+        for (i, t) in self.translation.iter().enumerate() {
+            if !(t.is_finite() && t.abs() <= MAX_COORDINATE_M) {
+                return Err(SceneError::invalid(
+                    format!("{what}: translation[{i}]"),
+                    format!("expected a finite distance within ±{MAX_COORDINATE_M:e} m, got {t}"),
+                ));
+            }
+        }
+        for (i, a) in self.rpy_deg.iter().enumerate() {
+            if !a.is_finite() {
+                return Err(SceneError::invalid(
+                    format!("{what}: rpy_deg[{i}]"),
+                    format!("expected a finite angle in degrees, got {a}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The placement as an isometry.
     pub fn isometry(&self) -> Isometry3 {
         geom::math::isometry_from_xyz_rpy(self.translation, self.rpy_deg.map(f64::to_radians))
@@ -195,13 +230,19 @@ fn p3(a: &[Real; 3]) -> Point3 {
 impl ShapeSpec {
     /// The shape's mesh before placement. `base_dir` resolves relative files.
     pub fn mesh(&self, base_dir: &Path) -> Result<TriMesh, SceneError> {
-        let finite = |vals: &[Real]| vals.iter().all(|v| v.is_finite());
+        // Finite and within ±MAX_COORDINATE_M.
+        let finite = |vals: &[Real]| {
+            vals.iter()
+                .all(|v| v.is_finite() && v.abs() <= MAX_COORDINATE_M)
+        };
         match self {
             Self::Box { min, max } => {
                 if !finite(min) || !finite(max) || (0..3).any(|i| min[i] >= max[i]) {
                     return Err(SceneError::invalid(
                         "box",
-                        format!("expected finite min < max on every axis, got {min:?} and {max:?}"),
+                        format!(
+                            "expected finite min < max on every axis, within ±{MAX_COORDINATE_M:e} m, got {min:?} and {max:?}"
+                        ),
                     ));
                 }
                 Ok(primitives::cuboid(p3(min), p3(max)))
@@ -216,7 +257,10 @@ impl ShapeSpec {
                 web_thickness,
             } => {
                 if !finite(from) || !finite(to) || !finite(up) {
-                    return Err(SceneError::invalid("i_beam", "non-finite coordinates"));
+                    return Err(SceneError::invalid(
+                        "i_beam",
+                        format!("coordinates must be finite and within ±{MAX_COORDINATE_M:e} m"),
+                    ));
                 }
                 Ok(primitives::i_beam(
                     &p3(from),
@@ -236,8 +280,21 @@ impl ShapeSpec {
                 radius,
                 segments,
             } => {
-                if !finite(from) || !finite(to) {
-                    return Err(SceneError::invalid("cylinder", "non-finite coordinates"));
+                if !finite(from) || !finite(to) || !finite(&[*radius]) {
+                    return Err(SceneError::invalid(
+                        "cylinder",
+                        format!(
+                            "coordinates and radius must be finite and within ±{MAX_COORDINATE_M:e} m"
+                        ),
+                    ));
+                }
+                if *segments > MAX_PRIMITIVE_SEGMENTS {
+                    return Err(SceneError::invalid(
+                        "cylinder segments",
+                        format!(
+                            "expected at most {MAX_PRIMITIVE_SEGMENTS} sides (MAX_PRIMITIVE_SEGMENTS: the caps' triangulation is quadratic in it), got {segments}"
+                        ),
+                    ));
                 }
                 Ok(primitives::cylinder(
                     &p3(from),
@@ -252,10 +309,21 @@ impl ShapeSpec {
                 from,
                 to,
             } => {
-                if profile.iter().any(|p| !finite(p)) {
+                if profile.len() > MAX_PRIMITIVE_SEGMENTS as usize {
+                    return Err(SceneError::invalid(
+                        "prism profile",
+                        format!(
+                            "expected at most {MAX_PRIMITIVE_SEGMENTS} vertices (MAX_PRIMITIVE_SEGMENTS: the caps' triangulation is quadratic in it), got {}",
+                            profile.len()
+                        ),
+                    ));
+                }
+                if profile.iter().any(|p| !finite(p)) || !finite(&[*from, *to]) {
                     return Err(SceneError::invalid(
                         "prism",
-                        "non-finite profile coordinates",
+                        format!(
+                            "profile and from/to must be finite and within ±{MAX_COORDINATE_M:e} m"
+                        ),
                     ));
                 }
                 let prof: Vec<Point2> = profile.iter().map(|p| Point2::new(p[0], p[1])).collect();
@@ -311,6 +379,9 @@ impl SceneSpec {
             )),
             (None, true) => Err(SceneError::invalid("scene", "has no objects")),
             (Some(c), true) => {
+                if let Some(pose) = &c.pose {
+                    pose.validate("point_cloud pose")?;
+                }
                 let mut cloud = crate::io::load_cloud(&base_dir.join(&c.file))?;
                 if let Some(pose) = &c.pose {
                     let iso = pose.isometry();
@@ -335,6 +406,9 @@ impl SceneSpec {
             (None, false) => {
                 let mut objects = Vec::with_capacity(self.objects.len());
                 for o in &self.objects {
+                    if let Some(pose) = &o.pose {
+                        pose.validate(&format!("object `{}` pose", o.name))?;
+                    }
                     let material = self.material_id(&o.material).map_err(|e| {
                         SceneError::invalid(format!("object `{}`", o.name), e.to_string())
                     })?;

@@ -148,9 +148,10 @@ fn sampling_density_exposure_and_determinism() {
         region: Some(region),
         exposed_only: true,
         seed: 1,
+        ..SamplingConfig::default()
     };
-    let a = sample_surfaces(&s, &cfg);
-    let b = sample_surfaces(&s, &cfg);
+    let a = sample_surfaces(&s, &cfg).unwrap();
+    let b = sample_surfaces(&s, &cfg).unwrap();
     assert_eq!(a, b);
     assert!(a.iter().all(|p| region.contains_point(&p.point)));
     // Nothing on hidden faces: the web behind the plate, the plate's back, the
@@ -173,5 +174,5 @@ fn sampling_density_exposure_and_determinism() {
     assert!(rel < 0.05, "roof samples {roof} vs {expected}");
     let mut all = cfg;
     all.exposed_only = false;
-    assert!(sample_surfaces(&s, &all).len() > a.len());
+    assert!(sample_surfaces(&s, &all).unwrap().len() > a.len());
 }

@@ -21,9 +21,10 @@ pub mod sweep;
 pub use classifier::{Classification, ClassifyError, Lrc, LrcConfig, LrcError, Observation};
 pub use range_finder::{RangeFinder, SensorPoint};
 pub use reflection::ReflectionModel;
-pub use scanner::{RangeNoise, Scan, ScanReturn, Scanner, ScannerConfig};
+pub use scanner::{MAX_RAYS_PER_SCAN, RangeNoise, Scan, ScanReturn, Scanner, ScannerConfig};
 pub use sweep::{
-    GridCell, GridShape, Sweep, SweepBuilder, SweepConfig, SweepPoint, beam_direction,
+    GridCell, GridShape, MAX_RAYS_PER_SWEEP, MAX_SCANS_PER_SWEEP, Sweep, SweepBuilder, SweepConfig,
+    SweepPoint, beam_direction,
 };
 
 /// Errors of sensor configuration.
@@ -56,4 +57,20 @@ pub enum SensorError {
     /// A scan file could not be read or written.
     #[error(transparent)]
     Scene(#[from] scene::SceneError),
+    /// A field asks for more work or memory than the crate's stated budget.
+    #[error(
+        "sensor config `{field}` = {value} gives {count} {what}, more than the limit of {limit}"
+    )]
+    Budget {
+        /// The field.
+        field: &'static str,
+        /// Its value.
+        value: String,
+        /// What it would cost.
+        count: usize,
+        /// What is counted (`rays per scan`, `scans per sweep`, ...).
+        what: &'static str,
+        /// The budget ([`MAX_RAYS_PER_SCAN`], [`MAX_SCANS_PER_SWEEP`], [`MAX_RAYS_PER_SWEEP`]).
+        limit: usize,
+    },
 }

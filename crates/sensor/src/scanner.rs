@@ -52,6 +52,12 @@ impl RangeNoise {
     }
 }
 
+/// Most rays one scan may have ([`ScannerConfig::ray_count`]): the budget
+/// [`ScannerConfig::validate`] holds a configuration to before anything is
+/// allocated. The URG-04LX has 769 bearings (683 usable); 10 000 is a 0.024°
+/// step over the full ±120° field, finer than any 2-D scanner this models.
+pub const MAX_RAYS_PER_SCAN: usize = 10_000;
+
 /// Configuration of the scanner.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -132,7 +138,48 @@ impl ScannerConfig {
             "max_range_m",
             "a distance greater than min_range_m",
             self.max_range_m,
-        )
+        )?;
+        let n = self.noise;
+        check(
+            n.sigma_near_m.is_finite() && n.sigma_near_m >= 0.0,
+            "noise.sigma_near_m",
+            "a finite standard deviation >= 0 (metres)",
+            n.sigma_near_m,
+        )?;
+        check(
+            n.near_limit_m.is_finite() && n.near_limit_m >= 0.0,
+            "noise.near_limit_m",
+            "a finite distance >= 0",
+            n.near_limit_m,
+        )?;
+        check(
+            n.relative_far.is_finite() && n.relative_far >= 0.0,
+            "noise.relative_far",
+            "a finite fraction of the range >= 0",
+            n.relative_far,
+        )?;
+        let rays = self.ray_count();
+        if rays > MAX_RAYS_PER_SCAN {
+            return Err(SensorError::Budget {
+                field: "angular_step_deg",
+                value: self.angular_step_deg.to_string(),
+                count: rays,
+                what: "rays per scan",
+                limit: MAX_RAYS_PER_SCAN,
+            });
+        }
+        Ok(())
+    }
+
+    /// Rays per scan, `⌊2h/step⌋ + 1`, computed without allocating (saturates
+    /// at `usize::MAX` for a step too small to count).
+    pub fn ray_count(&self) -> usize {
+        let steps = (2.0 * self.half_fov_deg / self.angular_step_deg + 1e-9).floor();
+        if steps.is_finite() && steps >= 0.0 {
+            (steps as usize).saturating_add(1)
+        } else {
+            usize::MAX
+        }
     }
 
     /// Ray bearings `θ_i`, radians, symmetric about 0 and inside the field:
@@ -331,5 +378,93 @@ impl Scanner {
             world_from_scanner: *world_from_scanner,
             returns,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ray_count_matches_the_bearings_and_the_budget_is_checked_first() {
+        for cfg in [ScannerConfig::default(), ScannerConfig::full_field()] {
+            assert_eq!(cfg.ray_count(), cfg.bearings_rad().len());
+        }
+        assert_eq!(ScannerConfig::full_field().ray_count(), 667);
+        // Issue 8: angular_step_deg = 1e-7 asked for 1.2·10⁹ rays and aborted.
+        let tiny = ScannerConfig {
+            angular_step_deg: 1e-7,
+            ..ScannerConfig::default()
+        };
+        assert_eq!(tiny.ray_count(), 1_227_600_001);
+        let err = Scanner::new(tiny).unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "sensor config `angular_step_deg` = 0.0000001 gives 1227600001 rays per scan, more than the limit of 10000"
+        );
+        // At the limit: ±120° at 0.024° is exactly 10 001 rays, 0.0240001° fits.
+        let at = |angular_step_deg| ScannerConfig {
+            angular_step_deg,
+            ..ScannerConfig::full_field()
+        };
+        assert_eq!(at(0.024).ray_count(), 10_001);
+        assert!(at(0.024).validate().is_err());
+        assert_eq!(at(0.024_000_1).ray_count(), 10_000);
+        assert_eq!(Scanner::new(at(0.024_000_1)).unwrap().ray_count(), 10_000);
+    }
+
+    #[test]
+    fn noise_settings_must_be_finite_and_non_negative() {
+        let with = |noise: RangeNoise| ScannerConfig {
+            noise,
+            ..ScannerConfig::default()
+        };
+        let base = RangeNoise::default();
+        for (bad, field) in [
+            (
+                RangeNoise {
+                    sigma_near_m: Real::NAN,
+                    ..base
+                },
+                "noise.sigma_near_m",
+            ),
+            (
+                RangeNoise {
+                    sigma_near_m: -0.01,
+                    ..base
+                },
+                "noise.sigma_near_m",
+            ),
+            (
+                RangeNoise {
+                    near_limit_m: Real::INFINITY,
+                    ..base
+                },
+                "noise.near_limit_m",
+            ),
+            (
+                RangeNoise {
+                    relative_far: -1.0,
+                    ..base
+                },
+                "noise.relative_far",
+            ),
+        ] {
+            let err = with(bad).validate().unwrap_err().to_string();
+            assert!(
+                err.starts_with(&format!("sensor config `{field}`")),
+                "{err}"
+            );
+        }
+        // Zero noise is a valid (noise-free) setting.
+        assert!(
+            with(RangeNoise {
+                sigma_near_m: 0.0,
+                relative_far: 0.0,
+                ..base
+            })
+            .validate()
+            .is_ok()
+        );
     }
 }

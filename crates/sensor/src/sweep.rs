@@ -4,11 +4,21 @@
 //! [`Sweep`] holds the returns on their (scan, ray) grid; [`SweepBuilder`]
 //! makes one scan by scan from what a scanner reports.
 
-use crate::SensorError;
+use crate::{ScannerConfig, SensorError};
 use geom::math::is_finite_point;
 use geom::{Isometry3, Point3, Real, Vector3};
 use scene::MaterialId;
 use serde::{Deserialize, Serialize};
+
+/// Most scans one sweep may have ([`SweepConfig::scan_count`]), checked by
+/// [`SweepConfig::validate`]: a 0.0036° step over the full 360°. The default
+/// sweep has 151.
+pub const MAX_SCANS_PER_SWEEP: usize = 100_000;
+
+/// Most rays (scans × rays per scan) one sweep may cast, checked by
+/// [`SweepConfig::validate_with`]. A sweep keeps every return, about 100 bytes
+/// each, so this is ~400 MB; the default sweep casts 151 × 342 = 51 642.
+pub const MAX_RAYS_PER_SWEEP: usize = 4_000_000;
 
 /// How to sweep.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -56,12 +66,46 @@ impl SweepConfig {
                 got: "0".into(),
             });
         }
+        let scans = self.scan_count();
+        if scans > MAX_SCANS_PER_SWEEP {
+            return Err(SensorError::Budget {
+                field: "step_deg",
+                value: self.step_deg.to_string(),
+                count: scans,
+                what: "scans per sweep",
+                limit: MAX_SCANS_PER_SWEEP,
+            });
+        }
         Ok(())
     }
 
-    /// Number of scans in a sweep: `⌊α / step⌋ + 1`.
+    /// [`Self::validate`] and [`ScannerConfig::validate`], then the sweep's total
+    /// ray count against [`MAX_RAYS_PER_SWEEP`].
+    pub fn validate_with(&self, scanner: &ScannerConfig) -> Result<(), SensorError> {
+        self.validate()?;
+        scanner.validate()?;
+        let rays = self.scan_count().saturating_mul(scanner.ray_count());
+        if rays > MAX_RAYS_PER_SWEEP {
+            return Err(SensorError::Budget {
+                field: "step_deg",
+                value: self.step_deg.to_string(),
+                count: rays,
+                what: "rays per sweep (scans × rays per scan)",
+                limit: MAX_RAYS_PER_SWEEP,
+            });
+        }
+        Ok(())
+    }
+
+    /// Number of scans in a sweep: `⌊α / step⌋ + 1` (saturating at `usize::MAX`
+    /// for a step too small to count).
     pub fn scan_count(&self) -> usize {
-        (self.tilt_deg / self.step_deg + 1e-9).floor() as usize + 1
+        let steps = (self.tilt_deg / self.step_deg + 1e-9).floor();
+        if steps.is_finite() && steps >= 0.0 {
+            (steps as usize).saturating_add(1)
+        } else {
+            usize::MAX
+        }
     }
 
     /// The tilt joint's values, radians, centred on `centre_rad` and shifted as
@@ -443,5 +487,42 @@ mod tests {
         assert!((t[0] - lim.0).abs() < 1e-12);
         assert!(t.iter().all(|v| *v >= lim.0 - 1e-12 && *v <= lim.1 + 1e-12));
         assert!(SweepConfig { step_deg: 0.0, ..s }.validate().is_err());
+    }
+
+    #[test]
+    fn sweeps_over_budget_are_refused_before_allocating() {
+        // Issue 8: step_deg = 1e-7 asked for 6·10⁸ scans and aborted the process.
+        let tiny = SweepConfig {
+            step_deg: 1e-7,
+            ..SweepConfig::default()
+        };
+        assert_eq!(tiny.scan_count(), 600_000_001);
+        let err = tiny.validate().unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "sensor config `step_deg` = 0.0000001 gives 600000001 scans per sweep, more than the limit of 100000"
+        );
+        // The limit itself: 360° at 0.0036° is 100 001 scans, 0.00360002° fits.
+        let at = |step_deg| SweepConfig {
+            tilt_deg: 360.0,
+            step_deg,
+            joint: 5,
+        };
+        assert_eq!(at(0.0036).scan_count(), 100_001);
+        assert!(at(0.0036).validate().is_err());
+        assert_eq!(at(0.003_600_02).scan_count(), 100_000);
+        assert!(at(0.003_600_02).validate().is_ok());
+        // Scans × rays: the default scanner (342 rays) over 20 000 scans is 6.8 M rays.
+        let scanner = ScannerConfig::default();
+        assert_eq!(scanner.ray_count(), 342);
+        assert!(SweepConfig::default().validate_with(&scanner).is_ok());
+        let long = SweepConfig {
+            step_deg: 60.0 / 20_000.0,
+            ..SweepConfig::default()
+        };
+        assert!(long.validate().is_ok());
+        let err = long.validate_with(&scanner).unwrap_err().to_string();
+        assert!(err.contains("6840342 rays per sweep"), "{err}");
+        assert!(err.contains("limit of 4000000"), "{err}");
     }
 }

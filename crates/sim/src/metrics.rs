@@ -1,11 +1,12 @@
 //! Ground-truth metrics of a measured point cloud (SPEC §6): coverage of the
 //! true surfaces (per material and overall) and accuracy of the points.
 
+use crate::SimError;
 use crate::scenario::MetricsConfig;
 use geom::{Aabb, Point3, Real};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
-use scene::{Scene, sample_surfaces};
+use scene::{DEFAULT_SAMPLE_CHUNK, Scene, SurfaceSampler};
 use serde::Serialize;
 use std::num::NonZero;
 
@@ -31,6 +32,11 @@ pub struct CoverageReport {
     pub covered_within_m: Real,
     /// The region the samples were restricted to.
     pub region: Option<Aabb>,
+    /// Density actually sampled, per m²: the configured one, or less when the
+    /// sampling budget (`max_samples`) capped it.
+    pub samples_per_m2: Real,
+    /// `true` when the budget lowered the density.
+    pub density_capped: bool,
     /// Per material, in the scene's table order (materials with no samples omitted).
     pub per_material: Vec<MaterialCoverage>,
 }
@@ -51,6 +57,14 @@ impl CoverageReport {
 pub struct AccuracyReport {
     /// Points evaluated.
     pub points: usize,
+    /// Their distance statistics; `None` when there were no points (a scan that
+    /// hit nothing has no accuracy, not a perfect one).
+    pub distances: Option<DistanceStats>,
+}
+
+/// Statistics of point-to-surface distances.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct DistanceStats {
     /// Mean distance, metres.
     pub mean_m: Real,
     /// 95th percentile, metres.
@@ -59,39 +73,90 @@ pub struct AccuracyReport {
     pub max_m: Real,
 }
 
-/// Coverage of `scene` by `points` under `cfg` (SPEC §6).
-pub fn coverage(scene: &Scene, points: &[Point3], cfg: &MetricsConfig) -> CoverageReport {
-    let samples = sample_surfaces(scene, &cfg.sampling);
-    let covered_flags: Vec<bool> = if points.is_empty() {
-        vec![false; samples.len()]
-    } else {
-        let arr: Vec<[Real; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
-        let tree: ImmutableKdTree<Real, 3> = ImmutableKdTree::new_from_slice(&arr);
-        let r2 = cfg.covered_within_m * cfg.covered_within_m;
-        let one = NonZero::<usize>::MIN;
-        // A bounded search: most samples have no point near them, and an
-        // unbounded nearest-neighbour search would wander the whole tree.
-        samples
-            .par_iter()
-            .map(|s| {
-                let q = [s.point.x, s.point.y, s.point.z];
-                !tree
-                    .nearest_n_within::<SquaredEuclidean>(&q, r2, one, false)
-                    .is_empty()
-            })
-            .collect()
-    };
-    let mut per = vec![(0usize, 0usize); scene.materials().len()];
-    for (s, c) in samples.iter().zip(&covered_flags) {
-        let e = &mut per[usize::from(s.material.0)];
-        e.0 += 1;
-        e.1 += usize::from(*c);
+impl std::fmt::Display for AccuracyReport {
+    /// `mean 1.2 mm, 95th percentile 3.4 mm, max 9.9 mm over 123 points`, or
+    /// `no points`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.distances {
+            None => write!(f, "no points"),
+            Some(d) => write!(
+                f,
+                "mean {:.1} mm, 95th percentile {:.1} mm, max {:.1} mm over {} points",
+                1000.0 * d.mean_m,
+                1000.0 * d.p95_m,
+                1000.0 * d.max_m,
+                self.points
+            ),
+        }
     }
-    CoverageReport {
-        samples: samples.len(),
-        covered: covered_flags.iter().filter(|c| **c).count(),
+}
+
+/// Coverage of `scene` by `points` under `cfg` (SPEC §6). The true-surface
+/// samples are streamed in chunks of [`scene::DEFAULT_SAMPLE_CHUNK`], so memory
+/// stays bounded whatever the scene, and their number is capped by
+/// `cfg.sampling.max_samples` (the report gives the density used). Refuses a
+/// configuration that fails [`MetricsConfig::validate`].
+pub fn coverage(
+    scene: &Scene,
+    points: &[Point3],
+    cfg: &MetricsConfig,
+) -> Result<CoverageReport, SimError> {
+    coverage_in_chunks(scene, points, cfg, DEFAULT_SAMPLE_CHUNK)
+}
+
+/// [`coverage`] with a given chunk size (the result does not depend on it).
+pub fn coverage_in_chunks(
+    scene: &Scene,
+    points: &[Point3],
+    cfg: &MetricsConfig,
+    chunk: usize,
+) -> Result<CoverageReport, SimError> {
+    cfg.validate()?;
+    let sampler = SurfaceSampler::new(scene, &cfg.sampling)
+        .map_err(|e| SimError::Scenario {
+            source_name: "metrics".into(),
+            message: e.to_string(),
+        })?
+        .with_chunk(chunk);
+    let samples_per_m2 = sampler.samples_per_m2();
+    let density_capped = sampler.is_capped();
+    let tree: Option<ImmutableKdTree<Real, 3>> = (!points.is_empty()).then(|| {
+        let arr: Vec<[Real; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
+        ImmutableKdTree::new_from_slice(&arr)
+    });
+    let r2 = cfg.covered_within_m * cfg.covered_within_m;
+    let one = NonZero::<usize>::MIN;
+    // (samples, covered) per material.
+    let mut per = vec![(0usize, 0usize); scene.materials().len()];
+    for samples in sampler {
+        let covered_flags: Vec<bool> = match &tree {
+            None => vec![false; samples.len()],
+            // A bounded search: most samples have no point near them, and an
+            // unbounded nearest-neighbour search would wander the whole tree.
+            Some(tree) => samples
+                .par_iter()
+                .map(|s| {
+                    let q = [s.point.x, s.point.y, s.point.z];
+                    !tree
+                        .nearest_n_within::<SquaredEuclidean>(&q, r2, one, false)
+                        .is_empty()
+                })
+                .collect(),
+        };
+        for (s, c) in samples.iter().zip(&covered_flags) {
+            if let Some(e) = per.get_mut(usize::from(s.material.0)) {
+                e.0 += 1;
+                e.1 += usize::from(*c);
+            }
+        }
+    }
+    Ok(CoverageReport {
+        samples: per.iter().map(|e| e.0).sum(),
+        covered: per.iter().map(|e| e.1).sum(),
         covered_within_m: cfg.covered_within_m,
         region: cfg.sampling.region,
+        samples_per_m2,
+        density_capped,
         per_material: scene
             .materials()
             .iter()
@@ -103,11 +168,12 @@ pub fn coverage(scene: &Scene, points: &[Point3], cfg: &MetricsConfig) -> Covera
                 covered: c,
             })
             .collect(),
-    }
+    })
 }
 
 /// Accuracy of `points` against the true surface: each point's distance to the
 /// nearest triangle (points farther than `search_m` count as `search_m`).
+/// No points gives [`AccuracyReport::distances`] `None`.
 pub fn accuracy(scene: &Scene, points: &[Point3], search_m: Real) -> AccuracyReport {
     let mut d: Vec<Real> = points
         .par_iter()
@@ -120,17 +186,17 @@ pub fn accuracy(scene: &Scene, points: &[Point3], search_m: Real) -> AccuracyRep
     if d.is_empty() {
         return AccuracyReport {
             points: 0,
-            mean_m: 0.0,
-            p95_m: 0.0,
-            max_m: 0.0,
+            distances: None,
         };
     }
     d.sort_by(Real::total_cmp);
     let n = d.len();
     AccuracyReport {
         points: n,
-        mean_m: d.iter().sum::<Real>() / n as Real,
-        p95_m: d[((0.95 * n as Real).ceil() as usize).clamp(1, n) - 1],
-        max_m: d[n - 1],
+        distances: Some(DistanceStats {
+            mean_m: d.iter().sum::<Real>() / n as Real,
+            p95_m: d[((0.95 * n as Real).ceil() as usize).clamp(1, n) - 1],
+            max_m: d[n - 1],
+        }),
     }
 }

@@ -106,6 +106,7 @@ impl ScanSetup {
         if let Some(t) = tilt_deg {
             sweep.tilt_deg = t;
         }
+        sweep.validate_with(&spec.config)?;
         let joints = joints.unwrap_or_else(|| s.robot.start_joints.clone());
         robot.check_within_limits(&joints)?;
         Ok(Self {
@@ -142,6 +143,7 @@ impl ScanSetup {
             sweep.tilt_deg = t;
         }
         let scanner = ScannerConfig::default();
+        sweep.validate_with(&scanner)?;
         let mut metrics = MetricsConfig::default();
         let base = Point3::from(world_from_base.translation.vector);
         metrics.sampling.region = Some(Aabb::new(base, base).loosened(scanner.max_range_m + 1.0));
@@ -186,13 +188,15 @@ impl ScanSetup {
     }
 
     /// Coverage and accuracy against a mesh ground truth (`None` for point-cloud
-    /// worlds, whose true surface is unknown).
-    pub fn score(&self, sweep: &Sweep) -> Option<ScanScores> {
-        let scene = self.world.as_scene()?;
+    /// worlds, whose true surface is unknown); an error for invalid metrics settings.
+    pub fn score(&self, sweep: &Sweep) -> Result<Option<ScanScores>, SimError> {
+        let Some(scene) = self.world.as_scene() else {
+            return Ok(None);
+        };
         let points = sweep.positions();
-        Some(ScanScores {
-            coverage: coverage(scene, &points, &self.metrics),
+        Ok(Some(ScanScores {
+            coverage: coverage(scene, &points, &self.metrics)?,
             accuracy: accuracy(scene, &points, 0.5),
-        })
+        }))
     }
 }

@@ -97,6 +97,27 @@ impl Default for MetricsConfig {
     }
 }
 
+impl MetricsConfig {
+    /// Check the fields: `covered_within_m` a finite distance > 0, and the
+    /// sampling settings (see [`SamplingConfig::validate`]). Errors name the
+    /// field (`metrics.covered_within_m`, `metrics.sampling.samples_per_m2`).
+    pub fn validate(&self) -> Result<(), SimError> {
+        let fail = |message: String| SimError::Scenario {
+            source_name: "metrics".into(),
+            message,
+        };
+        if !(self.covered_within_m.is_finite() && self.covered_within_m > 0.0) {
+            return Err(fail(format!(
+                "metrics.covered_within_m: expected a finite distance > 0 (metres), got {}",
+                self.covered_within_m
+            )));
+        }
+        self.sampling
+            .validate()
+            .map_err(|e| fail(format!("metrics.{e}")))
+    }
+}
+
 /// Names of the built-in scenarios.
 pub const BUILTIN_NAMES: [&str; 7] = builtin::NAMES;
 
@@ -206,11 +227,84 @@ pub struct LoadedScenario {
 }
 
 impl Scenario {
-    /// Parse a scenario from TOML text; `source` names the file in errors.
+    /// Parse a scenario from TOML text and [validate](Self::validate) it;
+    /// `source` names the file in errors.
     pub fn from_toml(text: &str, source: &str) -> Result<Self, SimError> {
-        toml::from_str(text).map_err(|e| SimError::Scenario {
+        let scenario: Self = toml::from_str(text).map_err(|e| SimError::Scenario {
             source_name: source.to_owned(),
             message: e.to_string(),
+        })?;
+        scenario.validate().map_err(|e| match e {
+            SimError::Scenario { message, .. } => SimError::Scenario {
+                source_name: source.to_owned(),
+                message,
+            },
+            other => other,
+        })?;
+        Ok(scenario)
+    }
+
+    /// Check the numbers a TOML file can get wrong before anything is built or
+    /// allocated: poses (finite, within ±[`scene::MAX_COORDINATE_M`]), start
+    /// joints, initial segments, the scanner and its sweep (within the sensor
+    /// budgets), and the metrics settings. Errors name the field by its TOML
+    /// path (`robot.base_pose: translation[0]: ...`).
+    pub fn validate(&self) -> Result<(), SimError> {
+        let fail = |message: String| SimError::Scenario {
+            source_name: self.name.clone(),
+            message,
+        };
+        let pose = |p: &PoseSpec, what: &str| p.validate(what).map_err(|e| fail(e.to_string()));
+        pose(&self.robot.base_pose, "robot.base_pose")?;
+        for (i, j) in self.robot.start_joints.iter().enumerate() {
+            if !j.is_finite() {
+                return Err(fail(format!(
+                    "robot.start_joints[{i}]: expected a finite joint value, got {j}"
+                )));
+            }
+        }
+        if let Some(scanner) = &self.scanner {
+            if let Some(mount) = &scanner.mount {
+                pose(mount, "scanner.mount")?;
+            }
+            scanner
+                .config
+                .validate()
+                .map_err(|e| fail(format!("scanner.config: {e}")))?;
+            scanner
+                .sweep
+                .validate_with(&scanner.config)
+                .map_err(|e| fail(format!("scanner.sweep: {e}")))?;
+        }
+        for (s, verts) in self.initial_segments.iter().enumerate() {
+            for (v, p) in verts.iter().enumerate() {
+                if !p
+                    .iter()
+                    .all(|c| c.is_finite() && c.abs() <= scene::MAX_COORDINATE_M)
+                {
+                    return Err(fail(format!(
+                        "initial_segments[{s}][{v}]: expected finite coordinates within ±{:e} m, got {p:?}",
+                        scene::MAX_COORDINATE_M
+                    )));
+                }
+            }
+        }
+        for o in &self.scene.objects {
+            if let Some(p) = &o.pose {
+                pose(p, &format!("scene.objects `{}` pose", o.name))?;
+            }
+        }
+        if let Some(p) = self
+            .scene
+            .point_cloud
+            .as_ref()
+            .and_then(|c| c.pose.as_ref())
+        {
+            pose(p, "scene.point_cloud.pose")?;
+        }
+        self.metrics.validate().map_err(|e| match e {
+            SimError::Scenario { message, .. } => fail(message),
+            other => other,
         })
     }
 
@@ -225,6 +319,7 @@ impl Scenario {
     /// A built-in by name or a scenario file by path.
     pub fn load(name_or_file: &str) -> Result<LoadedScenario, SimError> {
         if let Some(s) = builtin_scenario(name_or_file) {
+            s.validate()?;
             return Ok(LoadedScenario {
                 scenario: s,
                 base_dir: PathBuf::from("."),

@@ -129,8 +129,9 @@ fn bridge1_start_sweep_sees_roof_webs_and_flanges_with_materials() {
     // With noise, points stay near the true surface (σ 10 mm, 1 % beyond 1 m).
     let noisy = ScanSetup::from_scenario(&loaded, None, None, 7).unwrap();
     let sweep = &noisy.run(&mut |_, _| {}).unwrap().sweep;
-    let scores = noisy.score(sweep).unwrap();
-    assert!(scores.accuracy.mean_m < 0.012, "{:?}", scores.accuracy);
+    let scores = noisy.score(sweep).unwrap().unwrap();
+    let mean_m = scores.accuracy.distances.unwrap().mean_m;
+    assert!(mean_m < 0.012, "{:?}", scores.accuracy);
     assert!(scores.coverage.fraction() > 0.05 && scores.coverage.fraction() < 0.95);
 }
 

@@ -26,6 +26,16 @@ pub enum SurfaceError {
         /// What is wrong with it.
         message: String,
     },
+    /// A sensor set holds more points than [`SurfaceConfig::max_set_points`](crate::SurfaceConfig::max_set_points).
+    #[error(
+        "sensor set: points: {points} points, more than max_set_points = {limit} (an update's time grows with the set; split it into smaller sets or raise the limit)"
+    )]
+    SetTooLarge {
+        /// Points in the set.
+        points: usize,
+        /// The limit.
+        limit: usize,
+    },
     /// An initial segment is malformed.
     #[error("initial segment: {message}")]
     InitialSegment {

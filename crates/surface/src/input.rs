@@ -9,6 +9,7 @@
 //!   coplanar vertices, anticlockwise about the outward normal (so the table under
 //!   an object, seen from above, runs anticlockwise).
 
+use crate::config::DEFAULT_MAX_SET_POINTS;
 use crate::error::SurfaceError;
 use geom::{Point3, Real, UnitVector3, Vector3};
 use serde::Deserialize;
@@ -117,8 +118,9 @@ fn parse_error(source_name: &str, line: usize, field: &str, message: String) -> 
     }
 }
 
-/// Read sensor sets from JSON lines (format in the [module docs](self)). Errors
-/// name the source, the 1-based line and the field.
+/// Read sensor sets from JSON lines (format in the [module docs](self)), at most
+/// [`DEFAULT_MAX_SET_POINTS`] points a set. Errors name the source, the 1-based
+/// line and the field.
 ///
 /// ```
 /// let text = "{\"points\": [[0, 0, 1]], \"axes\": [[0, 0, -1]]}\n\n{\"points\": [], \"axes\": []}\n";
@@ -131,6 +133,22 @@ fn parse_error(source_name: &str, line: usize, field: &str, message: String) -> 
 pub fn read_sets_jsonl(
     reader: impl BufRead,
     source_name: &str,
+) -> Result<Vec<SensorSet>, SurfaceError> {
+    read_sets_jsonl_limited(reader, source_name, DEFAULT_MAX_SET_POINTS)
+}
+
+/// [`read_sets_jsonl`] with at most `max_set_points` points a set (pass the
+/// model's [`SurfaceConfig::max_set_points`](crate::SurfaceConfig::max_set_points)).
+///
+/// ```
+/// let text = "{\"points\": [[0, 0, 1], [0, 1, 1]], \"axes\": [[0, 0, -1], [0, 0, -1]]}";
+/// let err = surface::read_sets_jsonl_limited(text.as_bytes(), "sets.jsonl", 1).unwrap_err();
+/// assert!(err.to_string().starts_with("sets.jsonl:1: points: 2 points, more than max_set_points = 1"));
+/// ```
+pub fn read_sets_jsonl_limited(
+    reader: impl BufRead,
+    source_name: &str,
+    max_set_points: usize,
 ) -> Result<Vec<SensorSet>, SurfaceError> {
     let mut sets = Vec::new();
     for (i, line) in reader.lines().enumerate() {
@@ -149,6 +167,17 @@ pub fn read_sets_jsonl(
                 .unwrap_or("json");
             parse_error(source_name, line_no, field, e.to_string())
         })?;
+        if raw.points.len() > max_set_points {
+            return Err(parse_error(
+                source_name,
+                line_no,
+                "points",
+                format!(
+                    "{} points, more than max_set_points = {max_set_points} (split the set or raise the limit)",
+                    raw.points.len()
+                ),
+            ));
+        }
         let set = SensorSet {
             points: raw.points.iter().map(|p| Point3::from(*p)).collect(),
             axes: raw

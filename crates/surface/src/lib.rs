@@ -23,11 +23,11 @@ pub mod share;
 pub mod update;
 
 pub use changelog::{ChangeLog, Merger};
-pub use config::SurfaceConfig;
+pub use config::{DEFAULT_MAX_SET_POINTS, SurfaceConfig};
 pub use error::{InvariantViolation, SurfaceError};
 pub use export::{EdgeJson, ModelJson, ModelStats, SegmentJson, StatsJson, UpdateTimes};
 pub use fissure::FissureType;
-pub use input::{SensorSet, read_initial_segments_json, read_sets_jsonl};
+pub use input::{SensorSet, read_initial_segments_json, read_sets_jsonl, read_sets_jsonl_limited};
 pub use merge::MergeFailure;
 pub use model::SurfaceModel;
 pub use overlay::CombineError;

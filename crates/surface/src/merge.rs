@@ -18,7 +18,7 @@
 //! and the initial plane of S₃ is then its own plane, as in P§2.4.3.
 
 use crate::config::Tolerances;
-use crate::model::SurfaceModel;
+use crate::model::{Flag, SurfaceModel};
 use crate::overlay::combine;
 use crate::perimeter::{Node2, PerimPoint, Poly2};
 use crate::relations::OrderingFix;
@@ -260,7 +260,8 @@ impl SurfaceModel {
         structural: bool,
     ) -> SegmentId {
         let id = self.new_segment_id();
-        let was_pending = self.ctx.pending.remove(&s1) | self.ctx.pending.remove(&s2);
+        let was_pending =
+            self.set_flag(Flag::Pending, s1, false) | self.set_flag(Flag::Pending, s2, false);
         if self.journal.is_none() {
             // Outside a transaction the index is updated at once; the result takes
             // over the larger footprint's slot (see `index`).
@@ -285,11 +286,11 @@ impl SurfaceModel {
             from: [s1, s2],
             into: id,
         });
-        self.ctx.modified.remove(&s1);
-        self.ctx.modified.remove(&s2);
-        self.ctx.modified.insert(id);
+        self.set_flag(Flag::Modified, s1, false);
+        self.set_flag(Flag::Modified, s2, false);
+        self.set_flag(Flag::Modified, id, true);
         if !shares.is_empty() || was_pending {
-            self.ctx.pending.insert(id);
+            self.set_flag(Flag::Pending, id, true);
         }
         if structural && !shares.is_empty() {
             // Corner vertices inherited from both S₁ and S₂ of one cycle cannot stay.

@@ -37,12 +37,23 @@ pub(crate) struct Journal {
     pub mergers_len: usize,
     pub deleted_len: usize,
     pub points_deleted: u64,
-    pub modified: BTreeSet<SegmentId>,
-    pub pending: BTreeSet<SegmentId>,
+    /// Membership of `ctx.modified` / `ctx.pending` before the transaction
+    /// first changed it, per segment (an undo log: cloning the sets at every
+    /// `begin` made one update quadratic in the size of its sensor set).
+    pub flags_before: BTreeMap<(Flag, SegmentId), bool>,
     /// Shared edges re-pointed at a merger result: (segment, pair, old neighbour).
     pub relinks: Vec<(SegmentId, PairId, SegmentId)>,
     /// What validation checks at the end of the transaction.
     pub scope: Scope,
+}
+
+/// The two per-update marks a segment can carry, kept in [`UpdateCtx`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) enum Flag {
+    /// [`UpdateCtx::modified`].
+    Modified,
+    /// [`UpdateCtx::pending`].
+    Pending,
 }
 
 /// Bookkeeping of the update in progress.
@@ -408,8 +419,7 @@ impl SurfaceModel {
             mergers_len: self.ctx.log.mergers.len(),
             deleted_len: self.ctx.log.deleted.len(),
             points_deleted: self.points_deleted,
-            modified: self.ctx.modified.clone(),
-            pending: self.ctx.pending.clone(),
+            flags_before: BTreeMap::new(),
             relinks: Vec::new(),
             scope: Scope::Full,
         });
@@ -464,9 +474,34 @@ impl SurfaceModel {
             self.ctx.log.mergers.truncate(j.mergers_len);
             self.ctx.log.deleted.truncate(j.deleted_len);
             self.points_deleted = j.points_deleted;
-            self.ctx.modified = j.modified;
-            self.ctx.pending = j.pending;
+            for ((flag, id), was_set) in j.flags_before {
+                let set = match flag {
+                    Flag::Modified => &mut self.ctx.modified,
+                    Flag::Pending => &mut self.ctx.pending,
+                };
+                if was_set {
+                    set.insert(id);
+                } else {
+                    set.remove(&id);
+                }
+            }
         }
+    }
+
+    /// Set or clear `flag` on `id`, journalled so a rollback restores it.
+    /// Returns whether the flag was set before.
+    pub(crate) fn set_flag(&mut self, flag: Flag, id: SegmentId, on: bool) -> bool {
+        let set = match flag {
+            Flag::Modified => &mut self.ctx.modified,
+            Flag::Pending => &mut self.ctx.pending,
+        };
+        let was_set = if on { !set.insert(id) } else { set.remove(&id) };
+        if was_set != on
+            && let Some(j) = self.journal.as_mut()
+        {
+            j.flags_before.entry((flag, id)).or_insert(was_set);
+        }
+        was_set
     }
 
     /// Run `f` as a transaction that always commits (for operations the

@@ -18,7 +18,7 @@
 //!   every step removes a shared edge.
 
 use crate::invariants::{MAX_CORNER_CYCLE, cyclic_equal, global_order_violation};
-use crate::model::SurfaceModel;
+use crate::model::{Flag, SurfaceModel};
 use crate::segment::{CornerId, Edge, Node, PairId, SegmentId};
 use geom::PlaneFrame;
 use std::collections::BTreeSet;
@@ -378,8 +378,8 @@ impl SurfaceModel {
         if let Some(seg) = self.remove_segment(id) {
             self.points_deleted += seg.moments.m;
             self.ctx.log.deleted.push(id);
-            self.ctx.modified.remove(&id);
-            self.ctx.pending.remove(&id);
+            self.set_flag(Flag::Modified, id, false);
+            self.set_flag(Flag::Pending, id, false);
         }
     }
 }

@@ -21,7 +21,7 @@
 //! with the offending neighbour is dissolved and repositioning runs again. The
 //! loop ends because every retry dissolves a relation of S.
 
-use crate::model::SurfaceModel;
+use crate::model::{Flag, SurfaceModel};
 use crate::perimeter::Poly2;
 use crate::segment::{PairId, SegmentId};
 use geom::Point3;
@@ -35,7 +35,7 @@ impl SurfaceModel {
         let neighbours = self.poly(s).map_or(0, |p| p.neighbours().len());
         for _ in 0..=neighbours + 1 {
             self.begin();
-            self.ctx.pending.remove(&s);
+            self.set_flag(Flag::Pending, s, false);
             let ok = self.reposition_inner(s);
             let verdict = if ok { self.validate_touched() } else { Ok(()) };
             match verdict {
@@ -53,7 +53,7 @@ impl SurfaceModel {
                     let Some(nb) = culprit
                         .or_else(|| self.poly(s).and_then(|p| p.neighbours().into_iter().next()))
                     else {
-                        self.ctx.pending.remove(&s);
+                        self.set_flag(Flag::Pending, s, false);
                         return;
                     };
                     self.run(|m| m.dissolve(s, nb));
@@ -62,7 +62,7 @@ impl SurfaceModel {
         }
         // Every relation has been tried; what is left has no shared edges of s.
         self.run(|m| m.dissolve_all(s));
-        self.ctx.pending.remove(&s);
+        self.set_flag(Flag::Pending, s, false);
     }
 
     fn reposition_inner(&mut self, s: SegmentId) -> bool {

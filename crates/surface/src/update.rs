@@ -40,9 +40,16 @@ use std::collections::BTreeSet;
 
 impl SurfaceModel {
     /// Update the model with one set of sensor points (P§2.3). Bad input (non-finite
-    /// coordinates, a length mismatch, a non-unit axis) is refused with an error
-    /// and leaves the model unchanged.
+    /// coordinates, a length mismatch, a non-unit axis, more points than
+    /// [`SurfaceConfig::max_set_points`](crate::SurfaceConfig::max_set_points))
+    /// is refused with an error and leaves the model unchanged.
     pub fn update(&mut self, set: &SensorSet) -> Result<ChangeLog, SurfaceError> {
+        if set.len() > self.config.max_set_points {
+            return Err(SurfaceError::SetTooLarge {
+                points: set.len(),
+                limit: self.config.max_set_points,
+            });
+        }
         set.validate()?;
         self.check_id_space()?;
         self.ctx = UpdateCtx {

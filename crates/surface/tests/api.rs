@@ -274,3 +274,80 @@ fn updates_are_deterministic() {
     };
     assert_eq!(run(), run());
 }
+
+/// `n` points on z = 1 over a `side` × `side` square, seeded.
+fn square_set(n: usize, side: f64) -> SensorSet {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let points = (0..n)
+        .map(|_| {
+            Point3::new(
+                rng.random_range(0.0..side),
+                rng.random_range(0.0..side),
+                1.0,
+            )
+        })
+        .collect();
+    SensorSet::new(points, vec![down(); n]).unwrap()
+}
+
+#[test]
+fn a_set_over_max_set_points_is_refused_naming_the_limit() {
+    let config = SurfaceConfig {
+        max_set_points: 100,
+        ..SurfaceConfig::default()
+    };
+    let mut m = SurfaceModel::new(config).unwrap();
+    m.update(&square_set(100, 0.5)).unwrap();
+    let before = m.to_model_json();
+    let err = m.update(&square_set(101, 0.5)).unwrap_err();
+    assert_eq!(
+        err,
+        SurfaceError::SetTooLarge {
+            points: 101,
+            limit: 100
+        }
+    );
+    assert!(err.to_string().contains("max_set_points = 100"), "{err}");
+    assert_eq!(m.to_model_json(), before);
+    assert_eq!(m.updates(), 1);
+    // The default admits Pudney's 26-point sets with room to spare, and is checked.
+    assert_eq!(SurfaceConfig::default().max_set_points, 4096);
+    assert!(
+        SurfaceModel::new(SurfaceConfig {
+            max_set_points: 0,
+            ..SurfaceConfig::default()
+        })
+        .is_err()
+    );
+}
+
+#[test]
+fn reading_a_set_over_the_limit_names_the_line() {
+    let line = |n: usize| {
+        let pts = vec!["[0,0,1]"; n].join(",");
+        let axes = vec!["[0,0,-1]"; n].join(",");
+        format!("{{\"points\": [{pts}], \"axes\": [{axes}]}}\n")
+    };
+    let text = format!("{}\n{}", line(3), line(4));
+    assert_eq!(
+        surface::read_sets_jsonl_limited(text.as_bytes(), "s.jsonl", 4)
+            .unwrap()
+            .len(),
+        2
+    );
+    let err = surface::read_sets_jsonl_limited(text.as_bytes(), "s.jsonl", 3).unwrap_err();
+    assert!(
+        matches!(&err, SurfaceError::Parse { line: 3, field, .. } if field == "points"),
+        "{err}"
+    );
+    assert!(
+        err.to_string()
+            .starts_with("s.jsonl:3: points: 4 points, more than max_set_points = 3"),
+        "{err}"
+    );
+    // The unlimited reader applies the default limit.
+    let big = line(surface::DEFAULT_MAX_SET_POINTS + 1);
+    let err = read_sets_jsonl(big.as_bytes(), "big.jsonl").unwrap_err();
+    assert!(err.to_string().contains("max_set_points = 4096"), "{err}");
+}

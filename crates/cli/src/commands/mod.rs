@@ -166,7 +166,7 @@ struct FixtureArgs {
     /// Folder to write `structure.ply` and `rays.bin` into.
     #[arg(long)]
     out: PathBuf,
-    /// Number of rays (at most 50 000 000: 1.2 GB of rays.bin).
+    /// Number of rays (at most scene::fixtures::MAX_FIXTURE_RAYS, 10 million).
     #[arg(long, default_value_t = 1_000_000)]
     rays: usize,
     /// Seed of the ray directions and origins.
@@ -176,9 +176,6 @@ struct FixtureArgs {
 
 /// Most worker threads `raycast` starts.
 const MAX_THREADS: usize = 256;
-
-/// Most rays `raycast-fixture` writes (1.2 GB).
-const MAX_FIXTURE_RAYS: usize = 50_000_000;
 
 /// Run a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
@@ -366,7 +363,6 @@ fn scan(a: &ScanArgs) -> Result<()> {
         .sweep
         .write_ply(&staged.file(&a.out)?)
         .with_context(|| format!("writing {}", a.out.display()))?;
-    staged.commit()?;
     let sweep = &outcome.sweep;
     let shape = sweep.grid_shape().unwrap_or(sensor::GridShape {
         scans: 0,
@@ -394,6 +390,8 @@ fn scan(a: &ScanArgs) -> Result<()> {
     spinner.enable_steady_tick(std::time::Duration::from_millis(100));
     let scores = setup.score(sweep);
     spinner.finish_and_clear();
+    let scores = scores?;
+    staged.commit()?;
     let t_score = t2.elapsed();
     match scores {
         Some(s) => {
@@ -421,13 +419,13 @@ fn scan(a: &ScanArgs) -> Result<()> {
                     m.samples
                 )?;
             }
-            say!(
-                "accuracy: mean {:.1} mm, 95th percentile {:.1} mm, max {:.1} mm over {} points",
-                1000.0 * s.accuracy.mean_m,
-                1000.0 * s.accuracy.p95_m,
-                1000.0 * s.accuracy.max_m,
-                s.accuracy.points
-            )?;
+            if cov.density_capped {
+                say!(
+                    "  (sampled at {:.0} per m², lowered to keep within metrics.sampling.max_samples)",
+                    cov.samples_per_m2
+                )?;
+            }
+            say!("accuracy: {}", s.accuracy)?;
         }
         None => say!("(point-cloud world: no true surface to score against)")?,
     }
@@ -551,18 +549,13 @@ fn raycast(a: &RaycastArgs) -> Result<()> {
 }
 
 fn raycast_fixture(a: &FixtureArgs) -> Result<()> {
-    if a.rays > MAX_FIXTURE_RAYS {
-        bail!(
-            "--rays {}: at most {MAX_FIXTURE_RAYS} rays (24 bytes each in rays.bin)",
-            a.rays
-        );
-    }
+    // Checked before anything is written, so a refused count leaves no files.
+    let rays = scene::fixtures::incoherent_rays_checked(a.rays, a.seed).context("--rays")?;
     let mut staged = Staged::new();
     staged.ensure_dir(&a.out)?;
     let mesh = scene::fixtures::benchmark_structure();
     let mesh_path = a.out.join("structure.ply");
     scene::io::write_mesh_ply(&staged.file(&mesh_path)?, &mesh)?;
-    let rays = scene::fixtures::incoherent_rays(a.rays, a.seed);
     let bytes: Vec<u8> = rays
         .iter()
         .flatten()
