@@ -53,8 +53,13 @@
 //!   (text formats, headers) or element, row and property (binary data) at
 //!   fault, with what was expected and what was found. Nothing panics on bad
 //!   input: truncated data, lying size fields, corrupt LZF streams and garbage
-//!   are all reported. A file that parses but holds no points or no triangles is
-//!   an error too.
+//!   are all reported. Size fields must match the data exactly: a PLY element
+//!   count, PCD `POINTS` (or `WIDTH × HEIGHT`), compressed-block size or binary
+//!   STL triangle count that is *smaller* than the data is an error too, never
+//!   a silent truncation (only zero padding may follow a PCD compressed block,
+//!   as PCL writes it), and a count far larger than the file could hold is
+//!   refused before anything is allocated for it. A file that parses but holds
+//!   no points or no triangles is an error too.
 //! * **Meshes** are built with [`TriMesh::new`], so every returned mesh has
 //!   finite vertices and in-range indices. Polygons are fan-triangulated. Winding
 //!   is kept as in the file. PLY and STL meshes keep every vertex of the file (STL
