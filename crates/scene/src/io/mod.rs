@@ -11,6 +11,7 @@
 //! | [`read_pcd_header`] | a PCD header → [`PcdHeader`] (viewpoint, organized size, fields) |
 //! | [`write_ply_vertices`], [`write_ply_vertices_file`] | `f32` columns → binary little-endian PLY |
 //! | [`write_mesh_ply`], [`write_mesh_obj`] | [`TriMesh`] → binary PLY / text OBJ |
+//! | [`rays::read_rays`], [`rays::write_rays`] | rays files (24-byte `f32` records) of `surveyor raycast` |
 //!
 //! The format is chosen by the file extension, case-insensitively; any other
 //! extension is [`SceneError::Unsupported`].
@@ -107,6 +108,7 @@
 mod obj;
 mod pcd;
 mod ply;
+pub mod rays;
 mod stl;
 mod text;
 
