@@ -459,6 +459,22 @@ fn huge_declared_counts_in_small_files() {
             assert_mentions(&msg, &[name, count, part]);
         }
     }
+    // An ASCII PCD whose skipped field claims 2^32 - 1 values per point
+    // (found by tests/fuzz.rs: the reader reserved 2^32 + 2 token slots, a
+    // 64 GiB allocation, and aborted).
+    let path = write(
+        dir.path(),
+        "count.pcd",
+        b"FIELDS x y z rgb\nSIZE 4 4 4 1\nTYPE F F F U\nCOUNT 1 1 1 4294967295\nPOINTS 1\n\
+          DATA ascii\n1 2 3 4\n",
+    );
+    assert_mentions(
+        &message(io::load_cloud(&path)),
+        &[
+            "count.pcd:7:",
+            "point 0: found 4 values, expected 4294967298",
+        ],
+    );
     // A binary STL claiming u32::MAX triangles in 200 bytes.
     let mut stl = vec![0u8; 200];
     stl[80..84].copy_from_slice(&u32::MAX.to_le_bytes());

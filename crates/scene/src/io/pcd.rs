@@ -728,7 +728,9 @@ fn read_ascii(
         .split(|&b| b == b'\n')
         .enumerate()
         .map(|(i, l)| (header_lines + 1 + i, l.strip_suffix(b"\r").unwrap_or(l)));
-    let mut tokens: Vec<&str> = Vec::with_capacity(tokens_per_point);
+    // COUNT comes from the header: reserve for a sane line only (a lying
+    // count is caught when the line is split).
+    let mut tokens: Vec<&str> = Vec::with_capacity(tokens_per_point.min(256));
     let mut last_line = header_lines;
     for point in 0..n {
         let (line_no, text) = loop {
