@@ -296,4 +296,3 @@ fn seeds_are_valid() {
         assert!(robot.dof() >= 2, "{name}");
     }
 }
-
