@@ -40,6 +40,17 @@ pub enum SceneError {
         /// The formats accepted here.
         expected: &'static str,
     },
+    /// One ray of a rays file ([`crate::io::rays`]) is not a finite origin
+    /// with a unit direction (when reading, or before writing).
+    #[error("{path}: ray {index}: {message}")]
+    Ray {
+        /// The file.
+        path: PathBuf,
+        /// 0-based index of the ray (its record starts at byte `24 × index`).
+        index: usize,
+        /// What is wrong, with the values found.
+        message: String,
+    },
     /// Geometry that parses but cannot be used (empty, non-finite, bad indices).
     #[error("{what}: {message}")]
     Invalid {

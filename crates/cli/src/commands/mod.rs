@@ -461,40 +461,7 @@ fn three(v: Option<&[Real]>, flag: &str, unit: &str, limit: Real) -> Result<[Rea
 }
 
 fn read_rays(path: &Path) -> Result<Vec<[f32; 6]>> {
-    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-    if bytes.len() % 24 != 0 {
-        bail!(
-            "{}: {} bytes is not a whole number of rays (24 bytes each: six little-endian f32)",
-            path.display(),
-            bytes.len()
-        );
-    }
-    let mut rays = Vec::with_capacity(bytes.len() / 24);
-    for (k, chunk) in bytes.chunks_exact(24).enumerate() {
-        let mut r = [0f32; 6];
-        for (i, v) in r.iter_mut().enumerate() {
-            let b = [
-                chunk[4 * i],
-                chunk[4 * i + 1],
-                chunk[4 * i + 2],
-                chunk[4 * i + 3],
-            ];
-            *v = f32::from_le_bytes(b);
-        }
-        if r.iter().any(|v| !v.is_finite()) {
-            bail!("{}: ray {k} has a non-finite value", path.display());
-        }
-        let n2 = r[3] * r[3] + r[4] * r[4] + r[5] * r[5];
-        if (n2 - 1.0).abs() > 1e-3 {
-            bail!(
-                "{}: ray {k}: direction length {:.6}, expected a unit vector",
-                path.display(),
-                n2.sqrt()
-            );
-        }
-        rays.push(r);
-    }
-    Ok(rays)
+    Ok(scene::io::rays::read_rays(path)?)
 }
 
 fn raycast(a: &RaycastArgs) -> Result<()> {
@@ -556,14 +523,8 @@ fn raycast_fixture(a: &FixtureArgs) -> Result<()> {
     let mesh = scene::fixtures::benchmark_structure();
     let mesh_path = a.out.join("structure.ply");
     scene::io::write_mesh_ply(&staged.file(&mesh_path)?, &mesh)?;
-    let bytes: Vec<u8> = rays
-        .iter()
-        .flatten()
-        .flat_map(|v| v.to_le_bytes())
-        .collect();
     let rays_path = a.out.join("rays.bin");
-    std::fs::write(staged.file(&rays_path)?, bytes)
-        .with_context(|| format!("writing {}", rays_path.display()))?;
+    scene::io::rays::write_rays(&staged.file(&rays_path)?, &rays)?;
     staged.commit()?;
     say!(
         "{} ({} triangles), {} ({} rays)",

@@ -11,6 +11,7 @@
 //! | [`read_pcd_header`] | a PCD header → [`PcdHeader`] (viewpoint, organized size, fields) |
 //! | [`write_ply_vertices`], [`write_ply_vertices_file`] | `f32` columns → binary little-endian PLY |
 //! | [`write_mesh_ply`], [`write_mesh_obj`] | [`TriMesh`] → binary PLY / text OBJ |
+//! | [`rays::read_rays`], [`rays::write_rays`] | rays files (24-byte `f32` records) of `surveyor raycast` |
 //!
 //! The format is chosen by the file extension, case-insensitively; any other
 //! extension is [`SceneError::Unsupported`].
@@ -53,8 +54,13 @@
 //!   (text formats, headers) or element, row and property (binary data) at
 //!   fault, with what was expected and what was found. Nothing panics on bad
 //!   input: truncated data, lying size fields, corrupt LZF streams and garbage
-//!   are all reported. A file that parses but holds no points or no triangles is
-//!   an error too.
+//!   are all reported. Size fields must match the data exactly: a PLY element
+//!   count, PCD `POINTS` (or `WIDTH × HEIGHT`), compressed-block size or binary
+//!   STL triangle count that is *smaller* than the data is an error too, never
+//!   a silent truncation (only zero padding may follow a PCD compressed block,
+//!   as PCL writes it), and a count far larger than the file could hold is
+//!   refused before anything is allocated for it. A file that parses but holds
+//!   no points or no triangles is an error too.
 //! * **Meshes** are built with [`TriMesh::new`], so every returned mesh has
 //!   finite vertices and in-range indices. Polygons are fan-triangulated. Winding
 //!   is kept as in the file. PLY and STL meshes keep every vertex of the file (STL
@@ -102,6 +108,7 @@
 mod obj;
 mod pcd;
 mod ply;
+pub mod rays;
 mod stl;
 mod text;
 

@@ -65,6 +65,10 @@ impl PcdType {
 }
 
 /// Storage of a PCD file's points (`DATA` line).
+///
+/// The data must fill the file exactly: bytes or lines beyond `POINTS` points
+/// are an error, except zero bytes after a compressed block (PCL pads its
+/// compressed files).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PcdData {
     /// One text line per point.
@@ -511,7 +515,7 @@ pub(super) fn load_cloud(path: &Path, bytes: &[u8]) -> Result<PointCloud, SceneE
     let columns = match header.data {
         PcdData::Ascii => read_ascii(header, &wanted, &bytes[parsed.body..], parsed.lines, path)?,
         PcdData::Binary | PcdData::BinaryCompressed => {
-            read_binary(header, &wanted, &bytes[parsed.body..], path)?
+            read_binary(header, &wanted, &bytes[parsed.body..], parsed.body, path)?
         }
     };
     let column = |role: &str| {
@@ -547,10 +551,13 @@ fn layout(header: &PcdHeader) -> (usize, Vec<usize>) {
     (size, offsets)
 }
 
+/// Read `binary` or `binary_compressed` data; `body_offset` is where `body`
+/// starts in the file (for messages).
 fn read_binary(
     header: &PcdHeader,
     wanted: &[(&str, usize)],
     body: &[u8],
+    body_offset: usize,
     path: &Path,
 ) -> Result<Vec<Vec<f64>>, SceneError> {
     let perr = |msg: String| SceneError::parse(path, None, msg);
@@ -585,6 +592,18 @@ fn read_binary(
                 stream.len()
             )));
         }
+        // PCL pads compressed files with zero bytes after the block (a few
+        // kilobytes in PCL's own test files); anything else there is data the
+        // sizes do not account for.
+        if let Some(k) = stream[compressed_size..].iter().position(|&b| b != 0) {
+            return Err(perr(format!(
+                "binary_compressed: the header says {compressed_size} compressed bytes but {} \
+                 follow, and byte {} (after the compressed block) is data, not zero padding; \
+                 a size smaller than the data?",
+                stream.len(),
+                body_offset + 8 + compressed_size + k
+            )));
+        }
         if uncompressed_size != total {
             return Err(perr(format!(
                 "binary_compressed: the header says {uncompressed_size} uncompressed bytes \
@@ -609,6 +628,22 @@ fn read_binary(
                 "binary data truncated: {n} points × {point_size} bytes need {total} bytes \
                  after the header, found {}",
                 body.len()
+            )));
+        }
+        if body.len() > total {
+            let extra = body.len() - total;
+            let points = if point_size > 0 && extra.is_multiple_of(point_size) {
+                format!(" (= {} more points)", extra / point_size)
+            } else {
+                String::new()
+            };
+            return Err(perr(format!(
+                "binary data longer than declared: POINTS {n} × {point_size} bytes per point = \
+                 {total} bytes after the header, but the file has {} ({extra} bytes after the \
+                 last declared point{points}, from byte {}); POINTS (or WIDTH × HEIGHT) \
+                 smaller than the data?",
+                body.len(),
+                body_offset + total
             )));
         }
         let places = wanted
@@ -693,7 +728,9 @@ fn read_ascii(
         .split(|&b| b == b'\n')
         .enumerate()
         .map(|(i, l)| (header_lines + 1 + i, l.strip_suffix(b"\r").unwrap_or(l)));
-    let mut tokens: Vec<&str> = Vec::with_capacity(tokens_per_point);
+    // COUNT comes from the header: reserve for a sane line only (a lying
+    // count is caught when the line is split).
+    let mut tokens: Vec<&str> = Vec::with_capacity(tokens_per_point.min(256));
     let mut last_line = header_lines;
     for point in 0..n {
         let (line_no, text) = loop {
@@ -751,6 +788,21 @@ fn read_ascii(
             })?;
             column.push(v);
         }
+    }
+    // Points past the declared count: POINTS too small must not silently drop
+    // the rest of the file.
+    let mut extra = lines.filter(|(_, raw)| !raw.trim_ascii().is_empty());
+    if let Some((line_no, _)) = extra.next() {
+        let more = 1 + extra.count();
+        return Err(SceneError::parse(
+            path,
+            Some(line_no),
+            format!(
+                "{more} more non-blank line{} after the {n} points the header declares (POINTS \
+                 {n}); POINTS (or WIDTH × HEIGHT) smaller than the data?",
+                if more == 1 { "" } else { "s" },
+            ),
+        ));
     }
     Ok(columns)
 }

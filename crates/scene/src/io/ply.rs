@@ -765,7 +765,7 @@ fn parse_ply(bytes: &[u8], path: &Path, want: Want) -> Result<Parsed, SceneError
     };
     match header.encoding {
         Encoding::Binary(order) => {
-            reader.read_binary(&header.elements, &plans, body, order)?;
+            reader.read_binary(&header.elements, &plans, body, header.body, order)?;
         }
         Encoding::Ascii => reader.read_ascii(&header.elements, &plans, body, header.lines)?,
     }
@@ -813,11 +813,14 @@ impl Reader<'_> {
         Ok(value as u32)
     }
 
+    /// Read a binary body; `body_offset` is its position in the file (for
+    /// messages).
     fn read_binary(
         &mut self,
         elements: &[Element],
         plans: &[Plan],
         body: &[u8],
+        body_offset: usize,
         order: Order,
     ) -> Result<(), SceneError> {
         let path = self.path;
@@ -938,6 +941,35 @@ impl Reader<'_> {
                     }
                 }
             }
+        }
+        if pos < body.len() {
+            // The data goes on past what the header declares: a count that is
+            // too small must not silently drop the rest of the file.
+            let extra = body.len() - pos;
+            let rows = elements
+                .last()
+                .and_then(Element::fixed_row_size)
+                .filter(|&size| size > 0 && extra.is_multiple_of(size))
+                .map(|size| {
+                    format!(
+                        " (= {} more '{}' rows of {size} bytes)",
+                        extra / size,
+                        elements.last().map_or("", |e| e.name.as_str())
+                    )
+                })
+                .unwrap_or_default();
+            return Err(SceneError::parse(
+                path,
+                None,
+                format!(
+                    "{extra} bytes of data after the declared elements{rows}: the header \
+                     declares {}, which end at byte {} of {}; a header count smaller than the \
+                     data?",
+                    declared(elements),
+                    body_offset + pos,
+                    body_offset + body.len()
+                ),
+            ));
         }
         Ok(())
     }
@@ -1076,8 +1108,37 @@ impl Reader<'_> {
                 }
             }
         }
+        // Rows past the declared counts: a count that is too small must not
+        // silently drop the rest of the file.
+        let mut extra = lines.filter(|(_, raw)| !raw.trim_ascii().is_empty());
+        if let Some((line_no, _)) = extra.next() {
+            let more = 1 + extra.count();
+            return Err(SceneError::parse(
+                path,
+                Some(line_no),
+                format!(
+                    "{more} more non-blank line{} after the declared elements: the header \
+                     declares {}; a header count smaller than the data?",
+                    if more == 1 { "" } else { "s" },
+                    declared(elements)
+                ),
+            ));
+        }
         Ok(())
     }
+}
+
+/// The element counts a header declares, e.g. `100 'vertex' rows, 0 'face'
+/// rows`.
+fn declared(elements: &[Element]) -> String {
+    if elements.is_empty() {
+        return "no elements".to_owned();
+    }
+    elements
+        .iter()
+        .map(|e| format!("{} '{}' rows", e.count, e.name))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The first property of a fixed-layout row that does not fit in `left`

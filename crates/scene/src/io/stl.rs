@@ -6,7 +6,8 @@
 //! here: a file whose length is exactly what its triangle count promises
 //! (`84 + 50 n` bytes) is binary; otherwise a file starting with `solid` is
 //! ASCII. A binary file is checked against that length before `stl_io` reads
-//! it, so truncation gives a clear error.
+//! it, so truncation gives a clear error, and so does a count smaller than the
+//! data (the triangles past it are not silently dropped).
 
 use super::finish_mesh;
 use crate::{SceneError, TriMesh};
@@ -28,8 +29,22 @@ pub(super) fn load_mesh(path: &Path, bytes: &[u8], scale: Real) -> Result<TriMes
     let indexed = if bytes.len() >= HEADER {
         let count = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
         let expected = HEADER + TRIANGLE * count;
-        if bytes.len() == expected || (bytes.len() > expected && !looks_ascii) {
-            read_binary(&bytes[..expected]).map_err(|e| perr(format!("binary STL: {e}")))?
+        if bytes.len() == expected {
+            read_binary(bytes).map_err(|e| perr(format!("binary STL: {e}")))?
+        } else if bytes.len() > expected && !looks_ascii {
+            // A count smaller than the data must not silently drop triangles.
+            let extra = bytes.len() - expected;
+            return Err(perr(format!(
+                "binary STL longer than declared: the header declares {count} triangles = \
+                 {expected} bytes, the file has {} ({extra} bytes after the last declared \
+                 triangle{}); a triangle count smaller than the data?",
+                bytes.len(),
+                if extra.is_multiple_of(TRIANGLE) {
+                    format!(", = {} more triangles", extra / TRIANGLE)
+                } else {
+                    String::new()
+                }
+            )));
         } else if looks_ascii {
             read_ascii(bytes).map_err(|e| {
                 perr(format!(

@@ -1,0 +1,596 @@
+//! Byte-level fuzzing of every scene reader (issue 8 §2): PLY (ASCII, both
+//! binary orders), PCD (ascii, binary, binary_compressed), OBJ, STL (binary and
+//! ASCII), text clouds (.csv .xyz .txt .pts) and rays files. Small real and
+//! generated files are damaged byte by byte (flips, inserts, deletes, cuts,
+//! header numbers replaced by huge, negative or NaN values, repeated runs)
+//! or replaced by random bytes, then loaded through every entry point that
+//! accepts them. Nothing may panic, and every `Ok` must be self-consistent and
+//! agree with the file's own size fields (no silent truncation).
+//!
+//! `cargo test -p scene --test fuzz` runs 512 cases per format;
+//! `cargo test -p scene --test fuzz -- --ignored` runs 20 000 per format.
+
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "test helpers fail the test on any error"
+)]
+
+mod io_fixtures;
+
+use io_fixtures::{data, pcd_ascii, pcd_binary, pcd_compressed, ply_ascii, ply_binary};
+use proptest::collection::vec;
+use proptest::prelude::*;
+use proptest::sample::Index;
+use proptest::test_runner::{RngSeed, TestCaseError, TestRunner};
+use scene::io;
+use scene::{PointCloud, SceneError, TriMesh};
+use std::path::Path;
+use std::sync::Arc;
+
+/// Cases per format in `cargo test`.
+const CASES: u32 = 512;
+/// Cases per format in the `--ignored` run.
+const LONG_CASES: u32 = 20_000;
+
+// ---------------------------------------------------------------------------
+// Byte-level mutator (the same in every crate's tests/fuzz.rs): a seed file
+// damaged by up to eight edits, or (one case in ten) random bytes.
+
+/// Replacements for a number in a text header or field.
+const NUMBERS: [&str; 16] = [
+    "0",
+    "-1",
+    "1",
+    "4294967295",
+    "4294967296",
+    "4000000000",
+    "18446744073709551615",
+    "18446744073709551616",
+    "99999999999999999999999",
+    "-9223372036854775809",
+    "NaN",
+    "nan",
+    "inf",
+    "-inf",
+    "1e309",
+    "1.5",
+];
+/// Little-endian words written over binary count and size fields.
+const WORDS: [u32; 8] = [
+    0,
+    1,
+    0x7fff_ffff,
+    0x8000_0000,
+    u32::MAX,
+    4_000_000_000,
+    0x7fc0_0000, // f32 NaN
+    0x7f80_0000, // f32 +inf
+];
+
+#[derive(Clone, Debug)]
+enum Edit {
+    Set(Index, u8),
+    Flip(Index, u8),
+    Insert(Index, Vec<u8>),
+    Delete(Index, usize),
+    Truncate(Index),
+    /// Replace the number at or after a position by `NUMBERS[k]`.
+    Number(Index, usize),
+    /// Overwrite four bytes with `WORDS[k]`.
+    Word(Index, usize),
+    /// Copy a run of bytes elsewhere (repeated records, lines, tags).
+    Duplicate(Index, Index, usize),
+}
+
+fn edit() -> impl Strategy<Value = Edit> {
+    prop_oneof![
+        (any::<Index>(), any::<u8>()).prop_map(|(i, b)| Edit::Set(i, b)),
+        (any::<Index>(), 0u8..8).prop_map(|(i, b)| Edit::Flip(i, 1 << b)),
+        (any::<Index>(), vec(any::<u8>(), 1..16)).prop_map(|(i, b)| Edit::Insert(i, b)),
+        (any::<Index>(), 1usize..32).prop_map(|(i, n)| Edit::Delete(i, n)),
+        any::<Index>().prop_map(Edit::Truncate),
+        (any::<Index>(), 0..NUMBERS.len()).prop_map(|(i, k)| Edit::Number(i, k)),
+        (any::<Index>(), 0..WORDS.len()).prop_map(|(i, k)| Edit::Word(i, k)),
+        (any::<Index>(), any::<Index>(), 1usize..64).prop_map(|(a, b, n)| Edit::Duplicate(a, b, n)),
+    ]
+}
+
+fn apply(bytes: &mut Vec<u8>, edit: &Edit) {
+    let n = bytes.len();
+    if n == 0 {
+        if let Edit::Insert(_, b) = edit {
+            bytes.extend_from_slice(b);
+        }
+        return;
+    }
+    match edit {
+        Edit::Set(i, b) => bytes[i.index(n)] = *b,
+        Edit::Flip(i, m) => bytes[i.index(n)] ^= m,
+        Edit::Insert(i, b) => {
+            let at = i.index(n + 1);
+            bytes.splice(at..at, b.iter().copied());
+        }
+        Edit::Delete(i, len) => {
+            let at = i.index(n);
+            bytes.drain(at..(at + len).min(n));
+        }
+        Edit::Truncate(i) => bytes.truncate(i.index(n)),
+        Edit::Number(i, k) => {
+            let from = i.index(n);
+            let start = bytes[from..]
+                .iter()
+                .position(u8::is_ascii_digit)
+                .map_or(from, |p| from + p);
+            let end = bytes[start..]
+                .iter()
+                .position(|b| !(b.is_ascii_digit() || matches!(b, b'.' | b'-' | b'e' | b'+')))
+                .map_or(n, |p| start + p);
+            bytes.splice(start..end, NUMBERS[*k].bytes());
+        }
+        Edit::Word(i, k) => {
+            let at = i.index(n);
+            for (j, b) in WORDS[*k].to_le_bytes().into_iter().enumerate() {
+                if let Some(x) = bytes.get_mut(at + j) {
+                    *x = b;
+                }
+            }
+        }
+        Edit::Duplicate(a, b, len) => {
+            let from = a.index(n);
+            let chunk = bytes[from..(from + len).min(n)].to_vec();
+            let at = b.index(n + 1);
+            bytes.splice(at..at, chunk);
+        }
+    }
+}
+
+/// Inputs for a parser: `(seed name, bytes)`, a seed damaged by up to eight
+/// edits (nine cases in ten) or random bytes under a seed's name.
+fn damaged(seeds: Vec<(&'static str, Vec<u8>)>) -> impl Strategy<Value = (&'static str, Vec<u8>)> {
+    assert!(!seeds.is_empty());
+    let seeds = Arc::new(seeds);
+    let names: Vec<&'static str> = seeds.iter().map(|(name, _)| *name).collect();
+    let n = seeds.len();
+    prop_oneof![
+        9 => (0..n, vec(edit(), 0..8)).prop_map(move |(k, edits)| {
+            let (name, mut bytes) = seeds[k].clone();
+            for e in &edits {
+                apply(&mut bytes, e);
+            }
+            (name, bytes)
+        }),
+        1 => (0..n, vec(any::<u8>(), 0..300)).prop_map(move |(k, bytes)| (names[k], bytes)),
+    ]
+}
+
+/// How long a fuzz run is.
+#[derive(Clone, Copy, Debug)]
+enum Run {
+    /// `CASES` inputs per parser from a fixed RNG seed: the same inputs on
+    /// every `cargo test`, so a failure reproduces.
+    Short,
+    /// `LONG_CASES` inputs per parser from a fresh seed (printed).
+    Long,
+}
+
+/// Run `check` on inputs made from `seeds`; a panic or a failed assertion
+/// fails the test with the (shrunk) input. `FUZZ_SEED=<n>` replays a run (an
+/// abort, e.g. a failed allocation, prints no input, only the seed line).
+fn fuzz(
+    run: Run,
+    seeds: Vec<(&'static str, Vec<u8>)>,
+    check: impl Fn(&str, &[u8]) -> Result<(), TestCaseError>,
+) {
+    let (cases, default_seed) = match run {
+        Run::Short => (CASES, 0x5eed_0008),
+        Run::Long => (
+            LONG_CASES,
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(1, |d| d.as_nanos() as u64),
+        ),
+    };
+    let seed = std::env::var("FUZZ_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default_seed);
+    eprintln!("fuzz: {cases} cases, FUZZ_SEED={seed}");
+    let mut runner = TestRunner::new(ProptestConfig {
+        cases,
+        failure_persistence: None,
+        rng_seed: RngSeed::Fixed(seed),
+        ..ProptestConfig::default()
+    });
+    let result = runner.run(&damaged(seeds), |(name, bytes)| check(name, &bytes));
+    if let Err(e) = result {
+        panic!("FUZZ_SEED={seed}: {e}");
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Seeds
+
+fn read(rel: &str) -> Vec<u8> {
+    std::fs::read(data(rel)).unwrap()
+}
+
+/// The first `n` points of PCL's ASCII bunny, with the header made to match.
+fn bunny(n: usize) -> Vec<u8> {
+    let text = String::from_utf8(read("pointclouds/pcl_bun0.pcd")).unwrap();
+    let mut out = String::new();
+    let mut points = 0;
+    for line in text.lines() {
+        let line = match line.split_whitespace().next() {
+            Some("WIDTH") => format!("WIDTH {n}"),
+            Some("POINTS") => format!("POINTS {n}"),
+            _ => line.to_owned(),
+        };
+        let is_point = line.starts_with(|c: char| c == '-' || c.is_ascii_digit());
+        if is_point {
+            if points == n {
+                break;
+            }
+            points += 1;
+        }
+        out.push_str(&line);
+        out.push('\n');
+    }
+    out.into_bytes()
+}
+
+/// A real binary STL cut to its first `n` triangles (count field fixed).
+fn stl_binary(n: u32) -> Vec<u8> {
+    let mut stl = read("robots/ur5/meshes/ur5/collision/wrist_3.stl");
+    stl.truncate(84 + 50 * n as usize);
+    stl[80..84].copy_from_slice(&n.to_le_bytes());
+    stl
+}
+
+fn ply_seeds() -> Vec<(&'static str, Vec<u8>)> {
+    let dir = tempfile::tempdir().unwrap();
+    let block = io::load_mesh(&data("meshes/cinder_block_meters.obj"), 1.0).unwrap();
+    let mesh_path = dir.path().join("block.ply");
+    io::write_mesh_ply(&mesh_path, &block).unwrap();
+    let mut cols = Vec::new();
+    let x = [0.0f32, 1.0, 2.0, 3.0];
+    let y = [0.5f32, -0.5, 0.25, 1e-3];
+    io::write_ply_vertices(&mut cols, &["x", "y", "z", "ox"], &[&x, &y, &x, &y]).unwrap();
+    vec![
+        ("a.ply", ply_ascii()),
+        ("le.ply", ply_binary(false)),
+        ("be.ply", ply_binary(true)),
+        ("block.ply", std::fs::read(&mesh_path).unwrap()),
+        ("cols.ply", cols),
+    ]
+}
+
+fn pcd_seeds() -> Vec<(&'static str, Vec<u8>)> {
+    vec![
+        ("a.pcd", pcd_ascii()),
+        ("b.pcd", pcd_binary()),
+        ("c.pcd", pcd_compressed()),
+        ("bunny.pcd", bunny(12)),
+    ]
+}
+
+fn obj_seeds() -> Vec<(&'static str, Vec<u8>)> {
+    vec![
+        (
+            "t.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0 1\nvt 0 0\nvn 0 0 1\nf 1 2 3\nf 2/1 4/1/1 3//1\n\
+              f -1 -2 -3\n"
+                .to_vec(),
+        ),
+        ("block.obj", read("meshes/cinder_block_meters.obj")),
+    ]
+}
+
+fn stl_seeds() -> Vec<(&'static str, Vec<u8>)> {
+    let mut solid = stl_binary(4);
+    solid[..6].copy_from_slice(b"solid ");
+    vec![
+        ("b.stl", stl_binary(6)),
+        ("solid_header.stl", solid),
+        (
+            "a.stl",
+            b"solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n\
+              endloop\nendfacet\nfacet normal 0 0 1\nouter loop\nvertex 1 0 0\nvertex 1 1 0\n\
+              vertex 0 1 0\nendloop\nendfacet\nendsolid t\n"
+                .to_vec(),
+        ),
+    ]
+}
+
+fn text_seeds() -> Vec<(&'static str, Vec<u8>)> {
+    let beams = String::from_utf8(read("pointclouds/pc2beam_steel_beams_test_points.txt")).unwrap();
+    let beams: String = beams.lines().take(8).flat_map(|l| [l, "\n"]).collect();
+    vec![
+        ("t.csv", b"x,y,z,label\n1,2,3,4\n5,6,7,8\n".to_vec()),
+        (
+            "cc.txt",
+            b"//X,Y,Z,Nx,Ny,Nz,intensity\n1 2 3 0 0 1 0.5\n4 5 6 1 0 0 7\n".to_vec(),
+        ),
+        ("t.pts", b"2\n1 2 3 4\n5 6 7 8\n".to_vec()),
+        ("beams.xyz", beams.into_bytes()),
+    ]
+}
+
+fn ray_seeds() -> Vec<(&'static str, Vec<u8>)> {
+    let rays = scene::fixtures::incoherent_rays(4, 3);
+    vec![(
+        "rays.bin",
+        rays.iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect(),
+    )]
+}
+
+// ---------------------------------------------------------------------------
+// Checks: no panic; every Ok self-consistent and true to the file's sizes.
+
+fn fail(msg: String) -> TestCaseError {
+    TestCaseError::fail(msg)
+}
+
+fn check_cloud(cloud: &PointCloud) -> Result<(), TestCaseError> {
+    let n = cloud.points.len();
+    prop_assert!(n > 0, "an Ok cloud without points");
+    prop_assert!(cloud.points.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    if let Some(normals) = &cloud.normals {
+        prop_assert_eq!(normals.len(), n);
+        prop_assert!(normals.iter().all(|v| v.iter().all(|c| c.is_finite())));
+    }
+    if let Some(labels) = &cloud.labels {
+        prop_assert_eq!(labels.len(), n);
+    }
+    if let Some(intensities) = &cloud.intensities {
+        prop_assert_eq!(intensities.len(), n);
+    }
+    Ok(())
+}
+
+fn check_mesh(mesh: &TriMesh) -> Result<(), TestCaseError> {
+    prop_assert!(!mesh.triangles.is_empty(), "an Ok mesh without triangles");
+    prop_assert!(
+        mesh.vertices
+            .iter()
+            .all(|p| p.iter().all(|c| c.is_finite()))
+    );
+    let n = mesh.vertices.len();
+    prop_assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < n));
+    Ok(())
+}
+
+/// An error must name the file.
+fn check_error(e: &SceneError, path: &Path) -> Result<(), TestCaseError> {
+    let name = path.file_name().unwrap().to_str().unwrap();
+    let msg = e.to_string();
+    prop_assert!(msg.contains(name), "{msg:?} does not name {name}");
+    Ok(())
+}
+
+/// The header lines of a text header ending at the first line whose first
+/// word is `last` (`end_header`, `DATA`), and the offset after that line.
+fn header_lines(bytes: &[u8], last: &str) -> Option<(Vec<String>, usize)> {
+    let mut lines = Vec::new();
+    let mut pos = 0;
+    while let Some(nl) = bytes[pos..].iter().position(|&b| b == b'\n') {
+        let line = std::str::from_utf8(&bytes[pos..pos + nl]).ok()?.to_owned();
+        pos += nl + 1;
+        let first = line.split_whitespace().next().map(str::to_owned);
+        lines.push(line);
+        if first.as_deref() == Some(last) {
+            return Some((lines, pos));
+        }
+    }
+    None
+}
+
+/// PLY: the `element vertex N` count of the header, when it has one such line.
+fn declared_vertices(bytes: &[u8]) -> Option<usize> {
+    let (lines, _) = header_lines(bytes, "end_header")?;
+    let counts: Vec<usize> = lines
+        .iter()
+        .filter_map(|l| match l.split_whitespace().collect::<Vec<_>>()[..] {
+            ["element", "vertex", n] => n.parse().ok(),
+            _ => None,
+        })
+        .collect();
+    match counts[..] {
+        [n] => Some(n),
+        _ => None,
+    }
+}
+
+fn check_ply(path: &Path, bytes: &[u8]) -> Result<(), TestCaseError> {
+    match io::read_ply_vertices(path) {
+        Ok(table) => {
+            prop_assert!(table.columns.iter().all(|c| c.len() == table.len()));
+            prop_assert_eq!(table.names.len(), table.columns.len());
+            if let Some(n) = declared_vertices(bytes) {
+                prop_assert_eq!(table.len(), n, "vertex rows vs the header's count");
+            }
+        }
+        Err(e) => check_error(&e, path)?,
+    }
+    for cloud in [io::load_cloud(path), io::load_cloud_or_mesh_vertices(path)] {
+        match cloud {
+            Ok(cloud) => {
+                check_cloud(&cloud)?;
+                if let Some(n) = declared_vertices(bytes) {
+                    prop_assert_eq!(cloud.points.len(), n);
+                }
+            }
+            Err(e) => check_error(&e, path)?,
+        }
+    }
+    match io::load_mesh(path, 1.0) {
+        Ok(mesh) => check_mesh(&mesh)?,
+        Err(e) => check_error(&e, path)?,
+    }
+    Ok(())
+}
+
+fn check_pcd(path: &Path, bytes: &[u8]) -> Result<(), TestCaseError> {
+    let header = io::read_pcd_header(path);
+    if let Err(e) = &header {
+        check_error(e, path)?;
+    }
+    match io::load_cloud(path) {
+        Ok(cloud) => {
+            check_cloud(&cloud)?;
+            let header = header.map_err(|e| fail(format!("cloud loads, header fails: {e}")))?;
+            prop_assert!(cloud.points.len() <= header.points);
+            prop_assert_eq!(header.points, header.width * header.height);
+            let (_, body) = header_lines(bytes, "DATA").ok_or_else(|| fail("no DATA".into()))?;
+            let rest = &bytes[body..];
+            match header.data {
+                io::PcdData::Binary => {
+                    let point: usize = header.fields.iter().map(|f| f.size * f.count).sum();
+                    prop_assert_eq!(rest.len(), header.points * point, "binary body length");
+                }
+                io::PcdData::Ascii => {
+                    let rows = rest
+                        .split(|&b| b == b'\n')
+                        .filter(|l| !l.trim_ascii().is_empty())
+                        .count();
+                    prop_assert_eq!(rows, header.points, "ascii rows");
+                }
+                io::PcdData::BinaryCompressed => {
+                    let size = u32::from_le_bytes(rest[..4].try_into().unwrap()) as usize;
+                    prop_assert!(rest[8 + size..].iter().all(|&b| b == 0), "data after block");
+                }
+            }
+        }
+        Err(e) => check_error(&e, path)?,
+    }
+    Ok(())
+}
+
+fn check_mesh_file(path: &Path, bytes: &[u8]) -> Result<(), TestCaseError> {
+    match io::load_mesh(path, 1.0) {
+        Ok(mesh) => {
+            check_mesh(&mesh)?;
+            let is_stl = path.extension().is_some_and(|e| e == "stl");
+            if is_stl && !bytes.trim_ascii_start().starts_with(b"solid") {
+                let count = u32::from_le_bytes(bytes[80..84].try_into().unwrap()) as usize;
+                prop_assert_eq!(bytes.len(), 84 + 50 * count, "binary STL size");
+                prop_assert_eq!(mesh.triangles.len(), count);
+            }
+        }
+        Err(e) => check_error(&e, path)?,
+    }
+    match io::load_cloud_or_mesh_vertices(path) {
+        Ok(cloud) => check_cloud(&cloud)?,
+        Err(e) => check_error(&e, path)?,
+    }
+    Ok(())
+}
+
+fn check_text(path: &Path, _bytes: &[u8]) -> Result<(), TestCaseError> {
+    for cloud in [io::load_cloud(path), io::load_cloud_or_mesh_vertices(path)] {
+        match cloud {
+            Ok(cloud) => check_cloud(&cloud)?,
+            Err(e) => check_error(&e, path)?,
+        }
+    }
+    Ok(())
+}
+
+fn check_rays(_name: &str, bytes: &[u8]) -> Result<(), TestCaseError> {
+    let path = Path::new("fuzz/rays.bin");
+    match io::rays::parse_rays(path, bytes) {
+        Ok(rays) => {
+            prop_assert_eq!(rays.len() * 24, bytes.len());
+            for r in &rays {
+                prop_assert!(r.iter().all(|v| v.is_finite()));
+                let n2 = r[3] * r[3] + r[4] * r[4] + r[5] * r[5];
+                prop_assert!((n2 - 1.0).abs() <= 1e-3);
+            }
+        }
+        Err(e) => check_error(&e, path)?,
+    }
+    Ok(())
+}
+
+/// Write the input to a temporary file named like its seed and run `check`.
+fn via_file(
+    check: fn(&Path, &[u8]) -> Result<(), TestCaseError>,
+) -> impl Fn(&str, &[u8]) -> Result<(), TestCaseError> {
+    move |name, bytes| {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        check(&path, bytes)
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The tests: CASES per format here, LONG_CASES with --ignored.
+
+#[test]
+fn fuzz_ply() {
+    fuzz(Run::Short, ply_seeds(), via_file(check_ply));
+}
+
+#[test]
+fn fuzz_pcd() {
+    fuzz(Run::Short, pcd_seeds(), via_file(check_pcd));
+}
+
+#[test]
+fn fuzz_obj() {
+    fuzz(Run::Short, obj_seeds(), via_file(check_mesh_file));
+}
+
+#[test]
+fn fuzz_stl() {
+    fuzz(Run::Short, stl_seeds(), via_file(check_mesh_file));
+}
+
+#[test]
+fn fuzz_text_clouds() {
+    fuzz(Run::Short, text_seeds(), via_file(check_text));
+}
+
+#[test]
+fn fuzz_rays() {
+    fuzz(Run::Short, ray_seeds(), check_rays);
+}
+
+#[test]
+#[ignore = "long fuzz run (20 000 cases per format, minutes in debug): cargo test -p scene --test fuzz -- --ignored"]
+fn fuzz_long() {
+    fuzz(Run::Long, ply_seeds(), via_file(check_ply));
+    fuzz(Run::Long, pcd_seeds(), via_file(check_pcd));
+    fuzz(Run::Long, obj_seeds(), via_file(check_mesh_file));
+    fuzz(Run::Long, stl_seeds(), via_file(check_mesh_file));
+    fuzz(Run::Long, text_seeds(), via_file(check_text));
+    fuzz(Run::Long, ray_seeds(), check_rays);
+}
+
+/// The seeds themselves load (so the fuzz starts from valid files).
+#[test]
+fn seeds_are_valid() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in ply_seeds()
+        .into_iter()
+        .chain(pcd_seeds())
+        .chain(text_seeds())
+    {
+        let path = io_fixtures::write(dir.path(), name, &bytes);
+        io::load_cloud(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+    for (name, bytes) in obj_seeds().into_iter().chain(stl_seeds()) {
+        let path = io_fixtures::write(dir.path(), name, &bytes);
+        io::load_mesh(&path, 1.0).unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+    assert_eq!(
+        io::rays::parse_rays(Path::new("r"), &ray_seeds()[0].1)
+            .unwrap()
+            .len(),
+        4
+    );
+}
