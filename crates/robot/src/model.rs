@@ -401,21 +401,10 @@ impl Robot {
     /// the first one outside is an [`RobotError::OutsideLimits`] naming it.
     pub fn check_within_limits(&self, q: &[Real]) -> Result<(), RobotError> {
         self.check_joints(q)?;
-        for (index, (j, &v)) in self.actuated().zip(q).enumerate() {
-            if let Some(l) = j.limits
-                && !l.contains(v)
-            {
-                return Err(RobotError::OutsideLimits {
-                    joint: j.name.clone(),
-                    index,
-                    value: v,
-                    min: l.min,
-                    max: l.max,
-                    revolute: matches!(j.kind, JointKind::Revolute),
-                });
-            }
+        match self.limit_violations(q).into_iter().next() {
+            Some(e) => Err(e),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// The joints of `q` outside their limits, as [`RobotError::OutsideLimits`]
