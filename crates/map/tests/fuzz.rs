@@ -20,12 +20,7 @@
 use map::segment::parse_poses_csv;
 use map::sld::parse_discs_csv;
 use proptest::prelude::*;
-use testkit::{Run, fuzz};
-
-/// Cases per reader in `cargo test`.
-const CASES: u32 = 512;
-/// Cases per reader in the `--ignored` run.
-const LONG_CASES: u32 = 20_000;
+use testkit::{CASES, LONG_CASES, Run, fuzz, names_source};
 
 // ---------------------------------------------------------------------------
 // Seeds and checks
@@ -83,10 +78,7 @@ fn check_discs(name: &str, bytes: &[u8]) -> Result<(), TestCaseError> {
                 prop_assert!(d.radius_m > 0.0 && d.radius_m.is_finite());
             }
         }
-        Err(e) => {
-            let msg = e.to_string();
-            prop_assert!(msg.contains(name), "{msg:?} does not name {name}");
-        }
+        Err(e) => names_source(&e, name)?,
     }
     Ok(())
 }
@@ -98,10 +90,7 @@ fn check_poses(name: &str, bytes: &[u8]) -> Result<(), TestCaseError> {
             prop_assert_eq!(poses.len(), data_lines(&text));
             prop_assert!(poses.iter().flatten().all(|q| q.is_finite()));
         }
-        Err(e) => {
-            let msg = e.to_string();
-            prop_assert!(msg.contains(name), "{msg:?} does not name {name}");
-        }
+        Err(e) => names_source(&e, name)?,
     }
     Ok(())
 }

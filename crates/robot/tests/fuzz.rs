@@ -19,14 +19,12 @@
 use proptest::prelude::*;
 use robot::Robot;
 use std::path::Path;
-use testkit::{Run, fuzz};
+use testkit::{LONG_CASES, Run, fuzz, names_source};
 
 /// Cases per run in `cargo test`. Fewer than the other parsers' fuzz tests:
 /// every robot that loads gets its bounding ellipsoids fitted, about 0.4 s for
 /// the UR5 in a debug build, and most damaged URDFs still load.
 const CASES: u32 = 128;
-/// Cases in the `--ignored` run.
-const LONG_CASES: u32 = 20_000;
 
 // ---------------------------------------------------------------------------
 // Seeds and checks
@@ -90,10 +88,7 @@ fn check(name: &str, bytes: &[u8]) -> Result<(), TestCaseError> {
                     .map_err(|e| TestCaseError::fail(format!("FK at mid-limits fails: {e}")))?;
                 prop_assert_eq!(frames.len(), robot.joints.len() + 1);
             }
-            Err(e) => {
-                let msg = e.to_string();
-                prop_assert!(msg.contains(name), "{msg:?} does not name {name}");
-            }
+            Err(e) => names_source(&e, name)?,
         }
     }
     Ok(())

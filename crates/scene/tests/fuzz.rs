@@ -24,12 +24,7 @@ use proptest::prelude::*;
 use scene::io;
 use scene::{PointCloud, SceneError, TriMesh};
 use std::path::Path;
-use testkit::{Run, fuzz};
-
-/// Cases per format in `cargo test`.
-const CASES: u32 = 512;
-/// Cases per format in the `--ignored` run.
-const LONG_CASES: u32 = 20_000;
+use testkit::{CASES, LONG_CASES, Run, fuzz, names_source};
 
 // ---------------------------------------------------------------------------
 // Seeds
@@ -189,9 +184,7 @@ fn check_mesh(mesh: &TriMesh) -> Result<(), TestCaseError> {
 /// An error must name the file.
 fn check_error(e: &SceneError, path: &Path) -> Result<(), TestCaseError> {
     let name = path.file_name().unwrap().to_str().unwrap();
-    let msg = e.to_string();
-    prop_assert!(msg.contains(name), "{msg:?} does not name {name}");
-    Ok(())
+    names_source(e, name)
 }
 
 /// The header lines of a text header ending at the first line whose first

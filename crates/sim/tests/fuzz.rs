@@ -18,12 +18,7 @@
 
 use proptest::prelude::*;
 use sim::scenario::{BUILTIN_NAMES, Scenario, builtin_scenario};
-use testkit::{Run, fuzz};
-
-/// Cases per run in `cargo test`.
-const CASES: u32 = 512;
-/// Cases in the `--ignored` run.
-const LONG_CASES: u32 = 20_000;
+use testkit::{CASES, LONG_CASES, Run, fuzz, names_source};
 
 // ---------------------------------------------------------------------------
 // Seeds and checks
@@ -54,10 +49,7 @@ fn check(name: &str, bytes: &[u8]) -> Result<(), TestCaseError> {
     let source = format!("{name}.toml");
     match Scenario::from_toml(&String::from_utf8_lossy(bytes), &source) {
         Ok(s) => check_ok(&s)?,
-        Err(e) => {
-            let msg = e.to_string();
-            prop_assert!(msg.contains(&source), "{msg:?} does not name {source}");
-        }
+        Err(e) => names_source(&e, &source)?,
     }
     // The same bytes as a file (not UTF-8 is an error there, not a panic).
     let dir = tempfile::tempdir().unwrap();
@@ -65,10 +57,7 @@ fn check(name: &str, bytes: &[u8]) -> Result<(), TestCaseError> {
     std::fs::write(&path, bytes).unwrap();
     match Scenario::load(path.to_str().unwrap()) {
         Ok(loaded) => check_ok(&loaded.scenario)?,
-        Err(e) => {
-            let msg = e.to_string();
-            prop_assert!(msg.contains(&source), "{msg:?} does not name {source}");
-        }
+        Err(e) => names_source(&e, &source)?,
     }
     Ok(())
 }

@@ -19,12 +19,7 @@
 
 use proptest::prelude::*;
 use surface::{SensorSet, read_initial_segments_json, read_sets_jsonl};
-use testkit::{Run, fuzz};
-
-/// Cases per reader in `cargo test`.
-const CASES: u32 = 512;
-/// Cases per reader in the `--ignored` run.
-const LONG_CASES: u32 = 20_000;
+use testkit::{CASES, LONG_CASES, Run, fuzz, names_source};
 
 // ---------------------------------------------------------------------------
 // Seeds and checks
@@ -68,10 +63,7 @@ fn check_sets(name: &str, bytes: &[u8]) -> Result<(), TestCaseError> {
                 prop_assert_eq!(set.points.len(), set.axes.len());
             }
         }
-        Err(e) => {
-            let msg = e.to_string();
-            prop_assert!(msg.contains(name), "{msg:?} does not name {name}");
-        }
+        Err(e) => names_source(&e, name)?,
     }
     Ok(())
 }
@@ -84,10 +76,7 @@ fn check_segments(name: &str, bytes: &[u8]) -> Result<(), TestCaseError> {
                 prop_assert!(s.iter().all(|p| p.iter().all(|c| c.is_finite())));
             }
         }
-        Err(e) => {
-            let msg = e.to_string();
-            prop_assert!(msg.contains(name), "{msg:?} does not name {name}");
-        }
+        Err(e) => names_source(&e, name)?,
     }
     Ok(())
 }

@@ -4,6 +4,7 @@ use proptest::collection::vec;
 use proptest::prelude::*;
 use proptest::sample::Index;
 use proptest::test_runner::{RngSeed, TestCaseError, TestRunner};
+use std::fmt::Display;
 use std::sync::Arc;
 
 /// A fuzz seed: a file name (the parser's source name, and the extension that
@@ -12,6 +13,13 @@ pub type Seed = (&'static str, Vec<u8>);
 
 /// The RNG seed of every [`Run::Short`] run (unless `FUZZ_SEED` is set).
 pub const SHORT_SEED: u64 = 0x5eed_0008;
+
+/// Inputs per parser in `cargo test` ([`Run::Short`]), unless a parser's test
+/// states why it runs fewer.
+pub const CASES: u32 = 512;
+
+/// Inputs per parser in the `#[ignore]`d long runs ([`Run::Long`]).
+pub const LONG_CASES: u32 = 20_000;
 
 /// Replacements for a number in a text header or field ([`Edit::Number`]).
 pub const NUMBERS: [&str; 16] = [
@@ -198,4 +206,12 @@ pub fn fuzz(run: Run, seeds: Vec<Seed>, check: impl Fn(&str, &[u8]) -> Result<()
     if let Err(e) = result {
         panic!("FUZZ_SEED={seed}: {e}");
     }
+}
+
+/// The check every parser's error must pass: its message names the source
+/// (`name`, the file name or the name the bytes were parsed under).
+pub fn names_source(error: &dyn Display, name: &str) -> Result<(), TestCaseError> {
+    let msg = error.to_string();
+    prop_assert!(msg.contains(name), "{msg:?} does not name {name}");
+    Ok(())
 }

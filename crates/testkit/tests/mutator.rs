@@ -138,3 +138,13 @@ fn a_failed_check_names_the_seed() {
         Ok(())
     });
 }
+
+#[test]
+fn an_error_must_name_its_source() {
+    let e = std::io::Error::other("scan.ply: header says 4000000000 vertices");
+    assert!(testkit::names_source(&e, "scan.ply").is_ok());
+    let msg = testkit::names_source(&e, "rays.bin")
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("does not name rays.bin"), "{msg}");
+}
