@@ -1,39 +1,11 @@
 //! The command contract, exercised through the built binary.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers may panic
 
+mod support;
+
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn surveyor(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_surveyor"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = surveyor(args);
-    assert!(
-        out.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
-fn fails(args: &[&str]) -> String {
-    let out = surveyor(args);
-    assert!(!out.status.success(), "{args:?} should fail");
-    String::from_utf8(out.stderr).unwrap()
-}
-
-fn data(rel: &str) -> String {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/"))
-        .join(rel)
-        .display()
-        .to_string()
-}
+use std::path::Path;
+use support::{data, fails, ok, surveyor};
 
 type M4 = [[f64; 4]; 4];
 
