@@ -212,10 +212,8 @@ mod tests {
         assert_eq!(sweep.grid_neighbours(), back.grid_neighbours());
     }
 
-    #[test]
-    fn bad_grid_indices_name_the_vertex() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("s.ply");
+    /// A two-point scan file whose `scan` and `ray` columns are given.
+    fn two_point_file(path: &std::path::Path, scan: [f32; 2], ray: [f32; 2]) {
         let cols: Vec<Vec<f32>> = vec![
             vec![0.0, 1.0],
             vec![0.0, 0.0],
@@ -223,36 +221,27 @@ mod tests {
             vec![0.0, 0.0],
             vec![0.0, 0.0],
             vec![0.0, 0.0],
-            vec![0.0, 0.0],
-            vec![0.0, 0.5],
+            scan.to_vec(),
+            ray.to_vec(),
         ];
         let refs: Vec<&[f32]> = cols.iter().map(Vec::as_slice).collect();
         scene::io::write_ply_vertices_file(
-            &path,
+            path,
             &["x", "y", "z", "ox", "oy", "oz", "scan", "ray"],
             &refs,
         )
         .unwrap();
+    }
+
+    #[test]
+    fn bad_grid_indices_name_the_vertex() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.ply");
+        two_point_file(&path, [0.0, 0.0], [0.0, 0.5]);
         let e = Sweep::read_ply(&path).unwrap_err().to_string();
         assert!(e.contains("vertex 1") && e.contains("`ray`"), "{e}");
         // Cells out of order are an error too.
-        let cols2: Vec<Vec<f32>> = vec![
-            vec![0.0, 1.0],
-            vec![0.0, 0.0],
-            vec![1.0, 1.0],
-            vec![0.0, 0.0],
-            vec![0.0, 0.0],
-            vec![0.0, 0.0],
-            vec![1.0, 0.0],
-            vec![0.0, 0.0],
-        ];
-        let refs: Vec<&[f32]> = cols2.iter().map(Vec::as_slice).collect();
-        scene::io::write_ply_vertices_file(
-            &path,
-            &["x", "y", "z", "ox", "oy", "oz", "scan", "ray"],
-            &refs,
-        )
-        .unwrap();
+        two_point_file(&path, [1.0, 0.0], [0.0, 0.0]);
         let e = Sweep::read_ply(&path).unwrap_err().to_string();
         assert!(e.contains("strictly increasing"), "{e}");
     }
