@@ -4,6 +4,7 @@
 //!
 //! | module | entry points |
 //! |---|---|
+//! | [`error`] | [`MapError`]: the one error type of every module |
 //! | [`key`] | [`VoxelKey`], [`BlockKey`]: global integer keys |
 //! | [`traverse`] | exact voxel walk of a segment ([`traverse::walk_segment`]) and its tie rule |
 //! | [`regions`] | [`RegionsConfig`]: A1 ⊂ A2 ⊂ A3 (A§4.2.1) |
@@ -14,7 +15,9 @@
 //! | [`stats`] | [`OccupancyReport`]: `occupancy.json` |
 //! | [`pipeline`] | [`Mapper`], [`build_from_scans`], [`MapConfig`]: `surveyor map` |
 //! | [`sld`] | [`generate_discs`], [`SldConfig`], [`Disc`]: Scale-Like Discs (A§5.2) |
+//! | [`sld_io`] | disc CSV files, [`sld_io::load_points`]: the clouds discs are made from |
 //! | [`segment`] | [`segment_discs`], [`SegmentConfig`]: map segmentation (A§5.3, Algorithm 1) |
+//! | [`segment_io`] | `SEGMENTS.json` and `POSES.csv` files |
 //! | [`material`] | [`MaterialBelief`], [`MaterialConfig`]: per-voxel material belief, H3 (A§4.4) |
 
 pub mod error;
@@ -26,23 +29,25 @@ pub mod occupancy;
 pub mod pipeline;
 pub mod regions;
 pub mod segment;
+pub mod segment_io;
 pub mod sld;
+pub mod sld_io;
 pub mod stats;
 pub mod sweep;
 pub mod traverse;
 pub mod tsdf;
 
-pub use error::MapError;
+pub use error::{IoOp, MapError};
 pub use key::{BlockKey, VoxelKey};
-pub use material::{MaterialBelief, MaterialConfig, MaterialError};
+pub use material::{MaterialBelief, MaterialConfig};
 pub use occupancy::{
     GridGeometry, IntegrationStats, OcclusionConfig, OccupancyConfig, OccupancyGrid, RegionCounts,
     UnknownRun, VoxelState, h2_term,
 };
 pub use pipeline::{MapConfig, MapOutputs, Mapper, SweepSummary, build_from_scans};
 pub use regions::{Region, RegionBox, RegionsConfig};
-pub use segment::{SegmentConfig, SegmentError, segment_discs};
-pub use sld::{Disc, Orientation, SldConfig, SldError, SldResult, generate_discs};
+pub use segment::{SegmentConfig, segment_discs};
+pub use sld::{Disc, Orientation, SldConfig, SldResult, generate_discs};
 pub use stats::{OccupancyReport, RegionReport};
 pub use sweep::range_jumps;
 pub use tsdf::{TsdfConfig, TsdfIntegrator, TsdfMap, TsdfStats, TsdfVoxel, TsdfWeighting};

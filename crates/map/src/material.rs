@@ -48,9 +48,10 @@
 //! belief.update(key, &[0.1, 0.7, 0.1, 0.05, 0.05])?;
 //! assert_eq!(belief.map_estimate(key), Some(1));
 //! assert!(belief.h3_voxel(key).unwrap() < 5f64.ln());
-//! # Ok::<(), map::material::MaterialError>(())
+//! # Ok::<(), map::MapError>(())
 //! ```
 
+use crate::MapError;
 pub use crate::key::VoxelKey;
 use crate::sld::Disc;
 use geom::{Point3, Real, Vector3};
@@ -83,13 +84,9 @@ impl Default for MaterialConfig {
 
 impl MaterialConfig {
     /// Check the fields.
-    pub fn validate(&self) -> Result<(), MaterialError> {
-        let bad = |field: &'static str, expected: &'static str, got: String| {
-            Err(MaterialError::Config {
-                field,
-                expected,
-                got,
-            })
+    pub fn validate(&self) -> Result<(), MapError> {
+        let bad = |field, expected, got: String| {
+            Err(MapError::stage_config("material", field, expected, got))
         };
         if !(1..=u16::MAX as usize).contains(&self.n_materials) {
             return bad(
@@ -110,54 +107,6 @@ impl MaterialConfig {
         }
         Ok(())
     }
-}
-
-/// Errors of the material belief.
-#[derive(Debug, thiserror::Error)]
-pub enum MaterialError {
-    /// A configuration field is out of range.
-    #[error("material config `{field}`: expected {expected}, got {got}")]
-    Config {
-        /// The field.
-        field: &'static str,
-        /// What is accepted.
-        expected: &'static str,
-        /// What was given.
-        got: String,
-    },
-    /// An observation has the wrong number of entries.
-    #[error("observation has {got} probabilities, expected one per material ({expected})")]
-    ObservationLength {
-        /// `n_t`.
-        expected: usize,
-        /// Entries given.
-        got: usize,
-    },
-    /// An observation entry is negative or not finite.
-    #[error("observation entry {index} is {value}: expected a finite probability ≥ 0")]
-    ObservationValue {
-        /// The entry.
-        index: usize,
-        /// Its value.
-        value: Real,
-    },
-    /// The observation gives every material (with non-zero belief) zero
-    /// likelihood: Bayes' rule is undefined. The belief is left unchanged.
-    #[error("observation has zero evidence P(z) for voxel {key:?}")]
-    NoEvidence {
-        /// The voxel.
-        key: VoxelKey,
-    },
-    /// A point is not finite or too far from the origin for a voxel key.
-    #[error("point ({x}, {y}, {z}) has no voxel key")]
-    BadPoint {
-        /// x.
-        x: Real,
-        /// y.
-        y: Real,
-        /// z.
-        z: Real,
-    },
 }
 
 /// The material belief of every surface voxel (see the [module docs](self)).
@@ -185,7 +134,7 @@ fn entropy(p: &[Real]) -> Real {
 
 impl MaterialBelief {
     /// An empty belief map.
-    pub fn new(cfg: MaterialConfig) -> Result<Self, MaterialError> {
+    pub fn new(cfg: MaterialConfig) -> Result<Self, MapError> {
         cfg.validate()?;
         Ok(Self {
             cfg,
@@ -217,8 +166,8 @@ impl MaterialBelief {
     }
 
     /// The key of the voxel holding `p`.
-    pub fn key_of(&self, p: &Point3) -> Result<VoxelKey, MaterialError> {
-        VoxelKey::of_point(p, self.cfg.voxel_m).ok_or(MaterialError::BadPoint {
+    pub fn key_of(&self, p: &Point3) -> Result<VoxelKey, MapError> {
+        VoxelKey::of_point(p, self.cfg.voxel_m).ok_or(MapError::BadPoint {
             x: p.x,
             y: p.y,
             z: p.z,
@@ -257,7 +206,7 @@ impl MaterialBelief {
     /// Bayes update of one voxel with an LRC observation (eq. 4.15). A voxel
     /// without a belief is first given the uniform prior. On error the belief
     /// is unchanged.
-    pub fn update(&mut self, key: VoxelKey, observation: &[Real]) -> Result<(), MaterialError> {
+    pub fn update(&mut self, key: VoxelKey, observation: &[Real]) -> Result<(), MapError> {
         let n = self.cfg.n_materials;
         self.check_observation(observation)?;
         let i = if let Some(&i) = self.index.get(&key) {
@@ -266,7 +215,7 @@ impl MaterialBelief {
             // Check the evidence against the uniform prior before inserting.
             let floor = self.cfg.min_likelihood;
             if observation.iter().all(|&l| l.max(floor) <= 0.0) {
-                return Err(MaterialError::NoEvidence { key });
+                return Err(MapError::NoEvidence { key });
             }
             self.insert_surface(key);
             self.keys.len() - 1
@@ -279,7 +228,7 @@ impl MaterialBelief {
             .map(|(&prior, &l)| prior * l.max(floor))
             .sum();
         if !(evidence > 0.0 && evidence.is_finite()) {
-            return Err(MaterialError::NoEvidence { key });
+            return Err(MapError::NoEvidence { key });
         }
         for (prior, &l) in p.iter_mut().zip(observation) {
             *prior = *prior * l.max(floor) / evidence;
@@ -288,9 +237,9 @@ impl MaterialBelief {
         Ok(())
     }
 
-    fn check_observation(&self, observation: &[Real]) -> Result<(), MaterialError> {
+    fn check_observation(&self, observation: &[Real]) -> Result<(), MapError> {
         if observation.len() != self.cfg.n_materials {
-            return Err(MaterialError::ObservationLength {
+            return Err(MapError::ObservationLength {
                 expected: self.cfg.n_materials,
                 got: observation.len(),
             });
@@ -300,7 +249,7 @@ impl MaterialBelief {
             .enumerate()
             .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
         {
-            return Err(MaterialError::ObservationValue { index, value });
+            return Err(MapError::ObservationValue { index, value });
         }
         Ok(())
     }
@@ -314,7 +263,7 @@ impl MaterialBelief {
         &mut self,
         points: &[Point3],
         observation: &[Real],
-    ) -> Result<usize, MaterialError> {
+    ) -> Result<usize, MapError> {
         self.check_observation(observation)?;
         let mut keys = Vec::with_capacity(points.len());
         for p in points {
@@ -340,7 +289,7 @@ impl MaterialBelief {
                 None => observation.iter().any(|&l| l.max(floor) > 0.0),
             };
             if !ok {
-                return Err(MaterialError::NoEvidence { key: k });
+                return Err(MapError::NoEvidence { key: k });
             }
         }
         for &k in &keys {

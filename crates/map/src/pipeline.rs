@@ -1,9 +1,8 @@
 //! The library side of `surveyor map`: integrate sweeps into the occupancy
 //! grid and the TSDF, then write `mesh.ply` and `occupancy.json`.
 //!
-//! Integration is one call per sweep ([`Mapper::integrate_points`],
-//! [`Mapper::integrate_sweep`]) so the caller can time each; nothing here
-//! reads the clock.
+//! Integration is one call per sweep ([`Mapper::integrate_sweep`]) so the
+//! caller can time each; nothing here reads the clock.
 
 use crate::MapError;
 use crate::occupancy::{IntegrationStats, OccupancyConfig, OccupancyGrid};
@@ -120,14 +119,10 @@ impl MapOutputs {
     /// Write `dir/mesh.ply` (binary PLY) and `dir/occupancy.json`, creating
     /// `dir` if needed.
     pub fn write(&self, dir: &Path) -> Result<(), MapError> {
-        std::fs::create_dir_all(dir).map_err(|source| MapError::Write {
-            path: dir.to_owned(),
-            source,
-        })?;
+        std::fs::create_dir_all(dir).map_err(|e| MapError::write(dir, e))?;
         scene::io::write_mesh_ply(&dir.join("mesh.ply"), &self.mesh)?;
         let json = dir.join("occupancy.json");
-        std::fs::write(&json, self.report.to_json() + "\n")
-            .map_err(|source| MapError::Write { path: json, source })
+        std::fs::write(&json, self.report.to_json() + "\n").map_err(|e| MapError::write(&json, e))
     }
 }
 

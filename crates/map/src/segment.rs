@@ -34,11 +34,8 @@
 //!
 //! # Files
 //!
-//! * `SEGMENTS.json`: `{"segments": [[disc index, ...], ...]}`
-//!   ([`SegmentsFile`], [`save_segments_json`], [`load_segments_json`]).
-//! * `POSES.csv`: header `q1,q2,q3,q4,q5,q6`, then one row per disc, in disc
-//!   order, of the manipulator's joint angles in radians for acting on that
-//!   disc ([`parse_poses_csv`], [`load_poses_csv`]).
+//! Segment files (`SEGMENTS.json`) and pose files (`POSES.csv`) are read and
+//! written by [`crate::segment_io`].
 //!
 //! ```
 //! use geom::{Point3, UnitVector3, Vector3};
@@ -51,13 +48,13 @@
 //! let discs = [disc(0.0, 0.0), disc(0.05, 0.0), disc(0.10, 0.0), disc(0.15, 0.0), disc(0.2, 0.1)];
 //! let segments = segment_discs(&discs, None, &SegmentConfig::default())?;
 //! assert_eq!(segments, vec![vec![0, 1, 2, 3], vec![4]]);
-//! # Ok::<(), map::segment::SegmentError>(())
+//! # Ok::<(), map::MapError>(())
 //! ```
 
+use crate::MapError;
 use crate::sld::Disc;
 use geom::Real;
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
 
 /// A manipulator pose for a disc: six joint angles, radians.
 pub type JointPose = [Real; 6];
@@ -90,13 +87,9 @@ impl Default for SegmentConfig {
 
 impl SegmentConfig {
     /// Check the fields: finite, `τθ ∈ [0, 180]`, `τd > 0`, `τp ≥ 0`, `τq ≥ 0`.
-    pub fn validate(&self) -> Result<(), SegmentError> {
-        let bad = |field: &'static str, expected: &'static str, got: Real| {
-            Err(SegmentError::Config {
-                field,
-                expected,
-                got: got.to_string(),
-            })
+    pub fn validate(&self) -> Result<(), MapError> {
+        let bad = |field, expected, got: Real| {
+            Err(MapError::stage_config("segment", field, expected, got))
         };
         if !(self.tau_theta_deg.is_finite() && (0.0..=180.0).contains(&self.tau_theta_deg)) {
             return bad("tau_theta_deg", "an angle in [0, 180]", self.tau_theta_deg);
@@ -109,11 +102,12 @@ impl SegmentConfig {
         }
         for (k, &t) in self.tau_q_deg.iter().enumerate() {
             if !(t.is_finite() && t >= 0.0) {
-                return Err(SegmentError::Config {
-                    field: "tau_q_deg",
-                    expected: "non-negative angles",
-                    got: format!("joint {}: {t}", k + 1),
-                });
+                return Err(MapError::stage_config(
+                    "segment",
+                    "tau_q_deg",
+                    "non-negative angles",
+                    format!("joint {}: {t}", k + 1),
+                ));
             }
         }
         Ok(())
@@ -135,55 +129,6 @@ struct Thresholds {
     d2: Real,
     p: Real,
     q: [Real; 6],
-}
-
-/// Errors of segmentation and its files.
-#[derive(Debug, thiserror::Error)]
-pub enum SegmentError {
-    /// A configuration field is out of range.
-    #[error("segment config `{field}`: expected {expected}, got {got}")]
-    Config {
-        /// The field.
-        field: &'static str,
-        /// What is accepted.
-        expected: &'static str,
-        /// What was given.
-        got: String,
-    },
-    /// The poses do not match the discs one to one.
-    #[error("{poses} poses for {discs} discs: give one pose per disc")]
-    PoseCount {
-        /// Number of poses.
-        poses: usize,
-        /// Number of discs.
-        discs: usize,
-    },
-    /// A disc or a pose holds a non-finite value.
-    #[error("{what} {index} is not finite")]
-    NonFinite {
-        /// `disc` or `pose`.
-        what: &'static str,
-        /// Its index.
-        index: usize,
-    },
-    /// A file could not be read or written.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The operating-system error.
-        source: std::io::Error,
-    },
-    /// A poses or segments file is malformed.
-    #[error("{source_name}{}: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
-    Parse {
-        /// The file (or a label for in-memory text).
-        source_name: String,
-        /// 1-based line, when known.
-        line: Option<usize>,
-        /// What is wrong.
-        message: String,
-    },
 }
 
 /// The four measures of §5.3.1 between two discs.
@@ -266,27 +211,27 @@ fn check_inputs(
     discs: &[Disc],
     poses: Option<&[JointPose]>,
     cfg: &SegmentConfig,
-) -> Result<(), SegmentError> {
+) -> Result<(), MapError> {
     cfg.validate()?;
     let finite = |v: &[Real]| v.iter().all(|x| x.is_finite());
     if let Some(index) = discs
         .iter()
         .position(|d| !(finite(d.centre.coords.as_slice()) && finite(d.normal.as_slice())))
     {
-        return Err(SegmentError::NonFinite {
+        return Err(MapError::NonFinite {
             what: "disc",
             index,
         });
     }
     if let Some(p) = poses {
         if p.len() != discs.len() {
-            return Err(SegmentError::PoseCount {
+            return Err(MapError::PoseCount {
                 poses: p.len(),
                 discs: discs.len(),
             });
         }
         if let Some(index) = p.iter().position(|q| !finite(q)) {
-            return Err(SegmentError::NonFinite {
+            return Err(MapError::NonFinite {
                 what: "pose",
                 index,
             });
@@ -310,7 +255,7 @@ pub fn links(
     discs: &[Disc],
     poses: Option<&[JointPose]>,
     cfg: &SegmentConfig,
-) -> Result<Vec<(u32, u32)>, SegmentError> {
+) -> Result<Vec<(u32, u32)>, MapError> {
     check_inputs(discs, poses, cfg)?;
     let mut out = Vec::new();
     for_each_link(discs, poses, cfg, |i, j| out.push((i.min(j), i.max(j))));
@@ -436,7 +381,7 @@ pub fn segment_discs(
     discs: &[Disc],
     poses: Option<&[JointPose]>,
     cfg: &SegmentConfig,
-) -> Result<Vec<Vec<usize>>, SegmentError> {
+) -> Result<Vec<Vec<usize>>, MapError> {
     check_inputs(discs, poses, cfg)?;
     let mut uf = UnionFind::new(discs.len());
     for_each_link(discs, poses, cfg, |i, j| uf.union(i, j));
@@ -454,112 +399,6 @@ pub fn segment_of_disc(segments: &[Vec<usize>], discs: usize) -> Vec<Option<usiz
         }
     }
     out
-}
-
-/// The segments file: `{"segments": [[disc index, ...], ...]}`.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SegmentsFile {
-    /// Disc indices of each segment.
-    pub segments: Vec<Vec<usize>>,
-}
-
-/// Write segments as `{"segments": [[...], ...]}` to `path`.
-pub fn save_segments_json(path: &Path, segments: &[Vec<usize>]) -> Result<(), SegmentError> {
-    let file = SegmentsFile {
-        segments: segments.to_vec(),
-    };
-    let text = serde_json::to_string(&file).map_err(|e| SegmentError::Parse {
-        source_name: path.display().to_string(),
-        line: None,
-        message: e.to_string(),
-    })?;
-    std::fs::write(path, text + "\n").map_err(|source| SegmentError::Io {
-        path: path.to_owned(),
-        source,
-    })
-}
-
-/// Read a segments file written by [`save_segments_json`].
-pub fn load_segments_json(path: &Path) -> Result<Vec<Vec<usize>>, SegmentError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SegmentError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    let file: SegmentsFile = serde_json::from_str(&text).map_err(|e| SegmentError::Parse {
-        source_name: path.display().to_string(),
-        line: Some(e.line()),
-        message: e.to_string(),
-    })?;
-    Ok(file.segments)
-}
-
-/// The header of pose files.
-pub const POSES_CSV_HEADER: [&str; 6] = ["q1", "q2", "q3", "q4", "q5", "q6"];
-
-/// Parse a poses CSV: header `q1,q2,q3,q4,q5,q6`, then one row of six joint
-/// angles in radians per disc (blank lines ignored). Errors name
-/// `source_name`, the line and the field.
-pub fn parse_poses_csv(text: &str, source_name: &str) -> Result<Vec<JointPose>, SegmentError> {
-    let err = |line: Option<usize>, message: String| SegmentError::Parse {
-        source_name: source_name.to_owned(),
-        line,
-        message,
-    };
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty());
-    let (h, header) = lines
-        .next()
-        .ok_or_else(|| err(None, "empty file: expected the header q1,...,q6".into()))?;
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
-    if names != POSES_CSV_HEADER {
-        return Err(err(
-            Some(h + 1),
-            format!(
-                "expected the header q1,q2,q3,q4,q5,q6, found `{}`",
-                header.trim()
-            ),
-        ));
-    }
-    let mut poses = Vec::new();
-    for (i, raw) in lines {
-        let fields: Vec<&str> = raw.split(',').map(str::trim).collect();
-        if fields.len() != 6 {
-            return Err(err(
-                Some(i + 1),
-                format!("expected 6 joint angles, found {} fields", fields.len()),
-            ));
-        }
-        let mut q = [0.0; 6];
-        for (k, s) in fields.iter().enumerate() {
-            q[k] = s
-                .parse::<Real>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    err(
-                        Some(i + 1),
-                        format!(
-                            "field `q{}`: expected a finite angle in radians, found `{s}`",
-                            k + 1
-                        ),
-                    )
-                })?;
-        }
-        poses.push(q);
-    }
-    Ok(poses)
-}
-
-/// Read a poses CSV file (see [`parse_poses_csv`]).
-pub fn load_poses_csv(path: &Path) -> Result<Vec<JointPose>, SegmentError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SegmentError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    parse_poses_csv(&text, &path.display().to_string())
 }
 
 #[cfg(test)]

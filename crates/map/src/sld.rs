@@ -64,20 +64,16 @@
 //!
 //! The same points, orientation, configuration and seed give bit-identical
 //! discs. The only randomness is a ChaCha8 stream from the seed (voxel order
-//! and home points). Points are sorted once by voxel key into contiguous
-//! memory; a neighbourhood is nine binary searches over the sorted keys (the
-//! three voxels along `x` are adjacent keys). Paul reports 54 916 points →
+//! and home points). Points are sorted once by [`VoxelKey`] (z, then y, then
+//! x) into contiguous memory; a neighbourhood is 27 look-ups in an
+//! open-addressing index of the keys, read as nine contiguous runs (the three
+//! voxels along `x` are adjacent in the table). Paul reports 54 916 points →
 //! 1 636 discs in 5.5 s (Table 5.1); see the crate README for our figures.
 //!
 //! # Files
 //!
-//! [`write_discs_csv`] / [`parse_discs_csv`] (and the path versions
-//! [`save_discs_csv`], [`load_discs_csv`]) use the header
-//! `cx,cy,cz,nx,ny,nz,radius,points`, optionally followed by extra numeric
-//! columns ([`ExtraColumn`]: segment, material posterior, …) that the reader
-//! ignores. [`load_points`] reads a cloud file and, for PLY scans carrying
-//! `ox oy oz` columns, the sensor origin of every point; a mesh file's
-//! vertices come with their faces' normals.
+//! Disc CSV files and the point clouds discs are made from are read and
+//! written by [`crate::sld_io`].
 //!
 //! ```
 //! use geom::Point3;
@@ -91,16 +87,14 @@
 //! let result = generate_discs(&points, view, &SldConfig::default(), 7)?;
 //! assert_eq!(result.registered, points.len());
 //! assert!(result.discs.iter().all(|d| d.normal.z > 0.999));
-//! # Ok::<(), map::sld::SldError>(())
+//! # Ok::<(), map::MapError>(())
 //! ```
 
+use crate::{MapError, VoxelKey};
 use geom::{Pca, Plane, Point3, Real, UnitVector3, Vector3, unit};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
-use std::fmt::Write as _;
-use std::io::Write;
-use std::path::{Path, PathBuf};
 
 /// Parameters of SLD generation (Paul §5.2.1, Table 6.1).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -145,14 +139,9 @@ impl SldConfig {
     }
 
     /// Check the fields.
-    pub fn validate(&self) -> Result<(), SldError> {
-        let bad = |field: &'static str, expected: &'static str, got: String| {
-            Err(SldError::Config {
-                field,
-                expected,
-                got,
-            })
-        };
+    pub fn validate(&self) -> Result<(), MapError> {
+        let bad =
+            |field, expected, got: String| Err(MapError::stage_config("SLD", field, expected, got));
         if !(self.radius_m.is_finite() && self.radius_m > 0.0) {
             return bad("radius_m", "a positive distance", self.radius_m.to_string());
         }
@@ -254,136 +243,102 @@ impl SldResult {
     }
 }
 
-/// Errors of SLD generation and disc files.
-#[derive(Debug, thiserror::Error)]
-pub enum SldError {
-    /// A configuration field is out of range.
-    #[error("SLD config `{field}`: expected {expected}, got {got}")]
-    Config {
-        /// The field.
-        field: &'static str,
-        /// What is accepted.
-        expected: &'static str,
-        /// What was given.
-        got: String,
-    },
-    /// An input point (or its origin / reference normal) is not finite.
-    #[error("{what} {index} is not finite")]
-    NonFinite {
-        /// `point`, `sensor origin`, `reference normal` or `viewpoint`.
-        what: &'static str,
-        /// Its index.
-        index: usize,
-    },
-    /// A point is too far from the origin for the voxel hash (±2²⁰ voxels).
-    #[error("point {index} is too far from the origin for voxels of {radius_m} m")]
-    OutOfRange {
-        /// The point.
-        index: usize,
-        /// The voxel size.
-        radius_m: Real,
-    },
-    /// A per-point slice has the wrong length.
-    #[error("{what}: expected {expected} entries (one per point), got {got}")]
-    LengthMismatch {
-        /// Which input.
-        what: &'static str,
-        /// Number of points.
-        expected: usize,
-        /// Length given.
-        got: usize,
-    },
-    /// A file could not be read or written.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The operating-system error.
-        source: std::io::Error,
-    },
-    /// A disc or cloud file is malformed.
-    #[error("{source_name}{}: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
-    Parse {
-        /// The file (or a label for in-memory text).
-        source_name: String,
-        /// 1-based line, when known.
-        line: Option<usize>,
-        /// What is wrong.
-        message: String,
-    },
-}
+/// Largest |voxel index| of the SLD hash: `2²⁰ − 2`, so every voxel's
+/// neighbours are in range too and [`KeyIndex`] hashes a key as one word.
+const KEY_LIMIT: i32 = (1 << 20) - 2;
 
-/// Offset and width of one packed voxel coordinate.
-const KEY_BITS: u32 = 21;
-const KEY_OFFSET: i64 = 1 << (KEY_BITS - 1);
-/// Largest |voxel index| accepted (one less than the packing allows, so the
-/// neighbour keys of every voxel exist).
-const KEY_LIMIT: i64 = KEY_OFFSET - 2;
-
+/// The voxel `⌊p · inv_mu⌋` holding `p`, `None` when a coordinate is not
+/// finite or beyond ±[`KEY_LIMIT`] voxels.
 #[inline]
-fn pack(x: i64, y: i64, z: i64) -> u64 {
-    (((z + KEY_OFFSET) as u64) << (2 * KEY_BITS))
-        | (((y + KEY_OFFSET) as u64) << KEY_BITS)
-        | ((x + KEY_OFFSET) as u64)
+fn voxel_of(p: &Point3, inv_mu: Real) -> Option<VoxelKey> {
+    let limit = Real::from(KEY_LIMIT);
+    let axis = |c: Real| {
+        let u = (c * inv_mu).floor();
+        // NaN fails the comparison; an in-range float converts exactly.
+        (u.abs() <= limit).then_some(u as i32)
+    };
+    Some(VoxelKey::new(axis(p.x)?, axis(p.y)?, axis(p.z)?))
 }
 
-#[inline]
-fn voxel_of(p: &Point3, inv_mu: Real) -> [i64; 3] {
-    [
-        (p.x * inv_mu).floor() as i64,
-        (p.y * inv_mu).floor() as i64,
-        (p.z * inv_mu).floor() as i64,
-    ]
-}
-
-/// The voxel key of a point for voxels of size `radius_m`, as integer indices
-/// `⌊p / μ⌋` (Paul §5.2: `p = [130, −25, 35]`, `μ = 10` → `[13, −3, 3]`).
-pub fn voxel_index(p: &Point3, radius_m: Real) -> [i64; 3] {
+/// The voxel of a point for voxels of size `radius_m`, `⌊p / μ⌋` (Paul
+/// §5.2: `p = [130, −25, 35]`, `μ = 10` → `[13, −3, 3]`), as
+/// [`generate_discs`] computes it. `None` when the point is not finite or
+/// more than `2²⁰ − 2` voxels from the origin on an axis (the points
+/// [`generate_discs`] refuses).
+pub fn voxel_index(p: &Point3, radius_m: Real) -> Option<VoxelKey> {
     voxel_of(p, 1.0 / radius_m)
+}
+
+/// Offset of each coordinate in a [`RowWord`].
+const WORD_OFFSET: i32 = 1 << 20;
+/// Bits of each coordinate in a [`RowWord`].
+const WORD_BITS: u32 = 21;
+const WORD_MASK: u64 = (1 << WORD_BITS) - 1;
+
+/// A [`VoxelKey`] within ±([`KEY_LIMIT`] + 1) as one word: each coordinate
+/// offset by `2²⁰` into 21 bits, `z` highest. The word's integer order is
+/// the voxel table's order — `z`, then `y`, then `x` — so the three voxels
+/// along `x` of a neighbourhood row are adjacent in the table; and it is the
+/// input of [`KeyIndex`]'s hash. It sorts and hashes; the table itself holds
+/// [`VoxelKey`]s.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct RowWord(u64);
+
+impl RowWord {
+    /// The word of `key` (every coordinate within ±([`KEY_LIMIT`] + 1)).
+    #[inline]
+    fn of(key: VoxelKey) -> Self {
+        let [x, y, z] = key.coords().map(|c| u64::from((c + WORD_OFFSET) as u32));
+        Self((z << (2 * WORD_BITS)) | (y << WORD_BITS) | x)
+    }
+
+    /// The key of the word.
+    #[inline]
+    fn key(self) -> VoxelKey {
+        let axis = |shift: u32| ((self.0 >> shift) & WORD_MASK) as i32 - WORD_OFFSET;
+        VoxelKey::new(axis(0), axis(WORD_BITS), axis(2 * WORD_BITS))
+    }
 }
 
 /// Points sorted by voxel, with the voxel table (compressed rows).
 struct VoxelTable {
-    /// Sorted unique voxel keys.
-    keys: Vec<u64>,
+    /// The occupied voxels, unique, in [`RowWord`] order.
+    keys: Vec<VoxelKey>,
     /// `starts[v]..starts[v + 1]` are the slots of voxel `v`.
     starts: Vec<u32>,
     /// Point coordinates in slot order.
     points: Vec<Point3>,
     /// Input index of each slot.
     index: Vec<u32>,
-    /// Voxel indices `[x, y, z]` of each voxel.
-    coords: Vec<[i64; 3]>,
 }
 
 impl VoxelTable {
-    fn build(points: &[Point3], radius_m: Real) -> Result<Self, SldError> {
+    fn build(points: &[Point3], radius_m: Real) -> Result<Self, MapError> {
         let inv_mu = 1.0 / radius_m;
-        let mut order: Vec<(u64, u32)> = Vec::with_capacity(points.len());
+        let mut order: Vec<(RowWord, u32)> = Vec::with_capacity(points.len());
         for (i, p) in points.iter().enumerate() {
             if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
-                return Err(SldError::NonFinite {
+                return Err(MapError::NonFinite {
                     what: "point",
                     index: i,
                 });
             }
-            let [x, y, z] = voxel_of(p, inv_mu);
-            if x.abs() > KEY_LIMIT || y.abs() > KEY_LIMIT || z.abs() > KEY_LIMIT {
-                return Err(SldError::OutOfRange { index: i, radius_m });
-            }
-            order.push((pack(x, y, z), i as u32));
+            let key = voxel_of(p, inv_mu).ok_or(MapError::OutOfRange { index: i, radius_m })?;
+            order.push((RowWord::of(key), i as u32));
         }
+        // Ties (points of one voxel) in input order: the table is a function
+        // of the points alone.
         order.sort_unstable();
         let mut keys = Vec::new();
         let mut starts = Vec::new();
-        let mut coords = Vec::new();
         let mut sorted = Vec::with_capacity(points.len());
         let mut index = Vec::with_capacity(points.len());
-        for (slot, &(key, i)) in order.iter().enumerate() {
-            if keys.last() != Some(&key) {
-                keys.push(key);
+        let mut last = None;
+        for (slot, &(word, i)) in order.iter().enumerate() {
+            if last != Some(word) {
+                last = Some(word);
+                keys.push(word.key());
                 starts.push(slot as u32);
-                coords.push(voxel_of(&points[i as usize], inv_mu));
             }
             sorted.push(points[i as usize]);
             index.push(i);
@@ -394,22 +349,21 @@ impl VoxelTable {
             starts,
             points: sorted,
             index,
-            coords,
         })
     }
 
     /// Slot ranges of the (up to) 27 voxels around voxel `v`, pushed to `out`
     /// as up to nine contiguous runs (the three voxels along `x` are adjacent
-    /// keys, hence adjacent in the sorted table).
+    /// in [`RowWord`] order, hence in the table).
     fn neighbourhood(&self, index: &KeyIndex, v: usize, out: &mut Vec<(u32, u32)>) {
         out.clear();
-        let [x, y, z] = self.coords[v];
+        let key = self.keys[v];
         for dz in -1..=1 {
             for dy in -1..=1 {
                 let mut first = None;
                 let mut last = 0;
                 for dx in -1..=1 {
-                    if let Some(i) = index.get(&self.keys, pack(x + dx, y + dy, z + dz)) {
+                    if let Some(i) = index.get(&self.keys, key.offset(dx, dy, dz)) {
                         first.get_or_insert(i);
                         last = i;
                     }
@@ -432,7 +386,7 @@ struct KeyIndex {
 impl KeyIndex {
     const EMPTY: u32 = u32::MAX;
 
-    fn new(keys: &[u64]) -> Self {
+    fn new(keys: &[VoxelKey]) -> Self {
         let capacity = (2 * keys.len()).next_power_of_two().max(2);
         let mut index = Self {
             shift: 64 - capacity.trailing_zeros(),
@@ -448,13 +402,15 @@ impl KeyIndex {
         index
     }
 
+    /// The home slot of a key (every key looked up is within
+    /// ±([`KEY_LIMIT`] + 1)): its [`RowWord`], Fibonacci-hashed.
     #[inline]
-    fn home(&self, key: u64) -> usize {
-        (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> self.shift) as usize
+    fn home(&self, key: VoxelKey) -> usize {
+        (RowWord::of(key).0.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> self.shift) as usize
     }
 
     #[inline]
-    fn get(&self, keys: &[u64], key: u64) -> Option<u32> {
+    fn get(&self, keys: &[VoxelKey], key: VoxelKey) -> Option<u32> {
         let mask = self.slots.len() - 1;
         let mut s = self.home(key);
         loop {
@@ -478,19 +434,19 @@ enum OrientInput<'a> {
     Canonical,
 }
 
-fn check_orientation(o: Orientation<'_>, n: usize) -> Result<OrientInput<'_>, SldError> {
+fn check_orientation(o: Orientation<'_>, n: usize) -> Result<OrientInput<'_>, MapError> {
     let finite = |v: &Vector3| v.x.is_finite() && v.y.is_finite() && v.z.is_finite();
     match o {
         Orientation::SensorOrigins(origins) => {
             if origins.len() != n {
-                return Err(SldError::LengthMismatch {
+                return Err(MapError::LengthMismatch {
                     what: "sensor origins",
                     expected: n,
                     got: origins.len(),
                 });
             }
             if let Some(index) = origins.iter().position(|p| !finite(&p.coords)) {
-                return Err(SldError::NonFinite {
+                return Err(MapError::NonFinite {
                     what: "sensor origin",
                     index,
                 });
@@ -499,7 +455,7 @@ fn check_orientation(o: Orientation<'_>, n: usize) -> Result<OrientInput<'_>, Sl
         }
         Orientation::Viewpoint(v) => {
             if !finite(&v.coords) {
-                return Err(SldError::NonFinite {
+                return Err(MapError::NonFinite {
                     what: "viewpoint",
                     index: 0,
                 });
@@ -508,14 +464,14 @@ fn check_orientation(o: Orientation<'_>, n: usize) -> Result<OrientInput<'_>, Sl
         }
         Orientation::ReferenceNormals(normals) => {
             if normals.len() != n {
-                return Err(SldError::LengthMismatch {
+                return Err(MapError::LengthMismatch {
                     what: "reference normals",
                     expected: n,
                     got: normals.len(),
                 });
             }
             if let Some(index) = normals.iter().position(|v| !finite(v)) {
-                return Err(SldError::NonFinite {
+                return Err(MapError::NonFinite {
                     what: "reference normal",
                     index,
                 });
@@ -550,7 +506,7 @@ pub fn generate_discs(
     orientation: Orientation<'_>,
     cfg: &SldConfig,
     seed: u64,
-) -> Result<SldResult, SldError> {
+) -> Result<SldResult, MapError> {
     cfg.validate()?;
     let orient = check_orientation(orientation, points.len())?;
     let table = VoxelTable::build(points, cfg.radius_m)?;
@@ -715,252 +671,6 @@ pub fn generate_discs(
     })
 }
 
-/// An extra numeric column of a disc file (segment index, a material
-/// probability, …), written after the eight contract columns.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ExtraColumn {
-    /// Header name (no commas, not one of the contract names).
-    pub name: String,
-    /// One value per disc.
-    pub values: Vec<Real>,
-}
-
-/// The contract header of disc files.
-pub const DISC_CSV_HEADER: [&str; 8] = ["cx", "cy", "cz", "nx", "ny", "nz", "radius", "points"];
-
-/// Write discs as CSV: header `cx,cy,cz,nx,ny,nz,radius,points`, then the
-/// `extra` columns, one row per disc. Values use Rust's shortest round-trip
-/// formatting, so [`parse_discs_csv`] reads back identical discs.
-///
-/// Fails with [`std::io::ErrorKind::InvalidInput`], before writing anything,
-/// when an extra column has the wrong length or a bad name.
-pub fn write_discs_csv(
-    writer: &mut impl Write,
-    discs: &[Disc],
-    extra: &[ExtraColumn],
-) -> std::io::Result<()> {
-    for (k, c) in extra.iter().enumerate() {
-        let bad_name = c.name.is_empty()
-            || c.name.contains([',', '\n', '\r', '"'])
-            || DISC_CSV_HEADER.contains(&c.name.as_str())
-            || extra[..k].iter().any(|o| o.name == c.name);
-        if bad_name || c.values.len() != discs.len() {
-            return Err(std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                format!(
-                    "extra column `{}`: needs a unique name without commas and {} values (has {})",
-                    c.name,
-                    discs.len(),
-                    c.values.len()
-                ),
-            ));
-        }
-    }
-    let mut line = DISC_CSV_HEADER.join(",");
-    for c in extra {
-        line.push(',');
-        line.push_str(&c.name);
-    }
-    line.push('\n');
-    writer.write_all(line.as_bytes())?;
-    for (i, d) in discs.iter().enumerate() {
-        line.clear();
-        let _ = write!(
-            line,
-            "{},{},{},{},{},{},{},{}",
-            d.centre.x,
-            d.centre.y,
-            d.centre.z,
-            d.normal.x,
-            d.normal.y,
-            d.normal.z,
-            d.radius_m,
-            d.points
-        );
-        for c in extra {
-            let _ = write!(line, ",{}", c.values[i]);
-        }
-        line.push('\n');
-        writer.write_all(line.as_bytes())?;
-    }
-    Ok(())
-}
-
-/// [`write_discs_csv`] into a new file at `path`.
-pub fn save_discs_csv(path: &Path, discs: &[Disc], extra: &[ExtraColumn]) -> Result<(), SldError> {
-    let io = |source| SldError::Io {
-        path: path.to_owned(),
-        source,
-    };
-    let mut buf = Vec::new();
-    write_discs_csv(&mut buf, discs, extra).map_err(io)?;
-    std::fs::write(path, buf).map_err(io)
-}
-
-/// Read discs from CSV text with at least the contract columns
-/// `cx,cy,cz,nx,ny,nz,radius,points` (in any order; other columns are
-/// ignored). Normals are re-normalised; a zero or non-finite normal, a
-/// non-finite centre, a non-positive radius or a non-integer point count is
-/// an error naming `source_name` and the line.
-pub fn parse_discs_csv(text: &str, source_name: &str) -> Result<Vec<Disc>, SldError> {
-    let err = |line: Option<usize>, message: String| SldError::Parse {
-        source_name: source_name.to_owned(),
-        line,
-        message,
-    };
-    let mut lines = text.lines().enumerate();
-    let (_, header) = lines
-        .by_ref()
-        .find(|(_, l)| !l.trim().is_empty())
-        .ok_or_else(|| err(None, "empty file: expected a header line".into()))?;
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
-    let mut col = [0usize; 8];
-    for (k, want) in DISC_CSV_HEADER.iter().enumerate() {
-        col[k] = names.iter().position(|n| n == want).ok_or_else(|| {
-            err(
-                Some(1),
-                format!(
-                    "missing column `{want}` (header must contain {})",
-                    DISC_CSV_HEADER.join(",")
-                ),
-            )
-        })?;
-    }
-    let mut discs = Vec::new();
-    for (i, raw) in lines {
-        let line_no = i + 1;
-        if raw.trim().is_empty() {
-            continue;
-        }
-        let fields: Vec<&str> = raw.split(',').map(str::trim).collect();
-        if fields.len() < names.len() {
-            return Err(err(
-                Some(line_no),
-                format!("expected {} fields, found {}", names.len(), fields.len()),
-            ));
-        }
-        let mut v = [0.0; 7];
-        for k in 0..7 {
-            let s = fields[col[k]];
-            v[k] = s
-                .parse::<Real>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| {
-                    err(
-                        Some(line_no),
-                        format!(
-                            "field `{}`: expected a finite number, found `{s}`",
-                            DISC_CSV_HEADER[k]
-                        ),
-                    )
-                })?;
-        }
-        let s = fields[col[7]];
-        let points = s.parse::<usize>().map_err(|_| {
-            err(
-                Some(line_no),
-                format!("field `points`: expected a non-negative integer, found `{s}`"),
-            )
-        })?;
-        let normal = unit(Vector3::new(v[3], v[4], v[5]))
-            .ok_or_else(|| err(Some(line_no), "the normal (nx, ny, nz) is zero".into()))?;
-        if v[6] <= 0.0 {
-            return Err(err(
-                Some(line_no),
-                format!(
-                    "field `radius`: expected a positive distance, found {}",
-                    v[6]
-                ),
-            ));
-        }
-        discs.push(Disc {
-            centre: Point3::new(v[0], v[1], v[2]),
-            normal,
-            radius_m: v[6],
-            points,
-        });
-    }
-    Ok(discs)
-}
-
-/// Read a disc CSV file (see [`parse_discs_csv`]).
-pub fn load_discs_csv(path: &Path) -> Result<Vec<Disc>, SldError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SldError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    parse_discs_csv(&text, &path.display().to_string())
-}
-
-/// Points of a cloud file, with the sensor origin of every point when the
-/// file carries them.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct LoadedPoints {
-    /// The points.
-    pub points: Vec<Point3>,
-    /// Per-point sensor origins (PLY columns `ox oy oz`, as written by
-    /// `surveyor scan`), when present.
-    pub origins: Option<Vec<Point3>>,
-    /// Per-point normals, when the file has them.
-    pub normals: Option<Vec<Vector3>>,
-}
-
-impl LoadedPoints {
-    /// The best orientation these points allow: sensor origins, else the
-    /// file's normals, else [`Orientation::Canonical`].
-    pub fn orientation(&self) -> Orientation<'_> {
-        if let Some(o) = &self.origins {
-            Orientation::SensorOrigins(o)
-        } else if let Some(n) = &self.normals {
-            Orientation::ReferenceNormals(n)
-        } else {
-            Orientation::Canonical
-        }
-    }
-}
-
-/// Read a point cloud (any format `scene::io::load_cloud_or_mesh_vertices`
-/// reads: PLY, PCD, text, OBJ/STL vertices) and, for a PLY file with `ox`,
-/// `oy`, `oz` vertex properties, the per-point sensor origins.
-pub fn load_points(path: &Path) -> Result<LoadedPoints, SldError> {
-    let scene_err = |e: scene::SceneError| SldError::Parse {
-        source_name: path.display().to_string(),
-        line: None,
-        message: e.to_string(),
-    };
-    let is_ply = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
-    if is_ply {
-        let table = scene::io::read_ply_vertices(path).map_err(scene_err)?;
-        if sensor::Sweep::is_scan_table(&table) {
-            let sweep =
-                sensor::Sweep::from_ply_table(path, &table).map_err(|e| SldError::Parse {
-                    source_name: path.display().to_string(),
-                    line: None,
-                    message: match e {
-                        sensor::SensorError::ScanFile { message, .. } => message,
-                        other => other.to_string(),
-                    },
-                })?;
-            return Ok(LoadedPoints {
-                points: sweep.positions(),
-                origins: Some(sweep.origins()),
-                normals: None,
-            });
-        }
-    }
-    let cloud = scene::io::load_cloud_or_mesh_vertices(path).map_err(scene_err)?;
-    let origins = None;
-    Ok(LoadedPoints {
-        points: cloud.points,
-        origins,
-        normals: cloud.normals,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -970,15 +680,87 @@ mod tests {
         // Paul §5.2: μ = 10 mm, p = [130, −25, 35] mm → [13, −3, 3].
         assert_eq!(
             voxel_index(&Point3::new(0.130, -0.025, 0.035), 0.010),
-            [13, -3, 3]
+            Some(VoxelKey::new(13, -3, 3))
         );
+        // The hash's range: ±(2²⁰ − 2) voxels, nothing beyond, no NaN.
+        let edge = Real::from(KEY_LIMIT);
+        assert_eq!(
+            voxel_index(&Point3::new(edge + 0.5, -edge, 0.0), 1.0),
+            Some(VoxelKey::new(KEY_LIMIT, -KEY_LIMIT, 0))
+        );
+        assert_eq!(voxel_index(&Point3::new(edge + 1.0, 0.0, 0.0), 1.0), None);
+        assert_eq!(voxel_index(&Point3::new(0.0, -edge - 0.5, 0.0), 1.0), None);
+        assert_eq!(voxel_index(&Point3::new(0.0, 0.0, Real::NAN), 1.0), None);
     }
 
     #[test]
-    fn packed_keys_order_x_fastest() {
-        assert_eq!(pack(1, 0, 0), pack(0, 0, 0) + 1);
-        assert!(pack(-1, 1, 0) > pack(5, 0, 0));
-        assert!(pack(0, -5, 1) > pack(9, 9, 0));
+    fn row_words_round_trip_and_order_z_y_x() {
+        let edge = KEY_LIMIT + 1;
+        let keys = [
+            VoxelKey::new(0, 0, 0),
+            VoxelKey::new(-edge, edge, -1),
+            VoxelKey::new(edge, -edge, edge),
+            VoxelKey::new(5, -3, 0),
+            VoxelKey::new(-5, -3, 0),
+            VoxelKey::new(9, 9, -1),
+        ];
+        for a in keys {
+            assert_eq!(RowWord::of(a).key(), a);
+            for b in keys {
+                let [ax, ay, az] = a.coords();
+                let [bx, by, bz] = b.coords();
+                assert_eq!(
+                    RowWord::of(a).cmp(&RowWord::of(b)),
+                    (az, ay, ax).cmp(&(bz, by, bx)),
+                    "{a} vs {b}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn table_orders_x_fastest_and_neighbourhoods_are_the_27_voxels() {
+        // Points on a 5 × 5 × 5 lattice of unit voxels around the origin,
+        // two per voxel, some voxels left empty, in a scrambled order.
+        let mut points = Vec::new();
+        for i in 0..125_i32 {
+            let j = (i * 47) % 125;
+            let (x, y, z) = (j % 5 - 2, (j / 5) % 5 - 2, j / 25 - 2);
+            if (x + 2 * y + 3 * z).rem_euclid(4) == 0 {
+                continue;
+            }
+            for f in [0.25, 0.75] {
+                points.push(Point3::new(
+                    Real::from(x) + f,
+                    Real::from(y) + 0.5,
+                    Real::from(z) + f,
+                ));
+            }
+        }
+        let table = VoxelTable::build(&points, 1.0).unwrap();
+        // Sorted z, then y, then x: x neighbours are adjacent entries.
+        for w in table.keys.windows(2) {
+            let ([x0, y0, z0], [x1, y1, z1]) = (w[0].coords(), w[1].coords());
+            assert!((z0, y0, x0) < (z1, y1, x1), "{} before {}", w[0], w[1]);
+        }
+        let index = KeyIndex::new(&table.keys);
+        let mut runs = Vec::new();
+        for (v, key) in table.keys.iter().enumerate() {
+            table.neighbourhood(&index, v, &mut runs);
+            let mut got: Vec<u32> = runs.iter().flat_map(|&(a, b)| a..b).collect();
+            got.sort_unstable();
+            // Brute force: every slot whose voxel is within one step per axis.
+            let [x, y, z] = key.coords();
+            let want: Vec<u32> = (0..points.len() as u32)
+                .filter(|&s| {
+                    let [a, b, c] = voxel_index(&table.points[s as usize], 1.0)
+                        .unwrap()
+                        .coords();
+                    (a - x).abs() <= 1 && (b - y).abs() <= 1 && (c - z).abs() <= 1
+                })
+                .collect();
+            assert_eq!(got, want, "voxel {key}");
+        }
     }
 
     #[test]

@@ -70,7 +70,7 @@ fn mesh_vertex_discs_register_everything_and_face_the_sensor() {
         assert!(
             r.homes
                 .iter()
-                .all(|&h| seen.insert(voxel_index(&m.points[h as usize], 0.04)))
+                .all(|&h| seen.insert(voxel_index(&m.points[h as usize], 0.04).unwrap()))
         );
         let pure: Vec<Real> = m
             .truth

@@ -1,6 +1,6 @@
 //! Byte-level fuzzing of the map crate's CSV readers (issue 8 §2): disc files
-//! ([`map::sld::parse_discs_csv`]) and joint-pose files
-//! ([`map::segment::parse_poses_csv`]). Small valid files are damaged byte by
+//! ([`map::sld_io::parse_discs_csv`]) and joint-pose files
+//! ([`map::segment_io::parse_poses_csv`]). Small valid files are damaged byte by
 //! byte (flips, inserts, deletes, cuts, numbers replaced by huge, negative or
 //! NaN values, repeated runs) or replaced by random bytes, and parsed from
 //! memory. Nothing may panic; an error names the source; every `Ok` has one
@@ -17,8 +17,8 @@
     reason = "test helpers fail the test on any error"
 )]
 
-use map::segment::parse_poses_csv;
-use map::sld::parse_discs_csv;
+use map::segment_io::parse_poses_csv;
+use map::sld_io::parse_discs_csv;
 use proptest::prelude::*;
 use testkit::{CASES, LONG_CASES, Run, fuzz, names_source};
 

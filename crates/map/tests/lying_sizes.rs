@@ -1,10 +1,10 @@
 //! Issue 8 §2: `sld` on a PLY whose vertex count is smaller than its data
-//! used 100 of 51 642 points without a word. [`map::sld::load_points`] now
+//! used 100 of 51 642 points without a word. [`map::sld_io::load_points`] now
 //! refuses such a file, naming it and both counts.
 
 #![allow(clippy::unwrap_used, reason = "tests fail on any error")]
 
-use map::sld::load_points;
+use map::sld_io::load_points;
 
 #[test]
 fn load_points_refuses_a_ply_whose_vertex_count_is_too_small() {

@@ -2,8 +2,9 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers may panic
 
 use geom::{Point3, Real, UnitVector3, Vector3};
+use map::MapError;
 use map::key::VoxelKey;
-use map::material::{MaterialBelief, MaterialConfig, MaterialError, argmax};
+use map::material::{MaterialBelief, MaterialConfig, argmax};
 use map::sld::Disc;
 use proptest::prelude::*;
 use rand::{RngExt, SeedableRng};
@@ -157,7 +158,7 @@ fn update_points_touches_each_voxel_once() {
     let bad = [Point3::new(0.5, 0.5, 0.5), Point3::new(f64::NAN, 0.0, 0.0)];
     assert!(matches!(
         m.update_points(&bad, &z),
-        Err(MaterialError::BadPoint { .. })
+        Err(MapError::BadPoint { .. })
     ));
     assert_eq!(m.len(), 2);
 }
@@ -170,45 +171,64 @@ fn bad_observations_leave_the_belief_unchanged() {
     let before = m.probabilities(k).unwrap().to_vec();
     assert!(matches!(
         m.update(k, &[0.2; 4]),
-        Err(MaterialError::ObservationLength {
+        Err(MapError::ObservationLength {
             expected: 5,
             got: 4
         })
     ));
     assert!(matches!(
         m.update(k, &[0.2, 0.2, -0.1, 0.2, 0.2]),
-        Err(MaterialError::ObservationValue { index: 2, .. })
+        Err(MapError::ObservationValue { index: 2, .. })
     ));
     assert!(matches!(
         m.update(k, &[0.2, 0.2, 0.2, f64::NAN, 0.2]),
-        Err(MaterialError::ObservationValue { index: 3, .. })
+        Err(MapError::ObservationValue { index: 3, .. })
     ));
     // Zero evidence: the observation rules out the only possible materials.
     assert!(matches!(
         m.update(k, &[1.0, 1.0, 1.0, 0.0, 0.0]),
-        Err(MaterialError::NoEvidence { .. })
+        Err(MapError::NoEvidence { .. })
     ));
     assert_eq!(m.probabilities(k).unwrap(), before.as_slice());
     assert!(m.update(VoxelKey::new(9, 9, 9), &[0.0; 5]).is_err());
     assert!(m.probabilities(VoxelKey::new(9, 9, 9)).is_none());
     for bad in [
-        MaterialConfig {
-            n_materials: 0,
-            ..MaterialConfig::default()
-        },
-        MaterialConfig {
-            voxel_m: 0.0,
-            ..MaterialConfig::default()
-        },
-        MaterialConfig {
-            min_likelihood: 1.0,
-            ..MaterialConfig::default()
-        },
+        (
+            MaterialConfig {
+                n_materials: 0,
+                ..MaterialConfig::default()
+            },
+            "n_materials",
+            "0",
+        ),
+        (
+            MaterialConfig {
+                voxel_m: 0.0,
+                ..MaterialConfig::default()
+            },
+            "voxel_m",
+            "0",
+        ),
+        (
+            MaterialConfig {
+                min_likelihood: 1.0,
+                ..MaterialConfig::default()
+            },
+            "min_likelihood",
+            "1",
+        ),
     ] {
-        assert!(matches!(
-            MaterialBelief::new(bad),
-            Err(MaterialError::Config { .. })
-        ));
+        let e = MaterialBelief::new(bad.0).unwrap_err();
+        assert!(
+            matches!(e, MapError::Config { stage: "material", field, .. } if field == bad.1),
+            "{e:?}"
+        );
+        let msg = e.to_string();
+        assert!(
+            msg.starts_with(&format!("material config `{}`: expected ", bad.1))
+                && msg.ends_with(&format!(", got {}", bad.2)),
+            "{msg}"
+        );
     }
     let c: MaterialConfig = serde_json::from_str(r#"{"voxel_m": 0.02}"#).unwrap();
     assert_eq!((c.n_materials, c.voxel_m), (5, 0.02));

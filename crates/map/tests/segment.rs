@@ -6,11 +6,12 @@
 mod support;
 
 use geom::{Point3, Real, UnitVector3, Vector3};
+use map::MapError;
 use map::segment::{
-    JointPose, SegmentConfig, SegmentError, connected_components, linked, links, load_poses_csv,
-    load_segments_json, pair_measures, parse_poses_csv, save_segments_json, segment_discs,
+    JointPose, SegmentConfig, connected_components, linked, links, pair_measures, segment_discs,
     segment_of_disc,
 };
+use map::segment_io::{load_poses_csv, load_segments_json, parse_poses_csv, save_segments_json};
 use map::sld::{Disc, Orientation, SldConfig, generate_discs};
 use proptest::prelude::*;
 use std::collections::{BTreeMap, VecDeque};
@@ -439,7 +440,7 @@ fn files_round_trip_and_errors() {
     std::fs::write(&path, r#"{"segmentz": []}"#).unwrap();
     assert!(matches!(
         load_segments_json(&path),
-        Err(SegmentError::Parse { .. })
+        Err(MapError::Parse { .. })
     ));
 
     let poses = parse_poses_csv(
@@ -460,7 +461,7 @@ fn files_round_trip_and_errors() {
     assert_eq!(load_poses_csv(&csv).unwrap(), vec![[0.0; 6]]);
     assert!(matches!(
         load_poses_csv(&dir.path().join("none.csv")),
-        Err(SegmentError::Io { .. })
+        Err(MapError::Io { .. })
     ));
 }
 
@@ -475,13 +476,13 @@ fn bad_input_is_an_error() {
     let cfg = SegmentConfig::default();
     assert!(matches!(
         segment_discs(&[d, d], Some(&[[0.0; 6]]), &cfg),
-        Err(SegmentError::PoseCount { poses: 1, discs: 2 })
+        Err(MapError::PoseCount { poses: 1, discs: 2 })
     ));
     let mut nan = d;
     nan.centre.x = f64::NAN;
     assert!(matches!(
         segment_discs(&[d, nan], None, &cfg),
-        Err(SegmentError::NonFinite {
+        Err(MapError::NonFinite {
             what: "disc",
             index: 1
         })
@@ -490,34 +491,62 @@ fn bad_input_is_an_error() {
     q[1][3] = f64::INFINITY;
     assert!(matches!(
         segment_discs(&[d, d], Some(&q), &cfg),
-        Err(SegmentError::NonFinite {
+        Err(MapError::NonFinite {
             what: "pose",
             index: 1
         })
     ));
     for bad in [
-        SegmentConfig {
-            tau_d_m: 0.0,
-            ..cfg
-        },
-        SegmentConfig {
-            tau_theta_deg: -1.0,
-            ..cfg
-        },
-        SegmentConfig {
-            tau_p_m: Real::NAN,
-            ..cfg
-        },
-        SegmentConfig {
+        (
+            SegmentConfig {
+                tau_d_m: 0.0,
+                ..cfg
+            },
+            "tau_d_m",
+        ),
+        (
+            SegmentConfig {
+                tau_theta_deg: -1.0,
+                ..cfg
+            },
+            "tau_theta_deg",
+        ),
+        (
+            SegmentConfig {
+                tau_p_m: Real::NAN,
+                ..cfg
+            },
+            "tau_p_m",
+        ),
+        (
+            SegmentConfig {
+                tau_q_deg: [8.0, 10.0, -1.0, 20.0, 20.0, 20.0],
+                ..cfg
+            },
+            "tau_q_deg",
+        ),
+    ] {
+        let e = segment_discs(&[d], None, &bad.0).unwrap_err();
+        assert!(
+            matches!(e, MapError::Config { stage: "segment", field, .. } if field == bad.1),
+            "{e:?}"
+        );
+        assert!(
+            e.to_string()
+                .starts_with(&format!("segment config `{}`: expected ", bad.1)),
+            "{e}"
+        );
+    }
+    let e = segment_discs(
+        &[d],
+        None,
+        &SegmentConfig {
             tau_q_deg: [8.0, 10.0, -1.0, 20.0, 20.0, 20.0],
             ..cfg
         },
-    ] {
-        assert!(matches!(
-            segment_discs(&[d], None, &bad),
-            Err(SegmentError::Config { .. })
-        ));
-    }
+    )
+    .unwrap_err();
+    assert!(e.to_string().ends_with("got joint 3: -1"), "{e}");
     assert!(segment_discs(&[], None, &cfg).unwrap().is_empty());
     // Config from JSON with defaults.
     let c: SegmentConfig = serde_json::from_str(r#"{"tau_p_m": 0.02}"#).unwrap();

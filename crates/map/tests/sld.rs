@@ -6,9 +6,10 @@
 mod support;
 
 use geom::{Point3, Real, Vector3};
-use map::sld::{
-    Disc, ExtraColumn, Orientation, SldConfig, SldError, generate_discs, load_discs_csv,
-    load_points, parse_discs_csv, save_discs_csv, voxel_index, write_discs_csv,
+use map::MapError;
+use map::sld::{Disc, Orientation, SldConfig, generate_discs, voxel_index};
+use map::sld_io::{
+    ExtraColumn, load_discs_csv, load_points, parse_discs_csv, save_discs_csv, write_discs_csv,
 };
 use std::collections::HashSet;
 use std::path::Path;
@@ -31,7 +32,7 @@ fn home_voxels_are_unique(points: &[Point3], homes: &[u32], mu: Real) -> bool {
     let mut seen = HashSet::new();
     homes
         .iter()
-        .all(|&h| seen.insert(voxel_index(&points[h as usize], mu)))
+        .all(|&h| seen.insert(voxel_index(&points[h as usize], mu).unwrap()))
 }
 
 #[test]
@@ -349,7 +350,7 @@ fn bad_input_is_an_error() {
     pts[4].y = f64::NAN;
     assert!(matches!(
         generate_discs(&pts, Orientation::Canonical, &cfg, 0),
-        Err(SldError::NonFinite {
+        Err(MapError::NonFinite {
             what: "point",
             index: 4
         })
@@ -358,39 +359,62 @@ fn bad_input_is_an_error() {
     let origins = vec![Point3::origin(); 9];
     assert!(matches!(
         generate_discs(&pts, Orientation::SensorOrigins(&origins), &cfg, 0),
-        Err(SldError::LengthMismatch {
+        Err(MapError::LengthMismatch {
             expected: 10,
             got: 9,
             ..
         })
     ));
     for bad in [
-        SldConfig {
-            radius_m: 0.0,
-            ..cfg
-        },
-        SldConfig {
-            min_points: 2,
-            ..cfg
-        },
-        SldConfig {
-            plane_tolerance_m: Some(-1.0),
-            ..cfg
-        },
-        SldConfig {
-            min_eigen_ratio: 0.5,
-            ..cfg
-        },
+        (
+            SldConfig {
+                radius_m: 0.0,
+                ..cfg
+            },
+            "radius_m",
+            "0",
+        ),
+        (
+            SldConfig {
+                min_points: 2,
+                ..cfg
+            },
+            "min_points",
+            "2",
+        ),
+        (
+            SldConfig {
+                plane_tolerance_m: Some(-1.0),
+                ..cfg
+            },
+            "plane_tolerance_m",
+            "-1",
+        ),
+        (
+            SldConfig {
+                min_eigen_ratio: 0.5,
+                ..cfg
+            },
+            "min_eigen_ratio",
+            "0.5",
+        ),
     ] {
-        assert!(matches!(
-            generate_discs(&pts, Orientation::Canonical, &bad, 0),
-            Err(SldError::Config { .. })
-        ));
+        let e = generate_discs(&pts, Orientation::Canonical, &bad.0, 0).unwrap_err();
+        assert!(
+            matches!(e, MapError::Config { stage: "SLD", field, .. } if field == bad.1),
+            "{e:?}"
+        );
+        let msg = e.to_string();
+        assert!(
+            msg.starts_with(&format!("SLD config `{}`: expected ", bad.1))
+                && msg.ends_with(&format!(", got {}", bad.2)),
+            "{msg}"
+        );
     }
     let far = vec![Point3::new(1e9, 0.0, 0.0)];
     assert!(matches!(
         generate_discs(&far, Orientation::Canonical, &cfg, 0),
-        Err(SldError::OutOfRange { index: 0, .. })
+        Err(MapError::OutOfRange { index: 0, .. })
     ));
 }
 
@@ -466,10 +490,17 @@ fn csv_round_trip_and_errors() {
     .unwrap_err();
     assert!(e.to_string().contains("points"), "{e}");
     assert!(parse_discs_csv("", "e.csv").is_err());
-    assert!(matches!(
-        load_discs_csv(&dir.path().join("missing.csv")),
-        Err(SldError::Io { .. })
-    ));
+    let missing = dir.path().join("missing.csv");
+    let e = load_discs_csv(&missing).unwrap_err();
+    assert!(
+        matches!(&e, MapError::Io { path, op: map::IoOp::Read, .. } if *path == missing),
+        "{e:?}"
+    );
+    assert!(
+        e.to_string()
+            .starts_with(&format!("{}: cannot read: ", missing.display())),
+        "{e}"
+    );
     // Bad extra columns are refused before anything is written.
     let mut out = Vec::new();
     let bad = ExtraColumn {

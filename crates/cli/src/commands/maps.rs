@@ -8,8 +8,10 @@ use super::output::{Staged, config_toml, load_config};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use geom::Real;
-use map::segment::{SegmentConfig, load_poses_csv, save_segments_json, segment_discs};
-use map::sld::{SldConfig, generate_discs, load_discs_csv, load_points, save_discs_csv};
+use map::segment::{SegmentConfig, segment_discs};
+use map::segment_io::{load_poses_csv, save_segments_json};
+use map::sld::{SldConfig, generate_discs};
+use map::sld_io::{load_discs_csv, load_points, save_discs_csv};
 use map::{MapConfig, Mapper};
 use sensor::Sweep;
 use std::path::PathBuf;
@@ -168,7 +170,7 @@ pub struct MapArgs {
     /// bound the grid (default: the config's, which are the bridge scenarios').
     #[arg(long)]
     scenario: Option<String>,
-    /// The whole map configuration (TOML, fields of `MapConfig`: [occupancy], [tsdf]).
+    /// The whole map configuration (TOML, fields of `MapConfig`: tables `[occupancy]`, `[tsdf]`).
     #[arg(long)]
     config: Option<PathBuf>,
     /// Print the configuration in effect as TOML and exit.

@@ -1,5 +1,5 @@
 //! `surveyor model`: Pudney's incremental surface model (P ch. 2) fed from a
-//! file of sensor sets, with per-update timing ([`surface::replay`]).
+//! file of sensor sets, with per-update timing ([`mod@surface::replay`]).
 
 use super::output::{Staged, config_toml, load_config};
 use anyhow::{Context, Result, bail};
