@@ -352,38 +352,30 @@ fn map_applies_occlusion_weights_over_the_scan_grid() {
         r(1.0),
     ];
     let sweep = sensor::Sweep::from_range_grid(&bearings, &poses, &ranges).unwrap();
-    let file = dir.path().join("grid.ply");
-    sweep.write_ply(&file).unwrap();
-    let out = ok(&[
-        "map",
-        "--scans",
-        file.to_str().unwrap(),
-        "--voxel",
-        "0.05",
-        "--out",
-        dir.path().join("m").to_str().unwrap(),
-    ]);
+    // `surveyor map` of one sweep written to a scan file: (stdout, stderr).
+    let map_of = |sweep: &sensor::Sweep, name: &str| {
+        let file = dir.path().join(format!("{name}.ply"));
+        sweep.write_ply(&file).unwrap();
+        let out_dir = dir.path().join(name);
+        let o = surveyor(&[
+            "map",
+            "--scans",
+            file.to_str().unwrap(),
+            "--voxel",
+            "0.05",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let (out, _) = map_of(&sweep, "grid");
     assert!(out.contains("4 occlusion segments (scan grid)"), "{out}");
     // Without the grid only the two jumps along a scan are recoverable.
-    let list = sensor::Sweep::from_points(
-        sweep
-            .points()
-            .iter()
-            .map(|p| sensor::SweepPoint { cell: None, ..*p })
-            .collect(),
-    )
-    .unwrap();
-    let file = dir.path().join("list.ply");
-    list.write_ply(&file).unwrap();
-    let out = ok(&[
-        "map",
-        "--scans",
-        file.to_str().unwrap(),
-        "--voxel",
-        "0.05",
-        "--out",
-        dir.path().join("m2").to_str().unwrap(),
-    ]);
+    let (out, _) = map_of(&sweep.without_grid(), "list");
     assert!(out.contains("2 occlusion segments (no grid"), "{out}");
 
     // A sweep wholly outside the map's regions is integrated as nothing, with
@@ -400,17 +392,7 @@ fn map_applies_occlusion_weights_over_the_scan_grid() {
             .collect(),
     )
     .unwrap();
-    let file = dir.path().join("far.ply");
-    far.write_ply(&file).unwrap();
-    let o = surveyor(&[
-        "map",
-        "--scans",
-        file.to_str().unwrap(),
-        "--out",
-        dir.path().join("m3").to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success());
+    let (_, err) = map_of(&far, "far");
     assert!(
         err.contains("far.ply") && err.contains("all 12 rays lie outside the map"),
         "{err}"

@@ -314,15 +314,7 @@ fn range_jumps_use_both_grid_directions() {
     sweep.write_ply(&path).unwrap();
     let back = Sweep::read_ply(&path).unwrap();
     assert_eq!(map::range_jumps(&back, &occ).len(), 2);
-    let list = Sweep::from_points(
-        sweep
-            .points()
-            .iter()
-            .map(|p| sensor::SweepPoint { cell: None, ..*p })
-            .collect(),
-    )
-    .unwrap();
-    assert_eq!(map::range_jumps(&list, &occ).len(), 1);
+    assert_eq!(map::range_jumps(&sweep.without_grid(), &occ).len(), 1);
 }
 
 #[test]

@@ -319,6 +319,21 @@ impl Sweep {
         &self.bearings_rad
     }
 
+    /// The same returns as a plain list: no grid cells, scanner poses or
+    /// bearings (what a foreign cloud with ray origins gives).
+    pub fn without_grid(&self) -> Self {
+        Self {
+            points: self
+                .points
+                .iter()
+                .map(|p| SweepPoint { cell: None, ..*p })
+                .collect(),
+            shape: None,
+            scanner_poses: Vec::new(),
+            bearings_rad: Vec::new(),
+        }
+    }
+
     /// The measured points alone.
     pub fn positions(&self) -> Vec<Point3> {
         self.points.iter().map(|p| p.point).collect()
