@@ -196,6 +196,9 @@ pub struct BuildParams {
     pub max_leaf: usize,
     /// Cost of a node visit relative to one primitive test, for the SAH.
     pub traversal_cost: f32,
+    /// Primitives tested together in one step (SIMD lanes): the SAH counts a
+    /// set of `n` primitives as `⌈n / block⌉` tests.
+    pub block: usize,
 }
 
 impl Default for BuildParams {
@@ -206,6 +209,7 @@ impl Default for BuildParams {
             bins: 16,
             max_leaf: 8,
             traversal_cost: 1.0,
+            block: 1,
         }
     }
 }
@@ -231,6 +235,7 @@ impl Bvh {
             bins: params.bins.clamp(2, MAX_BINS),
             max_leaf: params.max_leaf.max(1),
             traversal_cost: params.traversal_cost,
+            block: params.block.max(1),
         };
         let n = bounds.len();
         let mut prim_indices: Vec<u32> = (0..n as u32).collect();
@@ -499,6 +504,7 @@ fn best_split(
 ) -> Option<(usize, f32)> {
     let count = slice.len();
     let bins = params.bins;
+    let blocks = |n: u32| n.div_ceil(params.block as u32) as f32;
     let mut best_cost = f32::INFINITY;
     let mut best: Option<(usize, f32)> = None;
     #[allow(clippy::needless_range_loop)] // `axis` indexes boxes and centroids alike
@@ -536,14 +542,14 @@ fn best_split(
             if left_count[l] == 0 || cnt == 0 {
                 continue;
             }
-            let cost = left_count[l] as f32 * left_area[l] + cnt as f32 * acc.half_area();
+            let cost = blocks(left_count[l]) * left_area[l] + blocks(cnt) * acc.half_area();
             if cost < best_cost {
                 best_cost = cost;
                 best = Some((axis, lo + i as f32 / scale));
             }
         }
     }
-    let leaf_cost = count as f32;
+    let leaf_cost = blocks(count as u32);
     let split_cost = if parent_half_area > 0.0 {
         params.traversal_cost + best_cost / parent_half_area
     } else {

@@ -21,7 +21,9 @@ pub const LEAF: u32 = 1 << 31;
 pub const NO_CHILD: u32 = u32::MAX;
 
 /// Up to four children: their boxes lane by lane, and what they are.
+/// 112 bytes padded to two whole cache lines, so a visit never touches a third.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
 pub struct Node4 {
     /// Lowest x, y, z then highest x, y, z of the four child boxes (lane k is
     /// child k). Unused lanes hold the empty box (+∞ lows, −∞ highs).
@@ -125,6 +127,60 @@ pub struct Bvh4 {
     nodes: Vec<Node4>,
 }
 
+/// What [`Bvh4::closest_hit`] does at the leaves.
+pub trait LeafTest {
+    /// The closest primitive hit of leaf `payload` along `ray` no farther than
+    /// `t_best`: `(id, t)`.
+    fn test(&mut self, ray: &RayF32, payload: u32, t_best: f32) -> Option<(u32, f32)>;
+
+    /// Ask the cache for the leaf's data, which will be tested soon.
+    fn prefetch(&self, _payload: u32) {}
+}
+
+/// Ask the cache for the line holding `x` (a no-op where not supported).
+#[inline]
+pub fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    safe_arch::prefetch_t0(x);
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
+/// Rays walked in turn by [`Bvh4::closest_hits`].
+pub const INTERLEAVE: usize = 8;
+
+/// The state of one ray's walk down the tree.
+#[derive(Clone, Debug)]
+struct Walk {
+    ray: RayF32,
+    r4: Ray4,
+    /// The reference to visit next.
+    cur: u32,
+    best_t: f32,
+    best: Option<u32>,
+    stack: Stack,
+}
+
+impl Walk {
+    #[inline]
+    fn new(ray: RayF32, t_max: f32, mut stack: Stack) -> Self {
+        stack.clear();
+        Self {
+            r4: Ray4::new(&ray),
+            ray,
+            cur: 0,
+            best_t: t_max,
+            best: None,
+            stack,
+        }
+    }
+
+    #[inline]
+    fn result(&self) -> Option<(u32, f32)> {
+        self.best.map(|id| (id, self.best_t))
+    }
+}
+
 /// A traversal stack: (child reference, entry distance). Reuse one across rays
 /// to keep allocation out of the loop.
 pub type Stack = Vec<(u32, f32)>;
@@ -203,76 +259,133 @@ impl Bvh4 {
         &self.nodes
     }
 
-    /// Closest hit along `ray` up to `t_max`: calls `leaf(payload, t_best)` for
-    /// the leaves whose boxes the ray enters, nearest box first; `leaf` returns
-    /// `(id, t)` for its closest primitive hit no farther than `t_best`. The first
-    /// hit found is kept even at exactly `t_max` (closed intervals work), later
-    /// ones only when strictly closer. Returns the winning id and distance.
+    /// Closest hit along `ray` up to `t_max`: calls [`LeafTest::test`] for the
+    /// leaves whose boxes the ray enters, nearest box first. The first hit found
+    /// is kept even at exactly `t_max` (closed intervals work), later ones only
+    /// when strictly closer. Returns the winning id and distance.
     #[inline]
-    pub fn closest_hit<F>(
+    pub fn closest_hit<L: LeafTest>(
         &self,
         ray: &RayF32,
         t_max: f32,
         stack: &mut Stack,
-        mut leaf: F,
-    ) -> Option<(u32, f32)>
-    where
-        F: FnMut(u32, f32) -> Option<(u32, f32)>,
-    {
-        stack.clear();
+        leaf: &mut L,
+    ) -> Option<(u32, f32)> {
         if self.nodes.is_empty() {
             return None;
         }
-        let r = Ray4::new(ray);
-        let mut best_t = t_max;
-        let mut best: Option<u32> = None;
-        let mut cur = 0u32;
-        loop {
-            if cur & LEAF == 0 {
-                if let Some(n) = self.nodes.get(cur as usize) {
-                    let (t_near, mask) = r.enter(n, f32x4::splat(best_t));
-                    if mask != 0 {
-                        if mask & (mask - 1) == 0 {
-                            cur = n.child[mask.trailing_zeros() as usize & 3];
-                            continue;
-                        }
-                        // Several: push them farthest first, go on with the nearest.
-                        let d = t_near.to_array();
-                        let base = stack.len();
-                        let mut m = mask;
-                        while m != 0 {
-                            let k = m.trailing_zeros() as usize & 3;
-                            m &= m - 1;
-                            let e = (n.child[k], d[k]);
-                            stack.push(e);
-                            let mut j = stack.len() - 1;
-                            while j > base && stack[j - 1].1 < e.1 {
-                                stack.swap(j - 1, j);
-                                j -= 1;
-                            }
-                        }
-                        if let Some((c, _)) = stack.pop() {
-                            cur = c;
-                            continue;
+        stack.clear();
+        let mut walk = Walk::new(*ray, t_max, std::mem::take(stack));
+        while self.step(&mut walk, leaf) {}
+        *stack = std::mem::take(&mut walk.stack);
+        walk.result()
+    }
+
+    /// [`Bvh4::closest_hit`] for many rays: `out[i]` receives ray `i`'s hit
+    /// (`out` as long as `rays`). [`INTERLEAVE`] rays are walked in turn, one node
+    /// each, and each prefetches the node it will visit next, so the cache misses
+    /// of independent rays overlap instead of following one another (the walk is
+    /// memory-bound for incoherent rays). Same results as one ray at a time.
+    pub fn closest_hits<L: LeafTest>(
+        &self,
+        rays: &[RayF32],
+        t_max: f32,
+        leaf: &mut L,
+        out: &mut [Option<(u32, f32)>],
+    ) {
+        if self.nodes.is_empty() {
+            out.fill(None);
+            return;
+        }
+        let n = rays.len().min(out.len());
+        let mut lanes: Vec<(usize, Walk)> = (0..n.min(INTERLEAVE))
+            .map(|i| (i, Walk::new(rays[i], t_max, Vec::with_capacity(64))))
+            .collect();
+        let mut next = lanes.len();
+        while !lanes.is_empty() {
+            let mut k = 0;
+            while k < lanes.len() {
+                let (id, walk) = &mut lanes[k];
+                if self.step(walk, leaf) {
+                    k += 1;
+                    continue;
+                }
+                out[*id] = walk.result();
+                if next < n {
+                    let stack = std::mem::take(&mut walk.stack);
+                    *walk = Walk::new(rays[next], t_max, stack);
+                    *id = next;
+                    next += 1;
+                    k += 1;
+                } else {
+                    lanes.swap_remove(k);
+                }
+            }
+        }
+    }
+
+    /// One visit: test the current node's children or the current leaf, choose
+    /// the next reference (nearest entered child, else the stack) and prefetch it.
+    /// `false` when the walk is over.
+    #[inline]
+    fn step<L: LeafTest>(&self, w: &mut Walk, leaf: &mut L) -> bool {
+        let cur = w.cur;
+        if cur & LEAF == 0 {
+            if let Some(n) = self.nodes.get(cur as usize) {
+                let (t_near, mask) = w.r4.enter(n, f32x4::splat(w.best_t));
+                if mask != 0 {
+                    if mask & (mask - 1) == 0 {
+                        w.cur = n.child[mask.trailing_zeros() as usize & 3];
+                        self.prefetch(w.cur, leaf);
+                        return true;
+                    }
+                    // Several: push them farthest first, go on with the nearest.
+                    let d = t_near.to_array();
+                    let base = w.stack.len();
+                    let mut m = mask;
+                    while m != 0 {
+                        let k = m.trailing_zeros() as usize & 3;
+                        m &= m - 1;
+                        let e = (n.child[k], d[k]);
+                        w.stack.push(e);
+                        let mut j = w.stack.len() - 1;
+                        while j > base && w.stack[j - 1].1 < e.1 {
+                            w.stack.swap(j - 1, j);
+                            j -= 1;
                         }
                     }
-                }
-            } else if let Some((id, t)) = leaf(cur & !LEAF, best_t)
-                && (t < best_t || (best.is_none() && t <= best_t))
-            {
-                best_t = t;
-                best = Some(id);
-            }
-            // Pop the next child still worth visiting.
-            loop {
-                let Some((c, d)) = stack.pop() else {
-                    return best.map(|id| (id, best_t));
-                };
-                if d <= best_t {
-                    cur = c;
-                    break;
+                    if let Some((c, _)) = w.stack.pop() {
+                        w.cur = c;
+                        self.prefetch(c, leaf);
+                        return true;
+                    }
                 }
             }
+        } else if let Some((id, t)) = leaf.test(&w.ray, cur & !LEAF, w.best_t)
+            && (t < w.best_t || (w.best.is_none() && t <= w.best_t))
+        {
+            w.best_t = t;
+            w.best = Some(id);
+        }
+        // Pop the next child still worth visiting.
+        while let Some((c, d)) = w.stack.pop() {
+            if d <= w.best_t {
+                w.cur = c;
+                self.prefetch(c, leaf);
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Prefetch what a child reference points to.
+    #[inline]
+    fn prefetch<L: LeafTest>(&self, c: u32, leaf: &L) {
+        if c & LEAF != 0 {
+            leaf.prefetch(c & !LEAF);
+        } else if let Some(node) = self.nodes.get(c as usize) {
+            prefetch(node);
+            prefetch(&node.planes[4]);
         }
     }
 

@@ -5,7 +5,7 @@ use crate::bvh::{Aabb32, BuildParams, Bvh, RayF32};
 use crate::error::SceneError;
 use crate::material::{Material, MaterialId, validate_materials};
 use crate::mesh::TriMesh;
-use crate::wide::{Bvh4, Stack};
+use crate::wide::{Bvh4, LeafTest, Stack, prefetch};
 use geom::{Aabb, Capsule, Point3, Ray, Real, Triangle, UnitVector3, Vector3};
 use rayon::prelude::*;
 use std::cell::RefCell;
@@ -114,6 +114,7 @@ const DET_MIN: f32 = 1e-20;
 /// Möller–Trumbore test; lanes beyond a leaf's triangles are all zero
 /// (determinant 0: never hit).
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
 struct Tri4 {
     v0: [f32x4; 3],
     e1: [f32x4; 3],
@@ -191,6 +192,53 @@ struct RayLanes {
     dir: [f32x4; 3],
 }
 
+/// The leaves of the wide tree: packets of four triangles, tested against one ray.
+struct PacketLeaves<'a> {
+    packets: &'a [Tri4],
+}
+
+impl PacketLeaves<'_> {
+    #[inline]
+    fn range(payload: u32) -> Range<usize> {
+        let start = (payload >> PACKET_BITS) as usize;
+        start..start + (payload & ((1 << PACKET_BITS) - 1)) as usize
+    }
+}
+
+impl LeafTest for PacketLeaves<'_> {
+    /// The closest hit among the leaf's packets: `(packet · 4 + lane, t)`.
+    #[inline]
+    fn test(&mut self, ray: &RayF32, payload: u32, t_best: f32) -> Option<(u32, f32)> {
+        let ray = RayLanes {
+            origin: ray.origin.map(f32x4::splat),
+            dir: ray.dir.map(f32x4::splat),
+        };
+        let range = Self::range(payload);
+        let start = range.start;
+        let packets = self.packets.get(range)?;
+        let mut found: Option<(u32, f32)> = None;
+        let mut best = t_best;
+        for (k, packet) in packets.iter().enumerate() {
+            if let Some((lane, t)) = packet.hit(&ray, best)
+                && found.is_none_or(|(_, b)| t < b)
+            {
+                best = t;
+                found = Some(((start + k) as u32 * 4 + lane as u32, t));
+            }
+        }
+        found
+    }
+
+    #[inline]
+    fn prefetch(&self, payload: u32) {
+        if let Some(p) = self.packets.get(Self::range(payload).start) {
+            prefetch(p);
+            prefetch(&p.e1[1]);
+            prefetch(&p.e2[2]);
+        }
+    }
+}
+
 /// Packets per leaf are stored in the low bits of a wide-tree leaf payload.
 const PACKET_BITS: u32 = 4;
 /// The SAH build of the triangle tree: leaves of at most four triangles (one
@@ -199,6 +247,7 @@ const TRIANGLE_BUILD: BuildParams = BuildParams {
     bins: 16,
     max_leaf: 4,
     traversal_cost: 1.0,
+    block: 4,
 };
 
 thread_local! {
@@ -457,46 +506,42 @@ impl Scene {
         stack: &mut Stack,
     ) -> Option<(f32, u32)> {
         let ray = RayF32::new(origin, dir);
-        let lanes = RayLanes {
-            origin: origin.map(f32x4::splat),
-            dir: dir.map(f32x4::splat),
+        let mut leaves = PacketLeaves {
+            packets: &self.packets,
         };
         self.bvh4
-            .closest_hit(&ray, t_max, stack, |payload, best| {
-                let start = (payload >> PACKET_BITS) as usize;
-                let count = (payload & ((1 << PACKET_BITS) - 1)) as usize;
-                let packets = self.packets.get(start..start + count)?;
-                let mut found: Option<(u32, f32)> = None;
-                let mut best = best;
-                for (k, packet) in packets.iter().enumerate() {
-                    if let Some((lane, t)) = packet.hit(&lanes, best)
-                        && found.is_none_or(|(_, b)| t < b)
-                    {
-                        best = t;
-                        found = Some(((start + k) as u32 * 4 + lane as u32, t));
-                    }
-                }
-                found
-            })
-            .and_then(|(lane_id, t)| {
-                let faces = self.packet_faces.get((lane_id / 4) as usize)?;
-                Some((t, faces[(lane_id % 4) as usize]))
-            })
+            .closest_hit(&ray, t_max, stack, &mut leaves)
+            .and_then(|hit| self.lane_face(hit))
+    }
+
+    /// `(t, face)` of a packet-lane hit.
+    #[inline]
+    fn lane_face(&self, (lane_id, t): (u32, f32)) -> Option<(f32, u32)> {
+        let faces = self.packet_faces.get((lane_id / 4) as usize)?;
+        Some((t, faces[(lane_id % 4) as usize]))
     }
 
     /// Bulk ray casting: `rays` holds six floats per ray (origin, unit direction);
     /// `out` receives one distance per ray, `+inf` on a miss. Runs on the rayon
-    /// pool of the caller, in chunks of 1024 rays that share a traversal stack.
+    /// pool of the caller, in chunks of 1024 rays, each walked several rays at a
+    /// time ([`Bvh4::closest_hits`]).
     pub fn cast_rays_f32(&self, rays: &[[f32; 6]], t_max: f32, out: &mut [f32]) {
         const CHUNK: usize = 1024;
         out.par_chunks_mut(CHUNK)
             .zip(rays.par_chunks(CHUNK))
             .for_each(|(out, rays)| {
-                let mut stack = Vec::with_capacity(64);
-                for (o, r) in out.iter_mut().zip(rays) {
-                    *o = self
-                        .first_hit_with([r[0], r[1], r[2]], [r[3], r[4], r[5]], t_max, &mut stack)
-                        .map_or(f32::INFINITY, |(t, _)| t);
+                let prepared: Vec<RayF32> = rays
+                    .iter()
+                    .map(|r| RayF32::new([r[0], r[1], r[2]], [r[3], r[4], r[5]]))
+                    .collect();
+                let mut hits = vec![None; prepared.len()];
+                let mut leaves = PacketLeaves {
+                    packets: &self.packets,
+                };
+                self.bvh4
+                    .closest_hits(&prepared, t_max, &mut leaves, &mut hits);
+                for (o, h) in out.iter_mut().zip(hits) {
+                    *o = h.map_or(f32::INFINITY, |(_, t)| t);
                 }
             });
     }
