@@ -20,6 +20,29 @@ pub const LEAF: u32 = 1 << 31;
 /// The reference of an unused child slot; its box is empty, so no ray enters it.
 pub const NO_CHILD: u32 = u32::MAX;
 
+/// A box grown by about eight units in the last place of its coordinates
+/// (relative 2⁻²⁰, plus 10⁻⁹ m near zero). A ray running exactly along a face of
+/// a tight box (a zero direction component, as on an axis-aligned structure)
+/// would otherwise leave the face's slab at `t = 0` and miss the triangles lying
+/// on that face, and rounding in the slab products could drop grazing hits; the
+/// triangle test, not the box, decides a hit. Monotone, so children stay inside
+/// their parents.
+fn padded(b: &Aabb32) -> Aabb32 {
+    const REL: f32 = 1.0 / (1u32 << 20) as f32;
+    const ABS: f32 = 1e-9;
+    let pad = |v: f32| {
+        if v.is_finite() {
+            v.abs() * REL + ABS
+        } else {
+            0.0
+        }
+    };
+    Aabb32 {
+        min: b.min.map(|v| v - pad(v)),
+        max: b.max.map(|v| v + pad(v)),
+    }
+}
+
 /// Up to four children: their boxes lane by lane, and what they are.
 /// 112 bytes padded to two whole cache lines, so a visit never touches a third.
 #[derive(Clone, Copy, Debug)]
@@ -147,7 +170,7 @@ pub fn prefetch<T>(x: &T) {
 }
 
 /// Rays walked in turn by [`Bvh4::closest_hits`].
-pub const INTERLEAVE: usize = 8;
+pub const INTERLEAVE: usize = 16;
 
 /// The state of one ray's walk down the tree.
 #[derive(Clone, Debug)]
@@ -232,10 +255,10 @@ impl Bvh4 {
             }
             for (lane, &k) in kids[..len].iter().enumerate() {
                 let kn = bvh.nodes.get(k)?;
-                let b = Aabb32 {
+                let b = padded(&Aabb32 {
                     min: kn.min,
                     max: kn.max,
-                };
+                });
                 let child = if kn.count > 0 {
                     let p = payload(kn.first, kn.count);
                     if p >= LEAF {
