@@ -8,6 +8,12 @@
 //! are visited nearest first, and farther ones wait on an explicit stack with their
 //! entry distances, dropped when a closer hit has been found meanwhile.
 //!
+//! Incoherent rays make the walk memory-bound (most node visits miss the cache),
+//! so batches ([`Bvh4::closest_hits`]) walk [`INTERLEAVE`] rays in turn, one node
+//! each, each ray prefetching the node or leaf it will visit next: the misses of
+//! independent rays overlap instead of following one another (in the manner of
+//! asynchronous memory-access chaining, Kocberber et al. 2015).
+//!
 //! The leaves are the binary tree's leaves; what a leaf holds is the caller's
 //! business: [`Bvh4::from_binary`] asks the caller for a 31-bit payload per leaf and
 //! [`Bvh4::closest_hit`] hands that payload back when a ray reaches the leaf.
