@@ -290,6 +290,7 @@ fn raycast_round_trip_against_a_known_plane() {
         "1",
     ]);
     assert!(stdout.contains("Mrays/s"), "{stdout}");
+    assert!(stdout.contains("median of 5 casts"), "{stdout}");
     let d: Vec<f32> = std::fs::read(&out)
         .unwrap()
         .chunks_exact(4)

@@ -1,4 +1,27 @@
 //! Triangles: ray hits, closest points, segment distance and intersection.
+//!
+//! # The ray–triangle convention
+//!
+//! One rule for every ray–triangle test of the workspace: this crate's
+//! [`Triangle::ray_hit`] (double precision) and the single-precision tests behind
+//! `scene`'s BVH (`Scene::first_hit_f32`, `Scene::cast_rays_f32`, `RayCast::cast_ray`
+//! on a scene). A ray `o + t·d` (unit `d`) hits the triangle `a b c` where
+//! `o + t·d = a + u·(b − a) + v·(c − a)` (Möller–Trumbore) with
+//!
+//! - **closed distance interval**: `0 ≤ t ≤ t_max` — a surface through the ray's
+//!   origin (`t = 0`) and one at exactly `t_max` are hit (as in Embree, whose
+//!   interval is `[tnear, tfar]`);
+//! - **closed triangle**: `u ≥ 0`, `v ≥ 0`, `u + v ≤ 1` — edges and vertices belong
+//!   to the triangle, so a ray through an edge shared by two triangles hits both
+//!   (at the same distance), and no ray slips through a closed mesh at an edge;
+//! - **either side**: front and back faces alike;
+//! - **parallel rays miss**: a ray parallel to the triangle's plane, including one
+//!   lying in it, misses (|determinant| below 10⁻³⁰⁰ here, 10⁻²⁰ in `f32`).
+//!
+//! Where several triangles are hit at the same smallest distance, which one is
+//! reported is unspecified; the distance is not. `tests` here and `scene`'s
+//! `tests/convention.rs` pin the rule on rays through edges, vertices, at `t = 0`
+//! and at `t = t_max`.
 
 use crate::line::{Segment3, closest_segment_segment};
 use crate::math::{Point3, Real, UnitVector3, Vector3, unit};
@@ -46,7 +69,8 @@ impl Triangle {
     }
 
     /// Distance along `ray` to the triangle (either side), if it is hit within
-    /// `[0, t_max]` (Möller–Trumbore).
+    /// `[0, t_max]`, edges and vertices included (Möller–Trumbore): the
+    /// workspace's [ray–triangle convention](self#the-raytriangle-convention).
     #[inline]
     pub fn ray_hit(&self, ray: &Ray, t_max: Real) -> Option<Real> {
         let e1 = self.b - self.a;
@@ -64,11 +88,11 @@ impl Triangle {
         }
         let qvec = tvec.cross(&e1);
         let v = ray.dir.dot(&qvec) * inv;
-        if v < 0.0 || u + v > 1.0 {
+        if !(v >= 0.0 && u + v <= 1.0) {
             return None;
         }
         let t = e2.dot(&qvec) * inv;
-        (t >= 0.0 && t <= t_max).then_some(t)
+        (0.0..=t_max).contains(&t).then_some(t)
     }
 
     /// The closest point of the triangle to `p` (Ericson, *Real-Time Collision
@@ -209,6 +233,42 @@ mod tests {
         assert!(t.ray_hit(&miss, 10.0).is_none());
         let away = Ray::new(Point3::new(0.25, 0.25, 2.0), -down);
         assert!(t.ray_hit(&away, 10.0).is_none());
+    }
+
+    /// The convention (module docs) on exact cases: every number below is a
+    /// small dyadic fraction, so Möller–Trumbore computes it without rounding.
+    #[test]
+    fn ray_hit_convention_edges_vertices_and_interval_ends() {
+        let t = tri();
+        let down = UnitVector3::new_normalize(Vector3::new(0.0, 0.0, -1.0));
+        let from = |x: f64, y: f64, z: f64| Ray::new(Point3::new(x, y, z), down);
+        // Vertices and edge points are hit (closed triangle)...
+        for (x, y) in [
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (0.0, 1.0),
+            (0.5, 0.0),
+            (0.0, 0.5),
+            (0.5, 0.5),
+            (0.25, 0.75),
+        ] {
+            assert_eq!(t.ray_hit(&from(x, y, 2.0), 10.0), Some(2.0), "({x}, {y})");
+        }
+        // ...points just outside are not.
+        for (x, y) in [(-0.125, 0.5), (0.5, -0.125), (0.625, 0.5), (1.0, 0.125)] {
+            assert_eq!(t.ray_hit(&from(x, y, 2.0), 10.0), None, "({x}, {y})");
+        }
+        // Closed distance interval: t == t_max and t == 0 are hits, just short
+        // of the surface is not.
+        assert_eq!(t.ray_hit(&from(0.25, 0.25, 2.0), 2.0), Some(2.0));
+        assert_eq!(t.ray_hit(&from(0.25, 0.25, 2.0), 1.999_999), None);
+        assert_eq!(t.ray_hit(&from(0.25, 0.25, 0.0), 1.0), Some(0.0));
+        // Either side.
+        let up = Ray::new(Point3::new(0.25, 0.25, -0.5), -down);
+        assert_eq!(t.ray_hit(&up, 1.0), Some(0.5));
+        // A ray in the triangle's plane misses, even through its interior.
+        let along = Ray::new(Point3::new(-1.0, 0.25, 0.0), Vector3::x_axis());
+        assert_eq!(t.ray_hit(&along, 10.0), None);
     }
 
     #[test]

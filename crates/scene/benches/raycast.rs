@@ -1,5 +1,8 @@
 //! Ray-casting throughput on the benchmark structure (~66 k triangles):
-//! one million incoherent rays, on one thread and on all threads.
+//! one million incoherent rays, one at a time through `first_hit_f32` (the path of
+//! `RayCast::cast_ray`), and in batches through `cast_rays_f32` (sixteen rays
+//! interleaved per thread, the path of `surveyor raycast` and of
+//! `../shared/bench/compare.sh`) on one and two threads.
 //!
 //! `cargo bench -p scene --bench raycast`
 #![allow(clippy::expect_used)] // a benchmark without its fixture cannot run
@@ -22,7 +25,7 @@ fn raycast(c: &mut Criterion) {
     let mut group = c.benchmark_group("raycast_66k");
     group.sample_size(10);
     group.throughput(Throughput::Elements(rays.len() as u64));
-    group.bench_function("incoherent_1M_one_thread", |b| {
+    group.bench_function("incoherent_1M_single_rays_one_thread", |b| {
         b.iter(|| {
             for (o, r) in out.iter_mut().zip(&rays) {
                 *o = scene

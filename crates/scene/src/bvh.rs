@@ -186,16 +186,57 @@ pub struct Bvh {
     pub prim_indices: Vec<u32>,
 }
 
-const BINS: usize = 16;
-const MAX_LEAF: usize = 8;
-/// Cost of a node visit relative to a primitive test, for the SAH.
-const TRAVERSAL_COST: f32 = 1.0;
-const STACK_SIZE: usize = 64;
+/// Parameters of the binned-SAH build.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BuildParams {
+    /// Bins per axis (at least 2).
+    pub bins: usize,
+    /// Largest leaf: larger sets are always split (by position, or by order when
+    /// every centroid coincides).
+    pub max_leaf: usize,
+    /// Cost of a node visit relative to one primitive test, for the SAH.
+    pub traversal_cost: f32,
+    /// Primitives tested together in one step (SIMD lanes): the SAH counts a
+    /// set of `n` primitives as `⌈n / block⌉` tests.
+    pub block: usize,
+}
+
+impl Default for BuildParams {
+    /// 16 bins, leaves of at most 8, a node visit as dear as a primitive test:
+    /// the setting for scalar primitive tests ([`Bvh::closest_hit`]).
+    fn default() -> Self {
+        Self {
+            bins: 16,
+            max_leaf: 8,
+            traversal_cost: 1.0,
+            block: 1,
+        }
+    }
+}
+
+/// Largest number of bins [`BuildParams::bins`] may ask for.
+pub const MAX_BINS: usize = 64;
+/// Deepest tree [`Bvh::check_invariants`] accepts.
+pub const MAX_DEPTH: usize = 64;
+const STACK_SIZE: usize = MAX_DEPTH;
 
 impl Bvh {
-    /// Build over primitives with the given boxes and centroids (same length).
+    /// Build over primitives with the given boxes and centroids (same length),
+    /// with [`BuildParams::default`].
     pub fn build(bounds: &[Aabb32], centroids: &[[f32; 3]]) -> Self {
+        Self::build_with(bounds, centroids, &BuildParams::default())
+    }
+
+    /// Build over primitives with the given boxes and centroids (same length).
+    /// `params.bins` is clamped to `2..=MAX_BINS` and `params.max_leaf` to at least 1.
+    pub fn build_with(bounds: &[Aabb32], centroids: &[[f32; 3]], params: &BuildParams) -> Self {
         debug_assert_eq!(bounds.len(), centroids.len());
+        let params = BuildParams {
+            bins: params.bins.clamp(2, MAX_BINS),
+            max_leaf: params.max_leaf.max(1),
+            traversal_cost: params.traversal_cost,
+            block: params.block.max(1),
+        };
         let n = bounds.len();
         let mut prim_indices: Vec<u32> = (0..n as u32).collect();
         if n == 0 {
@@ -228,23 +269,21 @@ impl Bvh {
             }
             nodes[node].min = bbox.min;
             nodes[node].max = bbox.max;
-            let split = if count <= 2 {
+            let split = if count <= 1 {
                 None
             } else {
-                best_split(slice, bounds, centroids, &cbox, bbox.half_area())
+                best_split(slice, bounds, centroids, &cbox, bbox.half_area(), &params)
             };
             let mid = match split {
                 Some((axis, pos)) => {
                     let mid = partition(slice, |p| centroids[p as usize][axis] < pos);
-                    if mid == 0 || mid == count {
-                        None
-                    } else {
-                        Some(mid)
-                    }
+                    (mid != 0 && mid != count).then_some(mid)
                 }
-                None if count > MAX_LEAF => Some(count / 2), // identical centroids: split by order
                 None => None,
             };
+            // A set too large for a leaf that the SAH cannot part (identical
+            // centroids, or a threshold that rounds to one side) is split by order.
+            let mid = mid.or((count > params.max_leaf).then_some(count / 2));
             if let Some(mid) = mid {
                 let left = nodes.len();
                 nodes[node].first = left as u32;
@@ -291,7 +330,9 @@ impl Bvh {
 
     /// Closest hit along a ray: calls `hit(slot, t_best)` for candidate leaf slots
     /// (positions in [`Bvh::prim_indices`], in front-to-back box order); `hit`
-    /// returns the hit distance when the primitive is hit closer than `t_best`.
+    /// returns the hit distance when the primitive is hit no farther than
+    /// `t_best`. The first hit found is kept even at exactly `t_max` (so closed
+    /// intervals `[0, t_max]` work), later ones only when strictly closer.
     /// Returns the winning slot and distance.
     #[inline]
     pub fn closest_hit<F>(&self, ray: &RayF32, t_max: f32, mut hit: F) -> Option<(u32, f32)>
@@ -315,7 +356,7 @@ impl Bvh {
                 let start = node.first;
                 for slot in start..start + node.count {
                     if let Some(t) = hit(slot, best_t)
-                        && t < best_t
+                        && (t < best_t || (best.is_none() && t <= best_t))
                     {
                         best_t = t;
                         best = Some(slot);
@@ -459,8 +500,11 @@ fn best_split(
     centroids: &[[f32; 3]],
     cbox: &Aabb32,
     parent_half_area: f32,
+    params: &BuildParams,
 ) -> Option<(usize, f32)> {
     let count = slice.len();
+    let bins = params.bins;
+    let blocks = |n: u32| n.div_ceil(params.block as u32) as f32;
     let mut best_cost = f32::INFINITY;
     let mut best: Option<(usize, f32)> = None;
     #[allow(clippy::needless_range_loop)] // `axis` indexes boxes and centroids alike
@@ -470,20 +514,20 @@ fn best_split(
         if extent <= 0.0 || !extent.is_finite() {
             continue;
         }
-        let scale = BINS as f32 / extent;
-        let mut bin_box = [Aabb32::EMPTY; BINS];
-        let mut bin_count = [0u32; BINS];
+        let scale = bins as f32 / extent;
+        let mut bin_box = [Aabb32::EMPTY; MAX_BINS];
+        let mut bin_count = [0u32; MAX_BINS];
         for &p in slice {
-            let b = (((centroids[p as usize][axis] - lo) * scale) as usize).min(BINS - 1);
+            let b = (((centroids[p as usize][axis] - lo) * scale) as usize).min(bins - 1);
             bin_count[b] += 1;
             bin_box[b].grow(&bounds[p as usize]);
         }
         // Sweep from the left and from the right.
-        let mut left_area = [0.0f32; BINS - 1];
-        let mut left_count = [0u32; BINS - 1];
+        let mut left_area = [0.0f32; MAX_BINS];
+        let mut left_count = [0u32; MAX_BINS];
         let mut acc = Aabb32::EMPTY;
         let mut cnt = 0;
-        for i in 0..BINS - 1 {
+        for i in 0..bins - 1 {
             acc.grow(&bin_box[i]);
             cnt += bin_count[i];
             left_area[i] = acc.half_area();
@@ -491,27 +535,27 @@ fn best_split(
         }
         let mut acc = Aabb32::EMPTY;
         let mut cnt = 0;
-        for i in (1..BINS).rev() {
+        for i in (1..bins).rev() {
             acc.grow(&bin_box[i]);
             cnt += bin_count[i];
             let l = i - 1;
             if left_count[l] == 0 || cnt == 0 {
                 continue;
             }
-            let cost = left_count[l] as f32 * left_area[l] + cnt as f32 * acc.half_area();
+            let cost = blocks(left_count[l]) * left_area[l] + blocks(cnt) * acc.half_area();
             if cost < best_cost {
                 best_cost = cost;
                 best = Some((axis, lo + i as f32 / scale));
             }
         }
     }
-    let leaf_cost = count as f32;
+    let leaf_cost = blocks(count as u32);
     let split_cost = if parent_half_area > 0.0 {
-        TRAVERSAL_COST + best_cost / parent_half_area
+        params.traversal_cost + best_cost / parent_half_area
     } else {
         f32::INFINITY
     };
-    if best.is_none() || (split_cost >= leaf_cost && count <= MAX_LEAF) {
+    if best.is_none() || (split_cost >= leaf_cost && count <= params.max_leaf) {
         return None;
     }
     best

@@ -9,6 +9,7 @@
 //! | [`world`] | [`Scene`]: triangles + materials + BVH; [`RayCast`], [`Hit`]; nearest point, capsule and triangle contacts |
 //! | [`cloud_world`] | [`PointCloudWorld`]: a real scan as a world, Pudney's ε rule (P§4.2) |
 //! | [`bvh`] | the binned-SAH bounding-volume hierarchy behind every query |
+//! | [`wide`] | its four-wide collapse, with SIMD box tests, for triangle ray casting |
 //! | [`primitives`] | (re-exported from `geom`) closed meshes of boxes, prisms, I-beams, cylinders |
 //! | [`sampling`] | uniform area samples of the true surfaces, for coverage metrics |
 //! | [`io`] | OBJ / STL / PLY meshes, PLY / PCD / text clouds, PLY output |
@@ -24,6 +25,7 @@ pub mod io;
 pub mod material;
 pub mod sampling;
 pub mod spec;
+pub mod wide;
 pub mod world;
 
 pub use cloud::PointCloud;

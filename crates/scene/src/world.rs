@@ -1,13 +1,16 @@
 //! Compiled scenes: a triangle soup with materials and a BVH, answering ray,
 //! nearest-point and collision queries.
 
-use crate::bvh::{Aabb32, Bvh, RayF32};
+use crate::bvh::{Aabb32, BuildParams, Bvh, RayF32};
 use crate::error::SceneError;
 use crate::material::{Material, MaterialId, validate_materials};
 use crate::mesh::TriMesh;
+use crate::wide::{Bvh4, LeafTest, Stack, prefetch};
 use geom::{Aabb, Capsule, Point3, Ray, Real, Triangle, UnitVector3, Vector3};
 use rayon::prelude::*;
+use std::cell::RefCell;
 use std::ops::{ControlFlow, Range};
+use wide::{CmpGe, CmpLe, f32x4};
 
 /// What a ray met.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -81,29 +84,175 @@ impl TriF32 {
         }
     }
 
-    /// Möller–Trumbore, both sides, hits in `(0, t_max)`.
+    /// Möller–Trumbore, both sides, under the convention of
+    /// [`geom::Triangle::ray_hit`]: hits at `t ∈ [0, t_max]`, edges and vertices
+    /// included (`u ≥ 0`, `v ≥ 0`, `u + v ≤ 1`), a ray in the triangle's plane
+    /// misses. The same operations in the same order as [`Tri4::hit`], so the two
+    /// agree to the bit.
     #[inline]
     fn hit(&self, o: &[f32; 3], d: &[f32; 3], t_max: f32) -> Option<f32> {
         let (e1, e2) = (&self.e1, &self.e2);
         let p = cross(d, e2);
         let det = dot(e1, &p);
-        if det.abs() < 1e-20 {
+        if det.abs() < DET_MIN {
             return None;
         }
         let inv = 1.0 / det;
         let s = [o[0] - self.v0[0], o[1] - self.v0[1], o[2] - self.v0[2]];
         let u = dot(&s, &p) * inv;
-        if !(0.0..=1.0).contains(&u) {
-            return None;
-        }
         let q = cross(&s, e1);
         let v = dot(d, &q) * inv;
-        if v < 0.0 || u + v > 1.0 {
+        let t = dot(e2, &q) * inv;
+        (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t >= 0.0 && t <= t_max).then_some(t)
+    }
+}
+
+/// Below this |determinant| a ray counts as lying in the triangle's plane.
+const DET_MIN: f32 = 1e-20;
+
+/// Four triangles side by side (structure of arrays) for one four-lane
+/// Möller–Trumbore test; lanes beyond a leaf's triangles are all zero
+/// (determinant 0: never hit).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Tri4 {
+    v0: [f32x4; 3],
+    e1: [f32x4; 3],
+    e2: [f32x4; 3],
+}
+
+impl Tri4 {
+    fn new(tris: &[TriF32]) -> Self {
+        let lanes = |f: &dyn Fn(&TriF32) -> [f32; 3]| -> [f32x4; 3] {
+            let mut a = [[0.0f32; 4]; 3];
+            for (lane, t) in tris.iter().take(4).enumerate() {
+                let v = f(t);
+                for axis in 0..3 {
+                    a[axis][lane] = v[axis];
+                }
+            }
+            a.map(f32x4::from)
+        };
+        Self {
+            v0: lanes(&|t| t.v0),
+            e1: lanes(&|t| t.e1),
+            e2: lanes(&|t| t.e2),
+        }
+    }
+
+    /// [`TriF32::hit`] on four triangles at once: the lane and distance of the
+    /// closest hit in `[0, t_max]` (the lowest lane on ties).
+    #[inline]
+    fn hit(&self, r: &RayLanes, t_max: f32) -> Option<(usize, f32)> {
+        let [dx, dy, dz] = r.dir;
+        let [e1x, e1y, e1z] = self.e1;
+        let [e2x, e2y, e2z] = self.e2;
+        let px = dy * e2z - dz * e2y;
+        let py = dz * e2x - dx * e2z;
+        let pz = dx * e2y - dy * e2x;
+        let det = e1x * px + e1y * py + e1z * pz;
+        let inv = f32x4::ONE / det;
+        let sx = r.origin[0] - self.v0[0];
+        let sy = r.origin[1] - self.v0[1];
+        let sz = r.origin[2] - self.v0[2];
+        let u = (sx * px + sy * py + sz * pz) * inv;
+        let qx = sy * e1z - sz * e1y;
+        let qy = sz * e1x - sx * e1z;
+        let qz = sx * e1y - sy * e1x;
+        let v = (dx * qx + dy * qy + dz * qz) * inv;
+        let t = (e2x * qx + e2y * qy + e2z * qz) * inv;
+        let zero = f32x4::ZERO;
+        let ok = det.abs().cmp_ge(f32x4::splat(DET_MIN))
+            & u.cmp_ge(zero)
+            & v.cmp_ge(zero)
+            & (u + v).cmp_le(f32x4::ONE)
+            & t.cmp_ge(zero)
+            & t.cmp_le(f32x4::splat(t_max));
+        let mut mask = ok.move_mask();
+        if mask == 0 {
             return None;
         }
-        let t = dot(e2, &q) * inv;
-        (t > 0.0 && t < t_max).then_some(t)
+        let ts = t.to_array();
+        let mut best: Option<(usize, f32)> = None;
+        while mask != 0 {
+            let k = mask.trailing_zeros() as usize & 3;
+            mask &= mask - 1;
+            if best.is_none_or(|(_, b)| ts[k] < b) {
+                best = Some((k, ts[k]));
+            }
+        }
+        best
     }
+}
+
+/// A ray's origin and direction, each coordinate in all four lanes.
+#[derive(Clone, Copy, Debug)]
+struct RayLanes {
+    origin: [f32x4; 3],
+    dir: [f32x4; 3],
+}
+
+/// The leaves of the wide tree: packets of four triangles, tested against one ray.
+struct PacketLeaves<'a> {
+    packets: &'a [Tri4],
+}
+
+impl PacketLeaves<'_> {
+    #[inline]
+    fn range(payload: u32) -> Range<usize> {
+        let start = (payload >> PACKET_BITS) as usize;
+        start..start + (payload & ((1 << PACKET_BITS) - 1)) as usize
+    }
+}
+
+impl LeafTest for PacketLeaves<'_> {
+    /// The closest hit among the leaf's packets: `(packet · 4 + lane, t)`.
+    #[inline]
+    fn test(&mut self, ray: &RayF32, payload: u32, t_best: f32) -> Option<(u32, f32)> {
+        let ray = RayLanes {
+            origin: ray.origin.map(f32x4::splat),
+            dir: ray.dir.map(f32x4::splat),
+        };
+        let range = Self::range(payload);
+        let start = range.start;
+        let packets = self.packets.get(range)?;
+        let mut found: Option<(u32, f32)> = None;
+        let mut best = t_best;
+        for (k, packet) in packets.iter().enumerate() {
+            if let Some((lane, t)) = packet.hit(&ray, best)
+                && found.is_none_or(|(_, b)| t < b)
+            {
+                best = t;
+                found = Some(((start + k) as u32 * 4 + lane as u32, t));
+            }
+        }
+        found
+    }
+
+    #[inline]
+    fn prefetch(&self, payload: u32) {
+        if let Some(p) = self.packets.get(Self::range(payload).start) {
+            prefetch(p);
+            prefetch(&p.e1[1]);
+            prefetch(&p.e2[2]);
+        }
+    }
+}
+
+/// Packets per leaf are stored in the low bits of a wide-tree leaf payload.
+const PACKET_BITS: u32 = 4;
+/// The SAH build of the triangle tree: leaves of at most four triangles (one
+/// four-lane packet).
+const TRIANGLE_BUILD: BuildParams = BuildParams {
+    bins: 16,
+    max_leaf: 4,
+    traversal_cost: 1.0,
+    block: 4,
+};
+
+thread_local! {
+    /// Traversal stack reused by single-ray queries on this thread.
+    static STACK: RefCell<Stack> = RefCell::new(Vec::with_capacity(64));
 }
 
 #[inline]
@@ -130,6 +279,13 @@ pub struct Scene {
     bvh: Bvh,
     /// Triangles in BVH slot order.
     tris: Vec<TriF32>,
+    /// The four-wide collapse of `bvh`, for bulk ray casting; its leaf payloads
+    /// are `first packet << PACKET_BITS | packet count`.
+    bvh4: Bvh4,
+    /// Each leaf's triangles in packets of four.
+    packets: Vec<Tri4>,
+    /// The triangle (face index) of each packet lane; `u32::MAX` for padding.
+    packet_faces: Vec<[u32; 4]>,
 }
 
 impl Scene {
@@ -176,8 +332,9 @@ impl Scene {
                 closed,
             });
         }
-        if mesh.triangles.len() >= u32::MAX as usize {
-            return Err(SceneError::invalid("scene", "more than 2³² triangles"));
+        // Packet indices must fit the wide tree's 31-bit leaf payloads.
+        if mesh.triangles.len() >= 1 << (31 - PACKET_BITS) {
+            return Err(SceneError::invalid("scene", "more than 2²⁷ triangles"));
         }
         let (bounds, centroids): (Vec<Aabb32>, Vec<[f32; 3]>) = mesh
             .iter_triangles()
@@ -187,12 +344,28 @@ impl Scene {
                 (b, [c.x as f32, c.y as f32, c.z as f32])
             })
             .unzip();
-        let bvh = Bvh::build(&bounds, &centroids);
-        let tris = bvh
+        let bvh = Bvh::build_with(&bounds, &centroids, &TRIANGLE_BUILD);
+        let tris: Vec<TriF32> = bvh
             .prim_indices
             .iter()
             .map(|&i| TriF32::new(&mesh.triangle(i as usize)))
             .collect();
+        let mut packets = Vec::new();
+        let mut packet_faces = Vec::new();
+        let bvh4 = Bvh4::from_binary(&bvh, |first, count| {
+            let start = packets.len() as u32;
+            let slots = first as usize..(first + count) as usize;
+            for (tri, slot) in tris[slots.clone()].chunks(4).zip(slots.step_by(4)) {
+                packets.push(Tri4::new(tri));
+                let mut faces = [u32::MAX; 4];
+                for (lane, f) in faces.iter_mut().take(tri.len()).enumerate() {
+                    *f = bvh.prim_indices[slot + lane];
+                }
+                packet_faces.push(faces);
+            }
+            (start << PACKET_BITS) | (packets.len() as u32 - start)
+        })
+        .ok_or_else(|| SceneError::invalid("scene", "too many triangles for the wide BVH"))?;
         Ok(Self {
             materials,
             objects: list,
@@ -200,6 +373,9 @@ impl Scene {
             tri_object,
             bvh,
             tris,
+            bvh4,
+            packets,
+            packet_faces,
         })
     }
 
@@ -260,32 +436,113 @@ impl Scene {
             .iter_triangles()
             .map(|t| Aabb32::from_f64(&Aabb::from_points([&t.a, &t.b, &t.c])))
             .collect();
-        self.bvh.check_invariants(&bounds)
+        self.bvh.check_invariants(&bounds)?;
+        // The wide tree: each face in exactly one leaf packet lane, inside the
+        // leaf's box, and the packets equal to the faces they name.
+        let mut seen = vec![false; bounds.len()];
+        self.bvh4.check_invariants(|payload, leaf_box| {
+            let start = (payload >> PACKET_BITS) as usize;
+            let count = (payload & ((1 << PACKET_BITS) - 1)) as usize;
+            if count == 0 {
+                return Err(format!("leaf {payload:#x} has no packets"));
+            }
+            for k in start..start + count {
+                let faces = self
+                    .packet_faces
+                    .get(k)
+                    .ok_or(format!("packet {k} missing"))?;
+                let packet = self.packets.get(k).ok_or(format!("packet {k} missing"))?;
+                for (lane, &f) in faces.iter().enumerate() {
+                    if f == u32::MAX {
+                        continue;
+                    }
+                    let b = bounds
+                        .get(f as usize)
+                        .ok_or(format!("packet {k} names face {f}"))?;
+                    if std::mem::replace(&mut seen[f as usize], true) {
+                        return Err(format!("face {f} in two packet lanes"));
+                    }
+                    if !leaf_box.contains(b) {
+                        return Err(format!("leaf box does not contain face {f}"));
+                    }
+                    let want = TriF32::new(&self.mesh.triangle(f as usize));
+                    let lane_of = |v: &[f32x4; 3]| v.map(|x| x.to_array()[lane]);
+                    if lane_of(&packet.v0) != want.v0
+                        || lane_of(&packet.e1) != want.e1
+                        || lane_of(&packet.e2) != want.e2
+                    {
+                        return Err(format!("packet {k} lane {lane} is not face {f}"));
+                    }
+                }
+            }
+            Ok(())
+        })?;
+        match seen.iter().position(|s| !s) {
+            Some(f) => Err(format!("face {f} in no packet")),
+            None => Ok(()),
+        }
     }
 
     /// The raw fast path: distance to the first triangle along a unit direction
     /// and its index, in single precision. Used by bulk ray casting.
+    ///
+    /// Hits follow the convention of [`geom::Triangle::ray_hit`]: `t ∈ [0, t_max]`,
+    /// edges and vertices included.
     #[inline]
     pub fn first_hit_f32(&self, origin: [f32; 3], dir: [f32; 3], t_max: f32) -> Option<(f32, u32)> {
+        STACK.with(|s| match s.try_borrow_mut() {
+            Ok(mut stack) => self.first_hit_with(origin, dir, t_max, &mut stack),
+            Err(_) => self.first_hit_with(origin, dir, t_max, &mut Vec::new()),
+        })
+    }
+
+    /// [`Scene::first_hit_f32`] with a caller-owned traversal stack.
+    #[inline]
+    fn first_hit_with(
+        &self,
+        origin: [f32; 3],
+        dir: [f32; 3],
+        t_max: f32,
+        stack: &mut Stack,
+    ) -> Option<(f32, u32)> {
         let ray = RayF32::new(origin, dir);
-        self.bvh
-            .closest_hit(&ray, t_max, |slot, best| {
-                self.tris[slot as usize].hit(&ray.origin, &ray.dir, best)
-            })
-            .map(|(slot, t)| (t, self.bvh.prim_indices[slot as usize]))
+        let mut leaves = PacketLeaves {
+            packets: &self.packets,
+        };
+        self.bvh4
+            .closest_hit(&ray, t_max, stack, &mut leaves)
+            .and_then(|hit| self.lane_face(hit))
+    }
+
+    /// `(t, face)` of a packet-lane hit.
+    #[inline]
+    fn lane_face(&self, (lane_id, t): (u32, f32)) -> Option<(f32, u32)> {
+        let faces = self.packet_faces.get((lane_id / 4) as usize)?;
+        Some((t, faces[(lane_id % 4) as usize]))
     }
 
     /// Bulk ray casting: `rays` holds six floats per ray (origin, unit direction);
     /// `out` receives one distance per ray, `+inf` on a miss. Runs on the rayon
-    /// pool of the caller.
+    /// pool of the caller, in chunks of 1024 rays, each walked several rays at a
+    /// time ([`Bvh4::closest_hits`]).
     pub fn cast_rays_f32(&self, rays: &[[f32; 6]], t_max: f32, out: &mut [f32]) {
-        out.par_iter_mut()
-            .zip(rays.par_iter())
-            .with_min_len(1024)
-            .for_each(|(o, r)| {
-                *o = self
-                    .first_hit_f32([r[0], r[1], r[2]], [r[3], r[4], r[5]], t_max)
-                    .map_or(f32::INFINITY, |(t, _)| t);
+        const CHUNK: usize = 1024;
+        out.par_chunks_mut(CHUNK)
+            .zip(rays.par_chunks(CHUNK))
+            .for_each(|(out, rays)| {
+                let prepared: Vec<RayF32> = rays
+                    .iter()
+                    .map(|r| RayF32::new([r[0], r[1], r[2]], [r[3], r[4], r[5]]))
+                    .collect();
+                let mut hits = vec![None; prepared.len()];
+                let mut leaves = PacketLeaves {
+                    packets: &self.packets,
+                };
+                self.bvh4
+                    .closest_hits(&prepared, t_max, &mut leaves, &mut hits);
+                for (o, h) in out.iter_mut().zip(hits) {
+                    *o = h.map_or(f32::INFINITY, |(_, t)| t);
+                }
             });
     }
 
