@@ -49,3 +49,24 @@ pub use plane::Plane;
 pub use polygon3::PlaneFrame;
 pub use ray::Ray;
 pub use triangle::Triangle;
+
+/// A structure's invariant that does not hold, as found by its
+/// `check_invariants` (the BVH, the occupancy grid, the TSDF, ...).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{structure}: invariant violated: {detail}")]
+pub struct InvariantViolation {
+    /// The structure checked.
+    pub structure: &'static str,
+    /// What does not hold, with the index of the element at fault.
+    pub detail: String,
+}
+
+impl InvariantViolation {
+    /// A violation of `structure`'s invariants.
+    pub fn new(structure: &'static str, detail: impl Into<String>) -> Self {
+        Self {
+            structure,
+            detail: detail.into(),
+        }
+    }
+}

@@ -1035,7 +1035,13 @@ impl OccupancyGrid {
     /// Recount every voxel and compare with the incremental counts; check that
     /// no voxel holds the unused bit pattern. For tests (it reads the whole
     /// grid).
-    pub fn check_invariants(&self) -> Result<(), String> {
+    pub fn check_invariants(&self) -> Result<(), geom::InvariantViolation> {
+        self.invariant_detail()
+            .map_err(|d| geom::InvariantViolation::new("occupancy grid", d))
+    }
+
+    /// The check of `check_invariants`, the failure as text.
+    fn invariant_detail(&self) -> Result<(), String> {
         let cells = self.cells();
         let g = &self.geometry;
         let mut recount = [ShellCounts::default(); 3];

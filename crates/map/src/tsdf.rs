@@ -644,7 +644,13 @@ impl TsdfMap {
 
     /// Check the block index and every voxel: finite distances within `±τ`,
     /// weights in `[0, W_max]`.
-    pub fn check_invariants(&self) -> Result<(), String> {
+    pub fn check_invariants(&self) -> Result<(), geom::InvariantViolation> {
+        self.invariant_detail()
+            .map_err(|d| geom::InvariantViolation::new("TSDF", d))
+    }
+
+    /// The check of `check_invariants`, the failure as text.
+    fn invariant_detail(&self) -> Result<(), String> {
         if self.index.len() != self.blocks.len() {
             return Err(format!(
                 "{} index entries for {} blocks",

@@ -11,7 +11,7 @@
 //! distances of a few metres, where `f32` still resolves a tenth of a micrometre;
 //! callers that need more refine the hit in `f64`.
 
-use geom::Aabb;
+use geom::{Aabb, InvariantViolation};
 use std::ops::ControlFlow;
 
 /// An axis-aligned box in single precision.
@@ -435,7 +435,13 @@ impl Bvh {
     /// Check the structure: every primitive appears in exactly one leaf, every
     /// child box lies inside its parent's, every leaf box contains its
     /// primitives' boxes, the tree depth fits the traversal stack.
-    pub fn check_invariants(&self, bounds: &[Aabb32]) -> Result<(), String> {
+    pub fn check_invariants(&self, bounds: &[Aabb32]) -> Result<(), InvariantViolation> {
+        self.invariant_detail(bounds)
+            .map_err(|d| InvariantViolation::new("BVH", d))
+    }
+
+    /// [`Bvh::check_invariants`], the failure as text.
+    pub(crate) fn invariant_detail(&self, bounds: &[Aabb32]) -> Result<(), String> {
         if bounds.is_empty() && self.prim_indices.is_empty() {
             return Ok(());
         }
@@ -615,6 +621,14 @@ mod tests {
         let c = vec![[0.5; 3]; 50];
         let bvh = Bvh::build(&b, &c);
         bvh.check_invariants(&b).unwrap();
+        // A primitive that moved out of its leaf's box is reported, typed.
+        let (mut b, c) = point_boxes(100);
+        let bvh = Bvh::build(&b, &c);
+        b[37].min = [1e6; 3];
+        b[37].max = [1e6 + 1.0; 3];
+        let e = bvh.check_invariants(&b).unwrap_err();
+        assert_eq!(e.structure, "BVH");
+        assert!(e.to_string().contains("invariant violated"), "{e}");
     }
 
     #[test]

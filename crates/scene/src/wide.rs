@@ -19,6 +19,7 @@
 //! [`Bvh4::closest_hit`] hands that payload back when a ray reaches the leaf.
 
 use crate::bvh::{Aabb32, Bvh, MAX_DEPTH, RayF32};
+use geom::InvariantViolation;
 use wide::{CmpLe, f32x4};
 
 /// Set in a child reference that names a leaf (the other 31 bits are its payload).
@@ -423,6 +424,15 @@ impl Bvh4 {
     /// [`MAX_DEPTH`]; `leaf(payload, leaf_box)` checks each leaf (it is called
     /// once per leaf reached).
     pub fn check_invariants(
+        &self,
+        leaf: impl FnMut(u32, &Aabb32) -> Result<(), String>,
+    ) -> Result<(), InvariantViolation> {
+        self.invariant_detail(leaf)
+            .map_err(|d| InvariantViolation::new("four-wide BVH", d))
+    }
+
+    /// The check of [`check_invariants`](Self::check_invariants), the failure as text.
+    pub(crate) fn invariant_detail(
         &self,
         mut leaf: impl FnMut(u32, &Aabb32) -> Result<(), String>,
     ) -> Result<(), String> {

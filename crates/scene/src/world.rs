@@ -6,7 +6,7 @@ use crate::error::SceneError;
 use crate::material::{Material, MaterialId, validate_materials};
 use crate::mesh::TriMesh;
 use crate::wide::{Bvh4, LeafTest, Stack, prefetch};
-use geom::{Aabb, Capsule, Point3, Ray, Real, Triangle, UnitVector3, Vector3};
+use geom::{Aabb, Capsule, InvariantViolation, Point3, Ray, Real, Triangle, UnitVector3, Vector3};
 use rayon::prelude::*;
 use std::cell::RefCell;
 use std::ops::{ControlFlow, Range};
@@ -429,18 +429,24 @@ impl Scene {
         &self.bvh
     }
 
-    /// Check the BVH against the triangles.
-    pub fn check_invariants(&self) -> Result<(), String> {
+    /// Check both BVHs against the triangles.
+    pub fn check_invariants(&self) -> Result<(), InvariantViolation> {
+        self.invariant_detail()
+            .map_err(|d| InvariantViolation::new("scene", d))
+    }
+
+    /// [`Scene::check_invariants`], the failure as text.
+    fn invariant_detail(&self) -> Result<(), String> {
         let bounds: Vec<Aabb32> = self
             .mesh
             .iter_triangles()
             .map(|t| Aabb32::from_f64(&Aabb::from_points([&t.a, &t.b, &t.c])))
             .collect();
-        self.bvh.check_invariants(&bounds)?;
+        self.bvh.invariant_detail(&bounds)?;
         // The wide tree: each face in exactly one leaf packet lane, inside the
         // leaf's box, and the packets equal to the faces they name.
         let mut seen = vec![false; bounds.len()];
-        self.bvh4.check_invariants(|payload, leaf_box| {
+        self.bvh4.invariant_detail(|payload, leaf_box| {
             let start = (payload >> PACKET_BITS) as usize;
             let count = (payload & ((1 << PACKET_BITS) - 1)) as usize;
             if count == 0 {
