@@ -112,11 +112,16 @@ impl Sweep {
             let material = match material {
                 Some(m) => {
                     let v = index(path, m[row], row, "material", -1.0)?;
-                    if v < 0.0 || v > f64::from(u16::MAX) {
-                        None
-                    } else {
-                        Some(MaterialId(v as u16))
+                    if v > f64::from(u16::MAX) {
+                        return Err(file_error(
+                            path,
+                            format!(
+                                "vertex {row}: `material` is {v}, expected a material index in [-1, {}]",
+                                u16::MAX
+                            ),
+                        ));
                     }
+                    (v >= 0.0).then_some(MaterialId(v as u16))
                 }
                 None => None,
             };

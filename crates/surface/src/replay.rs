@@ -24,6 +24,9 @@ pub struct ReplayOptions {
 /// Why a replay stopped. The model is left as it was after the last good set.
 #[derive(Debug, thiserror::Error)]
 pub enum ReplayError {
+    /// The configuration was refused.
+    #[error("{0}")]
+    Config(SurfaceError),
     /// An initial segment was refused.
     #[error("initial segment {index}: {source}")]
     Initial {
@@ -82,8 +85,7 @@ pub fn replay(
     options: ReplayOptions,
     progress: &mut dyn FnMut(usize),
 ) -> Result<Replay, ReplayError> {
-    let mut model =
-        SurfaceModel::new(config).map_err(|source| ReplayError::Initial { index: 0, source })?;
+    let mut model = SurfaceModel::new(config).map_err(ReplayError::Config)?;
     for (index, vertices) in initial.iter().enumerate() {
         model
             .add_initial_segment(vertices)

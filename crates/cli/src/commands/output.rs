@@ -1,8 +1,10 @@
 //! Outputs appear whole or not at all: every command writes its files under
 //! temporary names next to their destination and renames them into place
-//! only when the whole command has succeeded. On failure (or Ctrl-C before
-//! the commit) nothing new is left behind: temporary files are removed, and
-//! so is an output folder the command created.
+//! only when the whole command has succeeded. When a command fails, nothing
+//! new is left behind: temporary files are removed, and so is an output
+//! folder the command created. A process killed mid-way (Ctrl-C) may leave
+//! hidden `.surveyor-tmp-<pid>-*` files, but never a partial file under an
+//! output's own name.
 
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
