@@ -47,7 +47,7 @@ pub use occupancy::{
 pub use pipeline::{MapConfig, MapOutputs, Mapper, SweepSummary, build_from_scans};
 pub use regions::{Region, RegionBox, RegionsConfig};
 pub use segment::{SegmentConfig, segment_discs};
-pub use sld::{Disc, Orientation, SldConfig, SldResult, generate_discs};
+pub use sld::{Disc, DiscId, Orientation, SldConfig, SldResult, generate_discs};
 pub use stats::{OccupancyReport, RegionReport};
 pub use sweep::range_jumps;
 pub use tsdf::{TsdfConfig, TsdfIntegrator, TsdfMap, TsdfStats, TsdfVoxel, TsdfWeighting};

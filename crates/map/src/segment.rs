@@ -40,19 +40,20 @@
 //! ```
 //! use geom::{Point3, UnitVector3, Vector3};
 //! use map::segment::{segment_discs, SegmentConfig};
-//! use map::sld::Disc;
+//! use map::sld::{Disc, DiscId};
 //!
 //! let up = UnitVector3::new_unchecked(Vector3::z());
 //! let disc = |x: f64, z: f64| Disc { centre: Point3::new(x, 0.0, z), normal: up, radius_m: 0.04, points: 20 };
 //! // A floor strip of four discs 5 cm apart, and a step 10 cm higher.
 //! let discs = [disc(0.0, 0.0), disc(0.05, 0.0), disc(0.10, 0.0), disc(0.15, 0.0), disc(0.2, 0.1)];
 //! let segments = segment_discs(&discs, None, &SegmentConfig::default())?;
-//! assert_eq!(segments, vec![vec![0, 1, 2, 3], vec![4]]);
+//! let ids = |v: &[usize]| v.iter().copied().map(DiscId).collect::<Vec<_>>();
+//! assert_eq!(segments, vec![ids(&[0, 1, 2, 3]), ids(&[4])]);
 //! # Ok::<(), map::MapError>(())
 //! ```
 
 use crate::MapError;
-use crate::sld::Disc;
+use crate::sld::{Disc, DiscId};
 use geom::Real;
 use serde::{Deserialize, Serialize};
 
@@ -381,19 +382,22 @@ pub fn segment_discs(
     discs: &[Disc],
     poses: Option<&[JointPose]>,
     cfg: &SegmentConfig,
-) -> Result<Vec<Vec<usize>>, MapError> {
+) -> Result<Vec<Vec<DiscId>>, MapError> {
     check_inputs(discs, poses, cfg)?;
     let mut uf = UnionFind::new(discs.len());
     for_each_link(discs, poses, cfg, |i, j| uf.union(i, j));
-    Ok(components_of(&mut uf, discs.len()))
+    Ok(components_of(&mut uf, discs.len())
+        .into_iter()
+        .map(|members| members.into_iter().map(DiscId).collect())
+        .collect())
 }
 
 /// For each disc, the index of its segment in `segments`.
-pub fn segment_of_disc(segments: &[Vec<usize>], discs: usize) -> Vec<Option<usize>> {
+pub fn segment_of_disc(segments: &[Vec<DiscId>], discs: usize) -> Vec<Option<usize>> {
     let mut out = vec![None; discs];
     for (s, members) in segments.iter().enumerate() {
         for &i in members {
-            if let Some(slot) = out.get_mut(i) {
+            if let Some(slot) = out.get_mut(i.0) {
                 *slot = Some(s);
             }
         }

@@ -18,6 +18,7 @@
 
 use crate::MapError;
 use crate::segment::JointPose;
+use crate::sld::DiscId;
 use geom::Real;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -27,11 +28,11 @@ use std::path::Path;
 #[serde(deny_unknown_fields)]
 pub struct SegmentsFile {
     /// Disc indices of each segment.
-    pub segments: Vec<Vec<usize>>,
+    pub segments: Vec<Vec<DiscId>>,
 }
 
 /// Write segments as `{"segments": [[...], ...]}` to `path`.
-pub fn save_segments_json(path: &Path, segments: &[Vec<usize>]) -> Result<(), MapError> {
+pub fn save_segments_json(path: &Path, segments: &[Vec<DiscId>]) -> Result<(), MapError> {
     let file = SegmentsFile {
         segments: segments.to_vec(),
     };
@@ -41,7 +42,7 @@ pub fn save_segments_json(path: &Path, segments: &[Vec<usize>]) -> Result<(), Ma
 }
 
 /// Read a segments file written by [`save_segments_json`].
-pub fn load_segments_json(path: &Path) -> Result<Vec<Vec<usize>>, MapError> {
+pub fn load_segments_json(path: &Path) -> Result<Vec<Vec<DiscId>>, MapError> {
     let text = std::fs::read_to_string(path).map_err(|e| MapError::read(path, e))?;
     let file: SegmentsFile = serde_json::from_str(&text)
         .map_err(|e| MapError::parse(path.display().to_string(), Some(e.line()), e.to_string()))?;

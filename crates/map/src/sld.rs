@@ -168,6 +168,14 @@ impl SldConfig {
     }
 }
 
+/// Index of a disc in the list [`generate_discs`] returned (and in a discs
+/// file's rows). Serialised as the bare index.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize,
+)]
+#[serde(transparent)]
+pub struct DiscId(pub usize);
+
 /// One Scale-Like Disc `{P̂, n⃗}` (Paul Fig. 5.6).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Disc {

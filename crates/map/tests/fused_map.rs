@@ -148,7 +148,7 @@ fn fused_mesh_segments_part_roof_and_flange_undersides_below_the_step() {
         let (&seg, &n) = count.iter().max_by_key(|(_, n)| **n).unwrap();
         let undersides = segments[seg]
             .iter()
-            .filter(|&&i| class[i] == Some("underside"))
+            .filter(|&&i| class[i.0] == Some("underside"))
             .count();
         (total, n, undersides)
     };

@@ -12,7 +12,7 @@ use map::segment::{
     segment_of_disc,
 };
 use map::segment_io::{load_poses_csv, load_segments_json, parse_poses_csv, save_segments_json};
-use map::sld::{Disc, Orientation, SldConfig, generate_discs};
+use map::sld::{Disc, DiscId, Orientation, SldConfig, generate_discs};
 use proptest::prelude::*;
 use std::collections::{BTreeMap, VecDeque};
 
@@ -76,7 +76,7 @@ fn bridge1_segments_separate_the_surfaces() {
     for s in &segments {
         let mut count: BTreeMap<&str, usize> = BTreeMap::new();
         for &i in s {
-            if let Some(c) = classes[i] {
+            if let Some(c) = classes[i.0] {
                 *count.entry(c).or_default() += 1;
             }
         }
@@ -85,7 +85,7 @@ fn bridge1_segments_separate_the_surfaces() {
             let top = count.values().max().copied().unwrap_or(0);
             let mut raw: BTreeMap<&str, usize> = BTreeMap::new();
             for &i in s {
-                *raw.entry(groups[i].as_str()).or_default() += 1;
+                *raw.entry(groups[i.0].as_str()).or_default() += 1;
             }
             report.push(format!("{} discs: {count:?} (faces {raw:?})", s.len()));
             assert!(top * 10 >= pure * 9, "impure segment: {count:?}");
@@ -230,11 +230,11 @@ fn resolvable_bridge1_separates_every_named_surface() {
         // That segment is this surface's alone.
         let foreign = segments[seg]
             .iter()
-            .filter(|&&i| classes[i].is_some_and(|c| c != class))
+            .filter(|&&i| classes[i.0].is_some_and(|c| c != class))
             .count();
         let mut others: BTreeMap<&str, usize> = BTreeMap::new();
         for &i in &segments[seg] {
-            if let Some(c) = classes[i].filter(|c| *c != class) {
+            if let Some(c) = classes[i.0].filter(|c| *c != class) {
                 *others.entry(c).or_default() += 1;
             }
         }
@@ -275,7 +275,7 @@ fn poses_split_segments_further() {
     // δqB only removes links: every pose segment lies inside one plain segment.
     let plain_of = segment_of_disc(&plain, discs.len());
     for s in &with {
-        assert!(s.iter().all(|&i| plain_of[i] == plain_of[s[0]]));
+        assert!(s.iter().all(|&i| plain_of[i.0] == plain_of[s[0].0]));
     }
     assert!(with.len() > plain.len());
     // The overhead surface spans both halves: the wrist flip splits it in two
@@ -323,7 +323,7 @@ fn curved_surface_chain_of_figure_5_12() {
     assert!((m.dtheta_rad.to_degrees() - 4.0).abs() < 1e-9);
     assert!(!linked(&discs[0], &discs[2], None, &cfg)); // 8° apart
     assert_eq!(
-        segment_discs(&discs, None, &cfg).unwrap(),
+        ids(segment_discs(&discs, None, &cfg).unwrap()),
         vec![vec![0, 1, 2, 3, 4]]
     );
     // A joint jump between discs 2 and 3 cuts the chain.
@@ -332,7 +332,7 @@ fn curved_surface_chain_of_figure_5_12() {
         q[2] = 15f64.to_radians();
     }
     assert_eq!(
-        segment_discs(&discs, Some(&poses), &cfg).unwrap(),
+        ids(segment_discs(&discs, Some(&poses), &cfg).unwrap()),
         vec![vec![0, 1, 2], vec![3, 4]]
     );
 }
@@ -399,7 +399,7 @@ proptest! {
         let cfg = SegmentConfig { tau_theta_deg, tau_d_m, tau_p_m, ..SegmentConfig::default() };
         let poses: Vec<JointPose> = raw_poses[..discs.len()].to_vec();
         let p = use_poses.then_some(poses.as_slice());
-        let got = segment_discs(&discs, p, &cfg).unwrap();
+        let got = ids(segment_discs(&discs, p, &cfg).unwrap());
         let oracle = bfs_oracle(discs.len(), |i, j| {
             linked(&discs[i], &discs[j], p.map(|q| (&q[i], &q[j])), &cfg)
         });
@@ -430,7 +430,10 @@ proptest! {
 fn files_round_trip_and_errors() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("segments.json");
-    let segments = vec![vec![0, 2], vec![1], vec![3, 4, 5]];
+    let segments: Vec<Vec<DiscId>> = [vec![0, 2], vec![1], vec![3, 4, 5]]
+        .into_iter()
+        .map(|s| s.into_iter().map(DiscId).collect())
+        .collect();
     save_segments_json(&path, &segments).unwrap();
     assert_eq!(
         std::fs::read_to_string(&path).unwrap().trim(),
@@ -552,4 +555,12 @@ fn bad_input_is_an_error() {
     let c: SegmentConfig = serde_json::from_str(r#"{"tau_p_m": 0.02}"#).unwrap();
     assert_eq!(c.tau_q_deg, [8.0, 10.0, 14.0, 20.0, 20.0, 20.0]);
     assert_eq!(c.tau_p_m, 0.02);
+}
+
+/// Segments as bare disc indices, for comparing with hand-written lists.
+fn ids(segments: Vec<Vec<DiscId>>) -> Vec<Vec<usize>> {
+    segments
+        .into_iter()
+        .map(|s| s.into_iter().map(|d| d.0).collect())
+        .collect()
 }

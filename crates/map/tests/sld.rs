@@ -165,7 +165,7 @@ fn discs_from_surface_samples_like_mesh_vertices() {
     .unwrap();
     let points: Vec<Point3> = samples.iter().map(|s| s.point).collect();
     let normals: Vec<Vector3> = samples.iter().map(|s| s.normal.into_inner()).collect();
-    let faces: Vec<u32> = samples.iter().map(|s| s.face).collect();
+    let faces: Vec<u32> = samples.iter().map(|s| s.face.0).collect();
     let r = generate_discs(
         &points,
         Orientation::ReferenceNormals(&normals),

@@ -21,7 +21,7 @@ fn fk_and_jacobian(c: &mut Criterion) {
         b.iter(|| {
             q[0] += 1e-9;
             robot.fk_into(black_box(&q), &mut frames).expect("valid q");
-            robot.jacobian_into(&frames, 6, &flange, &mut jacobian);
+            robot.jacobian_into(&frames, robot::LinkId(6), &flange, &mut jacobian);
             black_box(&jacobian);
         });
     });

@@ -17,7 +17,7 @@ use crate::dh::DhRow;
 use crate::error::RobotError;
 use crate::mesh::parse_embedded_obj;
 use crate::model::{
-    CollisionShape, Joint, JointLimits, Link, RangeFinderMount, Robot, ScannerMount,
+    CollisionShape, Joint, JointLimits, Link, LinkId, RangeFinderMount, Robot, ScannerMount,
 };
 use geom::primitives::cuboid;
 use geom::{Capsule, Ellipsoid, Isometry3, Point3, Real, TriMesh, Vector3};
@@ -126,7 +126,7 @@ fn denso_vm6083() -> Result<Robot, RobotError> {
     }
     let [x, y, z] = VM6083_FLANGE_FROM_SCANNER_M;
     robot.scanner = Some(ScannerMount {
-        link: 6,
+        link: LinkId(6),
         link_from_scanner: Isometry3::translation(x, y, z),
     });
     robot.validate()?;
@@ -162,7 +162,7 @@ fn point3() -> Result<Robot, RobotError> {
                     continue;
                 }
                 range_finders.push(RangeFinderMount {
-                    link: 3,
+                    link: LinkId(3),
                     origin: Point3::origin(),
                     axis: unit_or_z(Vector3::new(Real::from(i), Real::from(j), Real::from(k))),
                     max_range_m: PUDNEY_SENSOR_RANGE_M,
@@ -179,7 +179,7 @@ fn point3() -> Result<Robot, RobotError> {
             body,
         ],
         joints,
-        tool: (3, Isometry3::identity()),
+        tool: (LinkId(3), Isometry3::identity()),
         scanner: None,
         range_finders,
         warnings: Vec::new(),
@@ -233,7 +233,7 @@ fn arm4() -> Result<Robot, RobotError> {
     let mut range_finders = Vec::with_capacity(133);
     let mut add = |link: usize, origin: Point3, dir: Vector3| {
         range_finders.push(RangeFinderMount {
-            link,
+            link: LinkId(link),
             origin,
             axis: unit_or_z(dir),
             max_range_m: PUDNEY_SENSOR_RANGE_M,
@@ -275,7 +275,7 @@ fn arm4() -> Result<Robot, RobotError> {
         name: "arm4".to_owned(),
         links,
         joints,
-        tool: (6, Isometry3::translation(0.0, 0.0, 1.0)),
+        tool: (LinkId(6), Isometry3::translation(0.0, 0.0, 1.0)),
         scanner: None,
         range_finders,
         warnings: Vec::new(),

@@ -9,7 +9,7 @@
 
 use crate::bounds::enclosing_ellipsoid_of;
 use crate::error::RobotError;
-use crate::model::{CollisionShape, Joint, JointKind, JointLimits, Link, Robot};
+use crate::model::{CollisionShape, Joint, JointKind, JointLimits, Link, LinkId, Robot};
 use geom::{Capsule, Isometry3, Point3, Real, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -129,7 +129,7 @@ impl Robot {
         }
         let robot = Robot {
             name: name.to_owned(),
-            tool: (links.len() - 1, Isometry3::identity()),
+            tool: (LinkId(links.len() - 1), Isometry3::identity()),
             links,
             joints,
             scanner: None,

@@ -31,6 +31,6 @@ pub use error::RobotError;
 pub use linalg::{damped_pseudo_inverse, null_space_projector, pseudo_inverse};
 pub use mesh::{LoadedMesh, MeshLoader, NoMeshLoader};
 pub use model::{
-    CollisionShape, Joint, JointKind, JointLimits, Link, PosedShape, RangeFinderMount, Robot,
-    ScannerMount,
+    CollisionShape, Joint, JointKind, JointLimits, Link, LinkId, PosedShape, RangeFinderMount,
+    Robot, ScannerMount,
 };

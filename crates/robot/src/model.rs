@@ -245,12 +245,34 @@ impl Link {
     }
 }
 
+/// Index of a link in [`Robot::links`] (0 is the base). Serialised as the bare
+/// index.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize,
+)]
+#[serde(transparent)]
+pub struct LinkId(pub usize);
+
+impl LinkId {
+    /// The index into [`Robot::links`] (and into `base_from_link`).
+    #[inline]
+    pub fn index(self) -> usize {
+        self.0
+    }
+}
+
+impl std::fmt::Display for LinkId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
 /// A single-point range finder fixed to a link (P§1.2): it measures along `axis`
 /// from `origin`, both in the link frame, up to `max_range_m`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RangeFinderMount {
-    /// Index of the link carrying the sensor.
-    pub link: usize,
+    /// The link carrying the sensor.
+    pub link: LinkId,
     /// Sensor origin `s` in the link frame.
     pub origin: Point3,
     /// Sensing axis `â` in the link frame.
@@ -263,7 +285,7 @@ impl RangeFinderMount {
     /// Origin and axis in the base frame, given the link frames from
     /// [`Robot::fk_into`]; `None` when the link index is out of range.
     pub fn in_base(&self, base_from_link: &[Isometry3]) -> Option<(Point3, UnitVector3)> {
-        let base_from_this = base_from_link.get(self.link)?;
+        let base_from_this = base_from_link.get(self.link.0)?;
         Some((
             base_from_this * self.origin,
             base_from_this.rotation * self.axis,
@@ -275,8 +297,8 @@ impl RangeFinderMount {
 /// ray, y = the ±90° ray, x = normal of the scan plane.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ScannerMount {
-    /// Index of the link carrying the scanner.
-    pub link: usize,
+    /// The link carrying the scanner.
+    pub link: LinkId,
     /// Scanner frame in the link frame.
     pub link_from_scanner: Isometry3,
 }
@@ -286,15 +308,15 @@ pub struct ScannerMount {
 pub enum PosedShape {
     /// A capsule already moved into the base frame.
     Capsule {
-        /// Link index.
-        link: usize,
+        /// The link.
+        link: LinkId,
         /// The capsule in the base frame.
         capsule: Capsule,
     },
     /// A mesh with the transform that places it (vertices stay in the link frame).
     Mesh {
-        /// Link index.
-        link: usize,
+        /// The link.
+        link: LinkId,
         /// The mesh, in the link frame.
         mesh: Arc<TriMesh>,
         /// Link frame in the base frame.
@@ -303,8 +325,8 @@ pub enum PosedShape {
 }
 
 impl PosedShape {
-    /// Index of the link the shape belongs to.
-    pub fn link(&self) -> usize {
+    /// The link the shape belongs to.
+    pub fn link(&self) -> LinkId {
         match self {
             Self::Capsule { link, .. } | Self::Mesh { link, .. } => *link,
         }
@@ -325,7 +347,7 @@ pub struct Robot {
     /// Joints; `joints.len() == links.len() - 1`.
     pub joints: Vec<Joint>,
     /// Control point / flange: link index and `link_from_tool`.
-    pub tool: (usize, Isometry3),
+    pub tool: (LinkId, Isometry3),
     /// The 2-D laser scanner, if the robot carries one.
     pub scanner: Option<ScannerMount>,
     /// Single-point range finders.
@@ -362,8 +384,8 @@ impl Robot {
     }
 
     /// Index of the link called `name`.
-    pub fn link_index(&self, name: &str) -> Option<usize> {
-        self.links.iter().position(|l| l.name == name)
+    pub fn link_index(&self, name: &str) -> Option<LinkId> {
+        self.links.iter().position(|l| l.name == name).map(LinkId)
     }
 
     /// `Ok` when `q` has one finite value per actuated joint.
@@ -489,7 +511,7 @@ impl Robot {
     pub fn tool_pose(&self, q: &[Real]) -> Result<Isometry3, RobotError> {
         let frames = self.forward_kinematics(q)?;
         let (link, link_from_tool) = self.tool;
-        let base_from_tool_link = frames.get(link).ok_or_else(|| self.link_error(link))?;
+        let base_from_tool_link = frames.get(link.0).ok_or_else(|| self.link_error(link))?;
         Ok(base_from_tool_link * link_from_tool)
     }
 
@@ -501,7 +523,7 @@ impl Robot {
         };
         let frames = self.forward_kinematics(q)?;
         let base_from_mount_link = frames
-            .get(mount.link)
+            .get(mount.link.0)
             .ok_or_else(|| self.link_error(mount.link))?;
         Ok(Some(base_from_mount_link * mount.link_from_scanner))
     }
@@ -513,10 +535,10 @@ impl Robot {
     pub fn jacobian(
         &self,
         q: &[Real],
-        link: usize,
+        link: LinkId,
         point_in_link: &Point3,
     ) -> Result<Matrix6xX<Real>, RobotError> {
-        if link >= self.links.len() {
+        if link.0 >= self.links.len() {
             return Err(self.link_error(link));
         }
         let frames = self.forward_kinematics(q)?;
@@ -536,10 +558,11 @@ impl Robot {
     pub fn jacobian_into(
         &self,
         base_from_link: &[Isometry3],
-        link: usize,
+        link: LinkId,
         point_in_link: &Point3,
         out: &mut Matrix6xX<Real>,
     ) {
+        let link = link.0;
         let dof = self.dof();
         if out.ncols() == dof {
             out.fill(0.0);
@@ -617,11 +640,11 @@ impl Robot {
             for shape in &link.collision {
                 out.push(match shape {
                     CollisionShape::Capsule(c) => PosedShape::Capsule {
-                        link: index,
+                        link: LinkId(index),
                         capsule: c.transformed(frame),
                     },
                     CollisionShape::Mesh(m) => PosedShape::Mesh {
-                        link: index,
+                        link: LinkId(index),
                         mesh: Arc::clone(m),
                         base_from_link: *frame,
                     },
@@ -632,12 +655,14 @@ impl Robot {
     }
 
     /// Every link's bounding ellipsoid in the base frame, tagged with the link index.
-    pub fn posed_ellipsoids(&self, base_from_link: &[Isometry3]) -> Vec<(usize, Ellipsoid)> {
+    pub fn posed_ellipsoids(&self, base_from_link: &[Isometry3]) -> Vec<(LinkId, Ellipsoid)> {
         self.links
             .iter()
             .zip(base_from_link)
             .enumerate()
-            .filter_map(|(i, (link, frame))| link.ellipsoid.map(|e| (i, e.transformed(frame))))
+            .filter_map(|(i, (link, frame))| {
+                link.ellipsoid.map(|e| (LinkId(i), e.transformed(frame)))
+            })
             .collect()
     }
 
@@ -697,7 +722,7 @@ impl Robot {
             )));
         }
         let n = self.links.len();
-        if self.tool.0 >= n {
+        if self.tool.0.0 >= n {
             return Err(bad(format!(
                 "tool link index {} out of range ({n} links)",
                 self.tool.0
@@ -707,7 +732,7 @@ impl Robot {
             return Err(bad("tool transform is not finite".to_owned()));
         }
         if let Some(s) = self.scanner {
-            if s.link >= n {
+            if s.link.0 >= n {
                 return Err(bad(format!(
                     "scanner link index {} out of range ({n} links)",
                     s.link
@@ -718,7 +743,7 @@ impl Robot {
             }
         }
         for (i, r) in self.range_finders.iter().enumerate() {
-            if r.link >= n {
+            if r.link.0 >= n {
                 return Err(bad(format!(
                     "range finder {i} is on link {} but there are {n} links",
                     r.link
@@ -760,10 +785,10 @@ impl Robot {
         Ok(())
     }
 
-    fn link_error(&self, link: usize) -> RobotError {
+    fn link_error(&self, link: LinkId) -> RobotError {
         RobotError::LinkOutOfRange {
             robot: self.name.clone(),
-            link,
+            link: link.0,
             links: self.links.len(),
         }
     }

@@ -30,7 +30,7 @@ use crate::bounds::enclosing_ellipsoid_of;
 use crate::dh::DEFAULT_LINK_RADIUS_M;
 use crate::error::RobotError;
 use crate::mesh::{LoadedMesh, MeshLoader, NoMeshLoader, urdf_cylinder};
-use crate::model::{CollisionShape, Joint, JointKind, JointLimits, Link, Robot};
+use crate::model::{CollisionShape, Joint, JointKind, JointLimits, Link, LinkId, Robot};
 use geom::math::isometry_from_xyz_rpy;
 use geom::primitives::cuboid;
 use geom::{Capsule, Isometry3, Point3, Real, TriMesh, Vector3, unit};
@@ -436,7 +436,7 @@ impl<'a, 'input> Parser<'a, 'input> {
 
         let robot = Robot {
             name,
-            tool: (robot_links.len() - 1, Isometry3::identity()),
+            tool: (LinkId(robot_links.len() - 1), Isometry3::identity()),
             links: robot_links,
             joints: robot_joints,
             scanner: None,

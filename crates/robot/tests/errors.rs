@@ -65,7 +65,7 @@ fn wrong_joint_count_and_nan() {
     let e = robot
         .jacobian(
             &[0.0, 0.0, 0.0, Real::INFINITY, 0.0, 0.0],
-            6,
+            robot::LinkId(6),
             &Point3::origin(),
         )
         .unwrap_err();
@@ -77,7 +77,9 @@ fn wrong_joint_count_and_nan() {
         !robot.within_limits(&[0.0, 0.0, 0.0, 0.0, 0.0, 7.0]),
         "joint 6 is limited to ±360°"
     );
-    let e = robot.jacobian(&[0.0; 6], 7, &Point3::origin()).unwrap_err();
+    let e = robot
+        .jacobian(&[0.0; 6], robot::LinkId(7), &Point3::origin())
+        .unwrap_err();
     assert_contains(&e.to_string(), &["link index 7", "7 links"]);
     let e = robot
         .min_algebraic_distance(

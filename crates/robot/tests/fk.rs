@@ -254,7 +254,7 @@ fn ur5_matches_hand_written_urdf_chain() {
                 "wrist_3_joint"
             ]
         );
-        assert_eq!(robot.tool.0, 8);
+        assert_eq!(robot.tool.0, robot::LinkId(8));
         for _ in 0..200 {
             let q = random_q(&robot, &mut rng);
             let frames = robot.forward_kinematics(&q).unwrap();
@@ -305,7 +305,7 @@ fn ur5_matches_published_dh_parameters() {
             dh_frames.push(t);
         }
         for (link, dh_frame) in [(wrist_2, 3), (wrist_3, 4)] {
-            let err = (frames[link].translation.vector - position(&dh_frames[dh_frame])).norm();
+            let err = (frames[link.0].translation.vector - position(&dh_frames[dh_frame])).norm();
             assert!(
                 err < 1e-9,
                 "wrist frame {dh_frame} at q = {q:?}: error {err}"

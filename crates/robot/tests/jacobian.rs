@@ -60,7 +60,7 @@ fn check(robot: &Robot, u: &[Real], link_pick: usize, p: [Real; 3]) -> Result<()
     let q = q_from_unit(robot, u);
     let link = link_pick % robot.links.len();
     let p = Point3::from(p);
-    let j = robot.jacobian(&q, link, &p).unwrap();
+    let j = robot.jacobian(&q, robot::LinkId(link), &p).unwrap();
     prop_assert_eq!(j.shape(), (6, robot.dof()));
     let fd = finite_difference(robot, &q, link, &p);
     let err = (&j - &fd).amax();
@@ -77,7 +77,7 @@ fn check(robot: &Robot, u: &[Real], link_pick: usize, p: [Real; 3]) -> Result<()
     // The allocation-free form from precomputed frames agrees exactly.
     let frames = robot.forward_kinematics(&q).unwrap();
     let mut j2 = Matrix6xX::zeros(robot.dof());
-    robot.jacobian_into(&frames, link, &p, &mut j2);
+    robot.jacobian_into(&frames, robot::LinkId(link), &p, &mut j2);
     prop_assert_eq!(j, j2);
     Ok(())
 }
@@ -118,16 +118,20 @@ proptest! {
 fn joints_after_the_link_give_zero_columns() {
     let robot = &*VM6083;
     let q = [0.2, -0.3, 0.9, 0.1, 0.5, -0.7];
-    let j = robot.jacobian(&q, 3, &Point3::new(0.1, 0.0, 0.0)).unwrap();
+    let j = robot
+        .jacobian(&q, robot::LinkId(3), &Point3::new(0.1, 0.0, 0.0))
+        .unwrap();
     for col in 3..6 {
         assert!(j.column(col).iter().all(|v| *v == 0.0));
     }
     // The base does not move at all.
-    let j0 = robot.jacobian(&q, 0, &Point3::new(0.1, 0.2, 0.3)).unwrap();
+    let j0 = robot
+        .jacobian(&q, robot::LinkId(0), &Point3::new(0.1, 0.2, 0.3))
+        .unwrap();
     assert!(j0.iter().all(|v| *v == 0.0));
     // point3: the Jacobian of the control point is [I; 0].
     let jp = POINT3
-        .jacobian(&[0.3, 0.1, -2.0], 3, &Point3::origin())
+        .jacobian(&[0.3, 0.1, -2.0], robot::LinkId(3), &Point3::origin())
         .unwrap();
     let mut expected = Matrix6xX::zeros(3);
     for i in 0..3 {
@@ -137,7 +141,7 @@ fn joints_after_the_link_give_zero_columns() {
     // A wrongly sized output is resized, not a panic; an out-of-range link gives zeros.
     let frames = robot.forward_kinematics(&q).unwrap();
     let mut out = Matrix6xX::zeros(2);
-    robot.jacobian_into(&frames, 99, &Point3::origin(), &mut out);
+    robot.jacobian_into(&frames, robot::LinkId(99), &Point3::origin(), &mut out);
     assert_eq!(out.ncols(), 6);
     assert!(out.iter().all(|v| *v == 0.0));
 }

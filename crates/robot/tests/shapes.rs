@@ -82,7 +82,7 @@ fn vm6083_capsules_and_ellipsoids_enclose_every_vertex() {
             "link6"
         ]
     );
-    assert_eq!(robot.tool, (6, Isometry3::identity()));
+    assert_eq!(robot.tool, (robot::LinkId(6), Isometry3::identity()));
 }
 
 #[test]
@@ -96,23 +96,24 @@ fn posed_shapes_follow_the_links() {
         let PosedShape::Capsule { link, capsule } = shape else {
             panic!("capsules only")
         };
-        let CollisionShape::Capsule(local) = &robot.links[*link].collision[0] else {
+        let CollisionShape::Capsule(local) = &robot.links[link.0].collision[0] else {
             unreachable!()
         };
-        assert!((capsule.segment.a - frames[*link] * local.segment.a).norm() < 1e-12);
+        assert!((capsule.segment.a - frames[link.0] * local.segment.a).norm() < 1e-12);
         assert_eq!(shape.link(), *link);
     }
     let ellipsoids = robot.posed_ellipsoids(&frames);
     assert_eq!(
-        ellipsoids.iter().map(|(i, _)| *i).collect::<Vec<_>>(),
+        ellipsoids.iter().map(|(i, _)| i.0).collect::<Vec<_>>(),
         [0, 1, 2, 3, 4, 5, 6]
     );
     // A posed ellipsoid gives the same algebraic distance as the local one.
     let p_link = Point3::new(0.05, 0.02, -0.1);
     let (i, posed) = ellipsoids[4];
-    let local = robot.links[i].ellipsoid.unwrap();
+    let local = robot.links[i.0].ellipsoid.unwrap();
     assert!(
-        (posed.algebraic_distance(&(frames[i] * p_link)) - local.algebraic_distance(&p_link)).abs()
+        (posed.algebraic_distance(&(frames[i.0] * p_link)) - local.algebraic_distance(&p_link))
+            .abs()
             < 1e-9
     );
 }
@@ -138,7 +139,7 @@ fn min_algebraic_distance_by_hand() {
             Vector3::z_axis(),
             None,
         )],
-        tool: (1, Isometry3::identity()),
+        tool: (robot::LinkId(1), Isometry3::identity()),
         scanner: None,
         range_finders: Vec::new(),
         warnings: Vec::new(),
@@ -175,7 +176,7 @@ fn builtin_sensor_layouts() {
     for (i, a) in point3.range_finders.iter().enumerate() {
         assert_eq!(
             (a.link, a.origin, a.max_range_m),
-            (3, Point3::origin(), 0.2)
+            (robot::LinkId(3), Point3::origin(), 0.2)
         );
         let d = a.axis.into_inner();
         // Each is a normalised (±1/0) grid direction, all distinct.
@@ -199,7 +200,7 @@ fn builtin_sensor_layouts() {
 
     let arm4 = robot::builtin("arm4").unwrap();
     assert_eq!(arm4.range_finders.len(), 133);
-    let count = |link: usize| arm4.range_finders.iter().filter(|r| r.link == link).count();
+    let count = |link: robot::LinkId| arm4.range_finders.iter().filter(|r| r.link == link).count();
     let link = |name: &str| arm4.link_index(name).unwrap();
     assert_eq!([count(link("link2")), count(link("link3"))], [40, 40]);
     let tool_link = arm4.tool.0;
@@ -228,7 +229,7 @@ fn builtin_sensor_layouts() {
     }
     // Every physical link has a capsule of radius 0.05 and an enclosing ellipsoid.
     for name in ["link1", "link2", "link3", "link4"] {
-        let l = &arm4.links[link(name)];
+        let l = &arm4.links[link(name).0];
         let [CollisionShape::Capsule(c)] = l.collision.as_slice() else {
             panic!("{name}")
         };
@@ -417,7 +418,7 @@ fn urdf_geometry_primitives_and_meshes() {
         }
     }
     // Tool = tip link frame.
-    assert_eq!(robot.tool, (6, Isometry3::identity()));
+    assert_eq!(robot.tool, (robot::LinkId(6), Isometry3::identity()));
     // The prismatic joint moves along x.
     let a = robot.tool_pose(&[0.0, 0.0, 0.0]).unwrap();
     let b = robot.tool_pose(&[0.0, 0.0, 0.25]).unwrap();

@@ -42,4 +42,4 @@ pub use spec::{
     CloudSpec, MAX_COORDINATE_M, MAX_PRIMITIVE_SEGMENTS, ObjectSpec, PoseSpec, SceneSpec,
     ShapeSpec, World,
 };
-pub use world::{Hit, RayCast, Scene, SceneObject};
+pub use world::{FaceId, Hit, ObjectId, RayCast, Scene, SceneObject};

@@ -3,7 +3,7 @@
 
 use crate::error::SceneError;
 use crate::material::MaterialId;
-use crate::world::Scene;
+use crate::world::{FaceId, ObjectId, Scene};
 use geom::triangle::Triangle;
 use geom::{Aabb, Point3, Real, UnitVector3};
 use rand::{RngExt, SeedableRng};
@@ -18,10 +18,10 @@ pub struct SurfaceSample {
     pub point: Point3,
     /// Outward unit normal of its triangle.
     pub normal: UnitVector3,
-    /// Triangle index.
-    pub face: u32,
-    /// Object index.
-    pub object: u32,
+    /// The triangle.
+    pub face: FaceId,
+    /// The object.
+    pub object: ObjectId,
     /// Material.
     pub material: MaterialId,
 }
@@ -232,8 +232,8 @@ impl<'a> SurfaceSampler<'a> {
                     None => break,
                 },
             };
-            let object = self.scene.triangle_object(cur.face as u32);
-            let material = self.scene.triangle_material(cur.face as u32);
+            let object = self.scene.triangle_object(FaceId(cur.face as u32));
+            let material = self.scene.triangle_material(FaceId(cur.face as u32));
             while cur.left > 0 && out.len() < self.chunk {
                 cur.left -= 1;
                 let p =
@@ -244,7 +244,7 @@ impl<'a> SurfaceSampler<'a> {
                 out.push(SurfaceSample {
                     point: p,
                     normal: cur.normal,
-                    face: cur.face as u32,
+                    face: FaceId(cur.face as u32),
                     object,
                     material,
                 });
@@ -294,7 +294,7 @@ pub fn sample_surfaces(
 /// `false` when the sample's face lies inside or flush against another closed
 /// object: a probe just off the face, on its outer side, is inside that object.
 pub fn is_exposed(scene: &Scene, s: &SurfaceSample) -> bool {
-    if !scene.objects()[s.object as usize].closed {
+    if !scene.objects()[s.object.index()].closed {
         return true;
     }
     let probe = s.point + s.normal.into_inner() * EXPOSURE_PROBE_M;

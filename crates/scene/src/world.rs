@@ -12,6 +12,24 @@ use std::cell::RefCell;
 use std::ops::{ControlFlow, Range};
 use wide::{CmpGe, CmpLe, f32x4};
 
+/// Index of a triangle of a [`Scene`]'s mesh (its face).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
+#[serde(transparent)]
+pub struct FaceId(pub u32);
+
+/// Index of an object of a [`Scene`] ([`Scene::objects`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
+#[serde(transparent)]
+pub struct ObjectId(pub u32);
+
+impl ObjectId {
+    /// The index into [`Scene::objects`].
+    #[inline]
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
 /// What a ray met.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
@@ -24,7 +42,7 @@ pub struct Hit {
     /// Material of the surface, when known.
     pub material: Option<MaterialId>,
     /// Index of the scene object, when the world is made of objects.
-    pub object: Option<u32>,
+    pub object: Option<ObjectId>,
     /// Index of the triangle (mesh worlds) or point (point-cloud worlds).
     pub element: u32,
 }
@@ -410,13 +428,18 @@ impl Scene {
     }
 
     /// The object a triangle belongs to.
-    pub fn triangle_object(&self, face: u32) -> u32 {
-        self.tri_object[face as usize]
+    pub fn triangle_object(&self, face: FaceId) -> ObjectId {
+        ObjectId(self.tri_object[face.0 as usize])
+    }
+
+    /// The object called `id`, if it exists.
+    pub fn object(&self, id: ObjectId) -> Option<&SceneObject> {
+        self.objects.get(id.index())
     }
 
     /// The material of a triangle.
-    pub fn triangle_material(&self, face: u32) -> MaterialId {
-        self.objects[self.tri_object[face as usize] as usize].material
+    pub fn triangle_material(&self, face: FaceId) -> MaterialId {
+        self.objects[self.tri_object[face.0 as usize] as usize].material
     }
 
     /// Bounding box of the whole scene.
@@ -554,7 +577,7 @@ impl Scene {
 
     /// The closest point of the scene's surface to `p` within `max_distance`:
     /// `(distance, triangle, point)`.
-    pub fn closest_point(&self, p: &Point3, max_distance: Real) -> Option<(Real, u32, Point3)> {
+    pub fn closest_point(&self, p: &Point3, max_distance: Real) -> Option<(Real, FaceId, Point3)> {
         let mut best_d = max_distance;
         let mut best: Option<(u32, Point3)> = None;
         // Grow the query box as the best distance shrinks: visit leaves within
@@ -608,7 +631,7 @@ impl Scene {
                 }
             }
         }
-        best.map(|(f, q)| (best_d, f, q))
+        best.map(|(f, q)| (best_d, FaceId(f), q))
     }
 
     /// Triangles whose boxes overlap `query` (candidates for exact tests).
@@ -624,13 +647,13 @@ impl Scene {
 
     /// The first triangle found within `clearance` of the capsule's surface
     /// (i.e. closer than `radius + clearance` to its axis), with its distance.
-    pub fn capsule_contact(&self, capsule: &Capsule, clearance: Real) -> Option<(u32, Real)> {
+    pub fn capsule_contact(&self, capsule: &Capsule, clearance: Real) -> Option<(FaceId, Real)> {
         let q = Aabb32::from_f64(&capsule.bounding_box().loosened(clearance));
         self.bvh.query_aabb(&q, |slot| {
             let face = self.bvh.prim_indices[slot as usize];
             let d = capsule.distance_to_triangle(&self.mesh.triangle(face as usize));
             if d <= clearance {
-                ControlFlow::Break((face, d))
+                ControlFlow::Break((FaceId(face), d))
             } else {
                 ControlFlow::Continue(())
             }
@@ -639,7 +662,7 @@ impl Scene {
 
     /// The first pair (scene triangle, given triangle index) that intersect,
     /// testing the given triangles (world frame) against the scene.
-    pub fn triangles_contact(&self, triangles: &[Triangle]) -> Option<(u32, usize)> {
+    pub fn triangles_contact(&self, triangles: &[Triangle]) -> Option<(FaceId, usize)> {
         for (k, t) in triangles.iter().enumerate() {
             let q = Aabb32::from_f64(&Aabb::from_points([&t.a, &t.b, &t.c]));
             let found = self.bvh.query_aabb(&q, |slot| {
@@ -651,7 +674,7 @@ impl Scene {
                 }
             });
             if let Some(face) = found {
-                return Some((face, k));
+                return Some((FaceId(face), k));
             }
         }
         None
@@ -661,7 +684,7 @@ impl Scene {
     /// first surface of a closed object met along a fixed direction is seen from
     /// its back. Triangles of `except` and of open objects are ignored, so a
     /// face flush against another object's face resolves to the other object.
-    pub fn is_inside_closed_object(&self, p: &Point3, except: Option<u32>) -> bool {
+    pub fn is_inside_closed_object(&self, p: &Point3, except: Option<ObjectId>) -> bool {
         // A direction off every axis avoids grazing axis-aligned edges.
         let dir = Vector3::new(0.267_261_241_9, 0.534_522_483_8, 0.801_783_725_7);
         let ray = RayF32::new(
@@ -671,7 +694,7 @@ impl Scene {
         let hit = self.bvh.closest_hit(&ray, f32::INFINITY, |slot, best| {
             let face = self.bvh.prim_indices[slot as usize];
             let obj = self.tri_object[face as usize];
-            if Some(obj) == except || !self.objects[obj as usize].closed {
+            if Some(ObjectId(obj)) == except || !self.objects[obj as usize].closed {
                 return None;
             }
             self.tris[slot as usize].hit(&ray.origin, &ray.dir, best)
@@ -715,7 +738,7 @@ impl RayCast for Scene {
             point: ray.point_at(t),
             normal,
             material: Some(self.objects[object as usize].material),
-            object: Some(object),
+            object: Some(ObjectId(object)),
             element: face,
         })
     }

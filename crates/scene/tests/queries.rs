@@ -171,7 +171,7 @@ fn closest_point_agrees_with_brute_force() {
             .fold(Real::INFINITY, Real::min);
         let (d, face, q) = scene.closest_point(&p, 100.0).unwrap();
         assert!((d - brute).abs() < 1e-12);
-        assert!((mesh.triangle(face as usize).distance_to_point(&p) - d).abs() < 1e-12);
+        assert!((mesh.triangle(face.0 as usize).distance_to_point(&p) - d).abs() < 1e-12);
         assert!(((q - p).norm() - d).abs() < 1e-12);
         // A radius below the true distance finds nothing.
         if brute > 1e-3 {

@@ -108,7 +108,7 @@ impl SimRig {
     /// The scanner pose in the world at the current joints.
     pub fn world_from_scanner(&self) -> Result<Isometry3, SimError> {
         let mount = self.robot.scanner.as_ref().ok_or(SimError::NoScanner)?;
-        Ok(self.world_from_base * self.frames[mount.link] * mount.link_from_scanner)
+        Ok(self.world_from_base * self.frames[mount.link.0] * mount.link_from_scanner)
     }
 }
 
@@ -164,7 +164,7 @@ impl RangeSensors for SimRig {
                     max_range_m: m.max_range_m,
                     noise_sigma_m: 0.0,
                 };
-                let world_from_link = self.world_from_base * self.frames[m.link];
+                let world_from_link = self.world_from_base * self.frames[m.link.0];
                 rf.measure(self.world.as_ref(), &world_from_link, &mut self.rng)
             })
             .collect())

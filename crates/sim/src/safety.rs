@@ -3,19 +3,19 @@
 //! the scene's triangles.
 
 use geom::{Isometry3, Real, Triangle};
-use robot::{PosedShape, Robot};
-use scene::Scene;
+use robot::{LinkId, PosedShape, Robot};
+use scene::{FaceId, ObjectId, Scene};
 use serde::Serialize;
 
 /// A link touching the scene.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Contact {
     /// The link.
-    pub link: usize,
+    pub link: LinkId,
     /// A scene triangle it touches.
-    pub face: u32,
+    pub face: FaceId,
     /// The scene object of that triangle.
-    pub object: u32,
+    pub object: ObjectId,
 }
 
 /// Every link in contact with the scene at the given link frames
@@ -31,7 +31,7 @@ pub fn robot_contacts(
     for shape in robot.posed_collision_shapes(base_from_link) {
         let (link, face) = match shape {
             PosedShape::Capsule { link, capsule } => {
-                if link == 0 || found.iter().any(|c| c.link == link) {
+                if link == LinkId(0) || found.iter().any(|c| c.link == link) {
                     continue;
                 }
                 let c = capsule.transformed(world_from_base);
@@ -42,7 +42,7 @@ pub fn robot_contacts(
                 mesh,
                 base_from_link,
             } => {
-                if link == 0 || found.iter().any(|c| c.link == link) {
+                if link == LinkId(0) || found.iter().any(|c| c.link == link) {
                     continue;
                 }
                 let world_from_link = world_from_base * base_from_link;
@@ -83,7 +83,7 @@ pub fn min_clearance(
     let mut best = search_m;
     for shape in robot.posed_collision_shapes(base_from_link) {
         if let PosedShape::Capsule { link, capsule } = shape {
-            if link == 0 {
+            if link == LinkId(0) {
                 continue;
             }
             let c = capsule.transformed(world_from_base);

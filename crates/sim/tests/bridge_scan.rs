@@ -72,7 +72,7 @@ fn bridge1_start_sweep_sees_roof_webs_and_flanges_with_materials() {
     let scene = setup.world.as_scene().unwrap();
     let name_of = |p: &Point3| {
         let (_, face, _) = scene.closest_point(p, 0.2).unwrap();
-        scene.objects()[scene.triangle_object(face) as usize]
+        scene.objects()[scene.triangle_object(face).index()]
             .name
             .clone()
     };
@@ -188,7 +188,7 @@ fn vm6083_contacts_against_the_bridge() {
         );
         let names: Vec<&str> = c
             .iter()
-            .map(|c| scene.objects()[c.object as usize].name.as_str())
+            .map(|c| scene.objects()[c.object.index()].name.as_str())
             .collect();
         assert!(names.iter().any(|n| wall.contains(n)), "{names:?}");
     }

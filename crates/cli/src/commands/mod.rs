@@ -381,11 +381,15 @@ fn scan(a: &ScanArgs) -> Result<()> {
         a.out.display()
     )?;
     for c in &outcome.contacts {
+        let object = setup
+            .world
+            .as_scene()
+            .and_then(|s| s.object(c.object))
+            .map_or_else(|| format!("{}", c.object.0), |o| format!("'{}'", o.name));
         say!(
-            "WARNING: link {} ({}) touches the scene (object {})",
+            "WARNING: link {} ({}) touches the scene (object {object})",
             c.link,
-            setup.robot.links[c.link].name,
-            c.object
+            setup.robot.links[c.link.0].name,
         )?;
     }
     let t2 = Instant::now();

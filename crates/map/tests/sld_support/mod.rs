@@ -220,7 +220,7 @@ fn face_offset(scene: &Scene, face: u32) -> Real {
 /// Group name of a face: object and outward axis.
 pub fn face_group(scene: &Scene, face: u32) -> String {
     let n = face_normal(scene, face);
-    let obj = &scene.objects()[scene.triangle_object(face) as usize].name;
+    let obj = &scene.objects()[scene.triangle_object(scene::FaceId(face)).index()].name;
     let ax = if n.x.abs() > 0.9 {
         if n.x > 0.0 { "+x" } else { "-x" }
     } else if n.y.abs() > 0.9 {
@@ -324,7 +324,7 @@ pub fn closest_faces(scene: &Scene, points: &[Point3], max_m: Real) -> Vec<u32> 
         .map(|p| {
             scene
                 .closest_point(p, max_m)
-                .map_or(u32::MAX, |(_, f, _)| f)
+                .map_or(u32::MAX, |(_, f, _)| f.0)
         })
         .collect()
 }

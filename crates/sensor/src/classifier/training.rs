@@ -117,7 +117,7 @@ impl RayCast for Patch {
             point,
             normal,
             material: Some(MaterialId(0)),
-            object: Some(0),
+            object: Some(scene::ObjectId(0)),
             element: 0,
         })
     }

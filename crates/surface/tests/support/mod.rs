@@ -224,7 +224,7 @@ pub fn sweep_sets(scene: &str, sweep: &Sweep) -> Vec<SensorSet> {
                 max_range_m: mount.max_range_m,
                 noise_sigma_m: sweep.noise_sigma,
             };
-            if let Some(sp) = finder.measure(&w, &frames[mount.link], &mut rng) {
+            if let Some(sp) = finder.measure(&w, &frames[mount.link.0], &mut rng) {
                 points.push(sp.point);
                 axes.push(sp.axis);
             }
