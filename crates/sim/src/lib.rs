@@ -12,10 +12,12 @@
 //! | [`scan_job`] | the `surveyor scan` job as library calls |
 
 pub mod metrics;
+pub mod range_sensors;
 pub mod rig;
 pub mod safety;
 pub mod scan_job;
 pub mod scenario;
+pub mod surface_score;
 pub mod sweep;
 
 pub use rig::{Arm, LineScanner, RangeSensors, ScanReadings, SimRig};
@@ -39,6 +41,14 @@ pub enum SimError {
     /// The scene could not be built or loaded.
     #[error(transparent)]
     Scene(#[from] scene::SceneError),
+    /// An argument of a library call is invalid.
+    #[error("{what}: {message}")]
+    InvalidArgument {
+        /// The argument.
+        what: String,
+        /// What is wrong.
+        message: String,
+    },
     /// A sensor configuration is invalid.
     #[error(transparent)]
     Sensor(#[from] sensor::SensorError),
