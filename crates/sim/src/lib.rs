@@ -19,6 +19,7 @@ pub mod scan_job;
 pub mod scenario;
 pub mod surface_score;
 pub mod sweep;
+pub mod table_fit;
 
 pub use rig::{Arm, LineScanner, RangeSensors, ScanReadings, SimRig};
 pub use scenario::{LoadedScenario, Scenario};

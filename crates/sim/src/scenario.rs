@@ -400,6 +400,28 @@ impl LoadedScenario {
     }
 }
 
+impl LoadedScenario {
+    /// A simulated rig for the scenario: the robot of [`build_robot`](Self::build_robot)
+    /// (with the `[range_sensors]` mounts) at its start joints, in the world of
+    /// [`build_world`](Self::build_world), with the scenario's range noise σ;
+    /// `seed` drives all sensor noise. The scanner is not simulated (surface
+    /// following uses range finders only).
+    pub fn build_rig(&self, seed: u64) -> Result<crate::SimRig, SimError> {
+        let robot = self.build_robot()?;
+        let world = std::sync::Arc::new(self.build_world()?);
+        let mut rig = crate::SimRig::new(
+            robot,
+            world,
+            self.scenario.world_from_base(),
+            &self.scenario.robot.start_joints,
+            None,
+            seed,
+        )?;
+        rig.set_range_noise_sigma_m(self.scenario.range_sensors.noise_sigma_m)?;
+        Ok(rig)
+    }
+}
+
 /// Reads URDF collision meshes with `scene`'s importer; formats it does not read
 /// (COLLADA `.dae`, ...) are skipped with a warning on the robot.
 pub fn scene_mesh_loader(path: &Path) -> Result<LoadedMesh, String> {

@@ -401,3 +401,27 @@ fn a_motion_through_an_obstacle_between_clear_poses_is_caught() {
         assert!(e.contains("max_step_m"), "{e}");
     }
 }
+
+#[test]
+fn a_scenario_builds_a_rig_with_its_sensors_and_noise() {
+    let mut s = sim::scenario::builtin_scenario("cube").unwrap();
+    s.range_sensors.noise_sigma_m = 0.003;
+    s.range_sensors
+        .rings
+        .push(ring("body", [0.0; 3], [0.0, 0.0, -1.0], 0.0, 1, 0.0));
+    let loaded = LoadedScenario {
+        scenario: s,
+        base_dir: ".".into(),
+    };
+    let mut rig = loaded.build_rig(3).unwrap();
+    assert_eq!(rig.robot().range_finders.len(), 27);
+    assert_eq!(rig.range_noise_sigma_m(), 0.003);
+    assert_eq!(rig.joints(), vec![0.0, 0.0, 1.1]);
+    // The added sensor looks down at the top face 0.1 below, with noise.
+    let d = rig.read_all().unwrap()[26].unwrap().distance_m;
+    assert!((d - 0.1).abs() < 5.0 * 0.003 && d != 0.1, "{d}");
+    let again = loaded.build_rig(3).unwrap().read_all().unwrap()[26]
+        .unwrap()
+        .distance_m;
+    assert_eq!(d, again);
+}
