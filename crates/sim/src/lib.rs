@@ -8,7 +8,10 @@
 //! | [`rig`] | the hardware traits [`Arm`], [`LineScanner`], [`RangeSensors`]; [`SimRig`] |
 //! | [`sweep`] | [`tilt_sweep`]: nod the scanner through the hardware traits into a [`sensor::Sweep`] |
 //! | [`metrics`] | [`metrics::coverage`], [`metrics::accuracy`] against the ground truth |
-//! | [`safety`] | [`safety::robot_contacts`]: the robot's link shapes against the scene |
+//! | [`safety`] | [`safety::robot_contacts`]: the robot's link shapes against the scene; [`safety::motion_contacts`] along a joint-space motion |
+//! | [`range_sensors`] | [`range_sensors::RangeSensorsSpec`]: a scenario's range finders (single and rings) and range noise |
+//! | [`surface_score`] | [`surface_score::score_surface_model`]: a surface model against the true faces, edges and corners |
+//! | [`table_fit`] | [`table_fit::fit_table`]: a table plane fitted to scan points, as world frame and initial segment |
 //! | [`scan_job`] | the `surveyor scan` job as library calls |
 
 pub mod metrics;
