@@ -186,6 +186,19 @@ fn exact_polygons_cover_their_faces_and_a_missing_face_is_zero() {
     assert_eq!(r.stray.polygons, 0);
 }
 
+/// Boustrophedon rows: `n + 1` rows of `n + 1` points `at(row, column)`
+/// (fractions in [0, 1]), every other row reversed.
+fn rows(n: usize, at: impl Fn(Real, Real) -> Point3) -> Vec<Point3> {
+    let mut out = Vec::new();
+    for i in 0..=n {
+        for j in 0..=n {
+            let j = if i % 2 == 0 { j } else { n - j };
+            out.push(at(i as Real / n as Real, j as Real / n as Real));
+        }
+    }
+    out
+}
+
 /// Point3's 26 range finders read along `path` in the cube world, each
 /// reading set fed to the model.
 fn follow_path(m: &mut SurfaceModel, path: &[Point3]) {
@@ -226,28 +239,8 @@ fn shared_edges_count_only_where_the_model_made_them() {
     let px = face_with_normal(&faces, [1.0, 0.0, 0.0]).id;
     let mut m = model_of(&[]);
     // Rows over the top face, then over the +x face from the top down.
-    let mut path = Vec::new();
-    let n = 25;
-    for i in 0..=n {
-        for j in 0..=n {
-            let j = if i % 2 == 0 { j } else { n - j };
-            path.push(p(
-                -0.5 + i as Real / n as Real,
-                -0.5 + j as Real / n as Real,
-                1.1,
-            ));
-        }
-    }
-    for i in 0..=n {
-        for j in 0..=n {
-            let j = if i % 2 == 0 { j } else { n - j };
-            path.push(p(
-                0.6,
-                -0.5 + j as Real / n as Real,
-                1.0 - 0.9 * i as Real / n as Real,
-            ));
-        }
-    }
+    let mut path = rows(25, |a, b| p(-0.5 + a, -0.5 + b, 1.1));
+    path.extend(rows(25, |a, b| p(0.6, -0.5 + b, 1.0 - 0.9 * a)));
     follow_path(&mut m, &path);
     // What the model made, read from its own records: one polygon per swept
     // face, sharing one edge.
@@ -299,4 +292,93 @@ fn shared_edges_count_only_where_the_model_made_them() {
     let acc = r.vertex_accuracy.unwrap();
     assert!(acc.max_m < 0.05, "{acc:?}");
     let _ = top_id;
+}
+
+#[test]
+fn a_corner_counts_where_the_model_made_one() {
+    let s = scene("cube");
+    let faces = true_faces(&s);
+    let id = |n: [Real; 3]| face_with_normal(&faces, n).id;
+    let (top, px, py) = (
+        id([0.0, 0.0, 1.0]),
+        id([1.0, 0.0, 0.0]),
+        id([0.0, 1.0, 0.0]),
+    );
+    // Top, then down the +x face, then down the +y face.
+    let mut path = rows(25, |a, b| p(-0.5 + a, -0.5 + b, 1.1));
+    path.extend(rows(25, |a, b| p(0.6, -0.5 + b, 1.0 - 0.9 * a)));
+    path.extend(rows(25, |a, b| p(0.5 - b, 0.6, 1.0 - 0.9 * a)));
+    let mut m = model_of(&[]);
+    follow_path(&mut m, &path);
+    // The model's own records: three polygons, each with one corner vertex,
+    // all at the cube's corner (0.5, 0.5, 1).
+    let corners: Vec<Point3> = m
+        .segments()
+        .filter_map(|s| s.as_polygon())
+        .flat_map(|p| {
+            p.nodes()
+                .iter()
+                .filter(|n| n.corner.is_some())
+                .map(|n| n.position)
+        })
+        .collect();
+    assert_eq!(corners.len(), 3);
+    assert!(
+        corners.iter().all(|c| (c - p(0.5, 0.5, 1.0)).norm() < 0.05),
+        "{corners:?}"
+    );
+
+    let r =
+        score_surface_model(&s, &m, &SurfaceScoreConfig::default(), &not_resting_on(0.0)).unwrap();
+    assert_eq!(r.corners_found, 1);
+    for c in &r.corners {
+        assert_eq!(c.found, c.position == [0.5, 0.5, 1.0], "{c:?}");
+    }
+    let pair = |a: usize, b: usize| [a.min(b), a.max(b)];
+    let made = [pair(top, px), pair(top, py), pair(px, py)];
+    for e in &r.edges {
+        if made.contains(&e.faces) {
+            assert!(e.covered_fraction > 0.9, "{e:?}");
+        } else {
+            assert_eq!(e.covered_fraction, 0.0, "{e:?}");
+        }
+    }
+    for f in &r.faces {
+        let want = if [top, px, py].contains(&f.face) {
+            1.0
+        } else {
+            0.0
+        };
+        assert!((f.covered_fraction - want).abs() < 1e-3, "{f:?}");
+    }
+}
+
+#[test]
+fn block1_faces_edges_and_corners() {
+    // The L-shaped block: two L-shaped sides (each one face of several
+    // triangles), the bottom, two tops, the step, and the two ends.
+    let s = scene("block1");
+    let faces = true_faces(&s);
+    assert_eq!(faces.len(), 8);
+    let area: Real = faces.iter().map(|f| f.area_m2).sum();
+    // Sides 2 × (1.2·0.4 + 0.6·0.4), bottom 1.2·0.7, tops 2 × 0.6·0.7, step
+    // 0.4·0.7, ends 0.4·0.7 + 0.8·0.7.
+    let want = 2.0 * 0.72 + 0.84 + 2.0 * 0.42 + 0.28 + 0.28 + 0.56;
+    assert!((area - want).abs() < 1e-9, "{area} vs {want}");
+    let r = score_surface_model(
+        &s,
+        &model_of(&[]),
+        &SurfaceScoreConfig::default(),
+        &not_resting_on(0.0),
+    )
+    .unwrap();
+    assert_eq!(r.faces.len(), 7);
+    // Edges among the 7 upper faces: each L side meets the 5 faces round it
+    // (2 tops, step, 2 ends); the upper top meets the step (convex) and the
+    // left end, the lower top the step (concave) and the right end: 2·5 + 4.
+    assert_eq!(r.edges.len(), 14);
+    // Corners off the table: 4 per L side, at its profile vertices (0.6, 0.4),
+    // (0, 0.4) (concave), (0, 0.8) and (−0.6, 0.8).
+    assert_eq!(r.corners.len(), 8);
+    assert!(r.corners.iter().any(|c| c.position == [0.0, 0.35, 0.4]));
 }
