@@ -91,10 +91,10 @@ impl SimRig {
     /// (σ not finite, or negative) leaves the rig unchanged.
     pub fn set_range_noise_sigma_m(&mut self, sigma_m: Real) -> Result<(), SimError> {
         if !(sigma_m.is_finite() && sigma_m >= 0.0) {
-            return Err(SimError::Scenario {
-                source_name: "rig".into(),
+            return Err(SimError::InvalidArgument {
+                what: "range noise σ (range_sensors.noise_sigma_m)".into(),
                 message: format!(
-                    "range_sensors.noise_sigma_m: expected a finite standard deviation ≥ 0 (metres), got {sigma_m}"
+                    "expected a finite standard deviation ≥ 0 (metres), got {sigma_m}"
                 ),
             });
         }

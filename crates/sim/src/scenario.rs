@@ -252,8 +252,8 @@ impl Scenario {
 
     /// Check the numbers a TOML file can get wrong before anything is built or
     /// allocated: poses (finite, within ±[`scene::MAX_COORDINATE_M`]), start
-    /// joints, the `[range_sensors]` table, initial segments, the scanner and its sweep (within the sensor
-    /// budgets), and the metrics settings. Errors name the field by its TOML
+    /// joints, the `[range_sensors]` table, initial segments, the scanner and
+    /// its sweep (within the sensor budgets), and the metrics settings. Errors name the field by its TOML
     /// path (`robot.base_pose: translation[0]: ...`).
     pub fn validate(&self) -> Result<(), SimError> {
         let fail = |message: String| SimError::Scenario {
