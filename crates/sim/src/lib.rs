@@ -8,15 +8,21 @@
 //! | [`rig`] | the hardware traits [`Arm`], [`LineScanner`], [`RangeSensors`]; [`SimRig`] |
 //! | [`sweep`] | [`tilt_sweep`]: nod the scanner through the hardware traits into a [`sensor::Sweep`] |
 //! | [`metrics`] | [`metrics::coverage`], [`metrics::accuracy`] against the ground truth |
-//! | [`safety`] | [`safety::robot_contacts`]: the robot's link shapes against the scene |
+//! | [`safety`] | [`safety::robot_contacts`]: the robot's link shapes against the scene; [`safety::motion_contacts`] along a joint-space motion |
+//! | [`range_sensors`] | [`range_sensors::RangeSensorsSpec`]: a scenario's range finders (single and rings) and range noise |
+//! | [`surface_score`] | [`surface_score::score_surface_model`]: a surface model against the true faces, edges and corners |
+//! | [`table_fit`] | [`table_fit::fit_table`]: a table plane fitted to scan points, as world frame and initial segment |
 //! | [`scan_job`] | the `surveyor scan` job as library calls |
 
 pub mod metrics;
+pub mod range_sensors;
 pub mod rig;
 pub mod safety;
 pub mod scan_job;
 pub mod scenario;
+pub mod surface_score;
 pub mod sweep;
+pub mod table_fit;
 
 pub use rig::{Arm, LineScanner, RangeSensors, ScanReadings, SimRig};
 pub use scenario::{LoadedScenario, Scenario};
@@ -39,6 +45,14 @@ pub enum SimError {
     /// The scene could not be built or loaded.
     #[error(transparent)]
     Scene(#[from] scene::SceneError),
+    /// An argument of a library call is invalid.
+    #[error("{what}: {message}")]
+    InvalidArgument {
+        /// The argument.
+        what: String,
+        /// What is wrong.
+        message: String,
+    },
     /// A sensor configuration is invalid.
     #[error(transparent)]
     Sensor(#[from] sensor::SensorError),

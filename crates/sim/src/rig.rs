@@ -58,6 +58,7 @@ pub struct SimRig {
     scanner: Option<Scanner>,
     rng: ChaCha8Rng,
     frames: Vec<Isometry3>,
+    range_noise_sigma_m: Real,
 }
 
 impl SimRig {
@@ -79,7 +80,31 @@ impl SimRig {
             scanner,
             rng: ChaCha8Rng::seed_from_u64(seed),
             frames,
+            range_noise_sigma_m: 0.0,
         })
+    }
+
+    /// Set the standard deviation of the Gaussian noise added to every
+    /// range-finder reading ([`RangeSensors::read_all`]), metres; 0 (the
+    /// default) gives exact readings. The noise is drawn from the rig's seeded
+    /// RNG, so the same seed, poses and reads give the same readings. An error
+    /// (σ not finite, or negative) leaves the rig unchanged.
+    pub fn set_range_noise_sigma_m(&mut self, sigma_m: Real) -> Result<(), SimError> {
+        if !(sigma_m.is_finite() && sigma_m >= 0.0) {
+            return Err(SimError::InvalidArgument {
+                what: "range noise σ (range_sensors.noise_sigma_m)".into(),
+                message: format!(
+                    "expected a finite standard deviation ≥ 0 (metres), got {sigma_m}"
+                ),
+            });
+        }
+        self.range_noise_sigma_m = sigma_m;
+        Ok(())
+    }
+
+    /// The range-finder noise σ in use, metres.
+    pub fn range_noise_sigma_m(&self) -> Real {
+        self.range_noise_sigma_m
     }
 
     /// The robot model.
@@ -154,19 +179,41 @@ impl LineScanner for SimRig {
 
 impl RangeSensors for SimRig {
     fn read_all(&mut self) -> Result<Vec<Option<SensorPoint>>, SimError> {
-        let mounts = self.robot.range_finders.clone();
-        Ok(mounts
+        let sigma = self.range_noise_sigma_m;
+        let Self {
+            robot,
+            world,
+            world_from_base,
+            rng,
+            frames,
+            ..
+        } = self;
+        // Sensors in mount order, one noise draw per hit: the readings are a
+        // function of the seed and the sequence of poses and reads.
+        robot
+            .range_finders
             .iter()
             .map(|m| {
+                let base_from_link =
+                    frames
+                        .get(m.link.0)
+                        .ok_or_else(|| robot::RobotError::InvalidRobot {
+                            robot: robot.name.clone(),
+                            message: format!(
+                                "range finder on link {} out of range ({} links)",
+                                m.link,
+                                frames.len()
+                            ),
+                        })?;
                 let rf = RangeFinder {
                     origin: m.origin,
                     axis: m.axis,
                     max_range_m: m.max_range_m,
-                    noise_sigma_m: 0.0,
+                    noise_sigma_m: sigma,
                 };
-                let world_from_link = self.world_from_base * self.frames[m.link.0];
-                rf.measure(self.world.as_ref(), &world_from_link, &mut self.rng)
+                let world_from_link = *world_from_base * base_from_link;
+                Ok(rf.measure(world.as_ref(), &world_from_link, rng))
             })
-            .collect())
+            .collect()
     }
 }

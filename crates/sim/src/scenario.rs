@@ -4,6 +4,7 @@
 //! new scene: print one, edit it, pass the file.
 
 use crate::SimError;
+use crate::range_sensors::RangeSensorsSpec;
 use geom::{Isometry3, Real};
 use map::RegionsConfig;
 use robot::{LoadedMesh, Robot, ScannerMount};
@@ -26,6 +27,10 @@ pub struct Scenario {
     /// The tilting laser scanner and its sweep (AXBAM scenarios).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scanner: Option<ScannerSpec>,
+    /// Single-point range finders added to the robot, and the range noise of
+    /// every reading (surface following; see [`crate::range_sensors`]).
+    #[serde(default, skip_serializing_if = "RangeSensorsSpec::is_empty")]
+    pub range_sensors: RangeSensorsSpec,
     /// Regions of interest A1 ⊂ A2 ⊂ A3 (A§4.2.1), when the method uses them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub regions: Option<RegionsConfig>,
@@ -209,6 +214,7 @@ pub fn builtin_scenario(name: &str) -> Option<Scenario> {
         name: name.to_owned(),
         description: description.to_owned(),
         robot,
+        range_sensors: RangeSensorsSpec::default(),
         scanner,
         regions,
         initial_segments: initial,
@@ -246,8 +252,8 @@ impl Scenario {
 
     /// Check the numbers a TOML file can get wrong before anything is built or
     /// allocated: poses (finite, within ±[`scene::MAX_COORDINATE_M`]), start
-    /// joints, initial segments, the scanner and its sweep (within the sensor
-    /// budgets), and the metrics settings. Errors name the field by its TOML
+    /// joints, the `[range_sensors]` table, initial segments, the scanner and
+    /// its sweep (within the sensor budgets), and the metrics settings. Errors name the field by its TOML
     /// path (`robot.base_pose: translation[0]: ...`).
     pub fn validate(&self) -> Result<(), SimError> {
         let fail = |message: String| SimError::Scenario {
@@ -263,6 +269,7 @@ impl Scenario {
                 )));
             }
         }
+        self.range_sensors.validate().map_err(fail)?;
         if let Some(scanner) = &self.scanner {
             if let Some(mount) = &scanner.mount {
                 pose(mount, "scanner.mount")?;
@@ -360,7 +367,8 @@ impl LoadedScenario {
         Ok(self.scenario.scene.build(&self.base_dir)?)
     }
 
-    /// Build the robot, with the scanner mounted when the scenario has one, and
+    /// Build the robot, with the scanner mounted when the scenario has one and
+    /// the scenario's `[range_sensors]` appended to its range finders, and
     /// check the start pose against it.
     pub fn build_robot(&self) -> Result<Robot, SimError> {
         let spec = &self.scenario.robot;
@@ -375,6 +383,13 @@ impl LoadedScenario {
         if let Some(scanner) = &self.scenario.scanner {
             mount_scanner(&mut robot, scanner.mount.as_ref());
         }
+        self.scenario
+            .range_sensors
+            .apply(&mut robot)
+            .map_err(|message| SimError::Scenario {
+                source_name: self.scenario.name.clone(),
+                message,
+            })?;
         robot
             .check_joints(&spec.start_joints)
             .map_err(|e| SimError::Scenario {
@@ -382,6 +397,28 @@ impl LoadedScenario {
                 message: format!("robot.start_joints: {e}"),
             })?;
         Ok(robot)
+    }
+}
+
+impl LoadedScenario {
+    /// A simulated rig for the scenario: the robot of [`build_robot`](Self::build_robot)
+    /// (with the `[range_sensors]` mounts) at its start joints, in the world of
+    /// [`build_world`](Self::build_world), with the scenario's range noise σ;
+    /// `seed` drives all sensor noise. The scanner is not simulated (surface
+    /// following uses range finders only).
+    pub fn build_rig(&self, seed: u64) -> Result<crate::SimRig, SimError> {
+        let robot = self.build_robot()?;
+        let world = std::sync::Arc::new(self.build_world()?);
+        let mut rig = crate::SimRig::new(
+            robot,
+            world,
+            self.scenario.world_from_base(),
+            &self.scenario.robot.start_joints,
+            None,
+            seed,
+        )?;
+        rig.set_range_noise_sigma_m(self.scenario.range_sensors.noise_sigma_m)?;
+        Ok(rig)
     }
 }
 
