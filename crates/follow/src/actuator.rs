@@ -1,0 +1,371 @@
+//! Actuator changes (P§3.3, eq. 3–5, App. A and B): `θ̇ = J⁺ẋ + α(I − J⁺J)z`,
+//! with `z = −∇H` keeping the links away from the surface model, and ceilings
+//! γ_p / γ_r on the change.
+
+use crate::config::{FollowConfig, Objective};
+use crate::query::closest_segment_model;
+use geom::{Isometry3, Point3, Real, Segment3, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix6xX};
+use robot::{CollisionShape, JointKind, LinkId, Robot};
+use surface::SurfaceModel;
+
+/// A link's description for eq. 4: a line segment in the link frame (the axis
+/// of its capsule; for mesh links the long axis of the bounding ellipsoid).
+/// Distances are measured from this axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkBody {
+    /// The link.
+    pub link: LinkId,
+    /// The axis, link frame.
+    pub axis: Segment3,
+}
+
+/// The links' descriptions: every capsule of links 1.. (several per link
+/// are treated as one link, its closest point winning), or the long axis of
+/// the bounding ellipsoid where a link has only meshes.
+pub fn link_bodies(robot: &Robot) -> Vec<LinkBody> {
+    let mut out = Vec::new();
+    for (i, link) in robot.links.iter().enumerate().skip(1) {
+        let mut any = false;
+        for shape in &link.collision {
+            if let CollisionShape::Capsule(c) = shape {
+                out.push(LinkBody {
+                    link: LinkId(i),
+                    axis: c.segment,
+                });
+                any = true;
+            }
+        }
+        if !any
+            && !link.collision.is_empty()
+            && let Some(e) = link.ellipsoid
+        {
+            let r = e.radii;
+            let (k, len) = [r.x, r.y, r.z]
+                .into_iter()
+                .enumerate()
+                .fold((0, 0.0), |b, (k, v)| if v > b.1 { (k, v) } else { b });
+            let mut axis = Vector3::zeros();
+            axis[k] = len;
+            let a = e.pose * Point3::from(-axis);
+            let b = e.pose * Point3::from(axis);
+            out.push(LinkBody {
+                link: LinkId(i),
+                axis: Segment3::new(a, b),
+            });
+        }
+    }
+    out
+}
+
+/// The part of segment `s` farther than `radius` from `c`: up to two pieces.
+pub fn outside_ball(s: &Segment3, c: &Point3, radius: Real) -> Vec<Segment3> {
+    let d = s.b - s.a;
+    let len2 = d.norm_squared();
+    if len2 <= 0.0 {
+        return if (s.a - c).norm() >= radius {
+            vec![*s]
+        } else {
+            Vec::new()
+        };
+    }
+    // |a + t d − c|² = r² → t² |d|² + 2 t d·(a − c) + |a − c|² − r² = 0.
+    let f = s.a - c;
+    let b = d.dot(&f);
+    let disc = b * b - len2 * (f.norm_squared() - radius * radius);
+    if disc <= 0.0 {
+        return vec![*s];
+    }
+    let root = disc.sqrt();
+    let (t0, t1) = ((-b - root) / len2, (-b + root) / len2);
+    let mut out = Vec::new();
+    if t0 > 0.0 {
+        out.push(Segment3::new(s.a, s.point_at(t0.min(1.0))));
+    }
+    if t1 < 1.0 {
+        out.push(Segment3::new(s.point_at(t1.max(0.0)), s.b));
+    }
+    out.retain(|p| p.length() > 1e-9);
+    out
+}
+
+/// One link's closest approach to the model (eq. 4): `lᵢ` on the link, `sᵢ`
+/// on the model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkProximity {
+    /// The link.
+    pub link: LinkId,
+    /// `lᵢ`, base frame.
+    pub on_link: Point3,
+    /// `sᵢ`, base frame.
+    pub on_model: Point3,
+    /// `‖lᵢ − sᵢ‖`.
+    pub distance: Real,
+}
+
+/// Each link's closest point to the model within `influence` (eq. 4), the
+/// control point's own zone (radius δ) excluded from the tool link (P§3.3).
+/// `frames` are the link frames in the model's frame.
+pub fn link_proximities(
+    model: &SurfaceModel,
+    bodies: &[LinkBody],
+    frames: &[Isometry3],
+    control_point: &Point3,
+    tool_link: LinkId,
+    exclusion: Real,
+    influence: Real,
+) -> Vec<LinkProximity> {
+    let mut out: Vec<LinkProximity> = Vec::new();
+    for body in bodies {
+        let Some(frame) = frames.get(body.link.0) else {
+            continue;
+        };
+        let axis = Segment3::new(frame * body.axis.a, frame * body.axis.b);
+        let pieces = if body.link == tool_link {
+            outside_ball(&axis, control_point, exclusion)
+        } else {
+            vec![axis]
+        };
+        for piece in pieces {
+            if let Some((d, l, s, _)) = closest_segment_model(model, &piece, influence) {
+                match out.iter_mut().find(|p| p.link == body.link) {
+                    Some(p) if p.distance <= d => {}
+                    Some(p) => {
+                        *p = LinkProximity {
+                            link: body.link,
+                            on_link: l,
+                            on_model: s,
+                            distance: d,
+                        };
+                    }
+                    None => out.push(LinkProximity {
+                        link: body.link,
+                        on_link: l,
+                        on_model: s,
+                        distance: d,
+                    }),
+                }
+            }
+        }
+    }
+    out
+}
+
+/// A proximity switch that detects an object (App. B): its position `pᵢ` and
+/// the centre `cᵢ` of its sensing field, base frame, on link `link`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SwitchContact {
+    /// The link carrying the switch.
+    pub link: LinkId,
+    /// `pᵢ`.
+    pub position: Point3,
+    /// `cᵢ`.
+    pub field_centre: Point3,
+}
+
+/// The reconfiguration vector `z = −∇H` of eq. 5 (link distances), or of
+/// App. B (switches), for the robot at link frames `frames`.
+pub fn reconfiguration(
+    robot: &Robot,
+    frames: &[Isometry3],
+    objective: Objective,
+    proximities: &[LinkProximity],
+    switches: &[SwitchContact],
+    config: &FollowConfig,
+) -> DVector<Real> {
+    let dof = robot.dof();
+    let mut z = DVector::zeros(dof);
+    let d0 = 0.5 * config.influence_m * config.influence_m;
+    let g = config.exponent as i32;
+    let mut jac = Matrix6xX::zeros(dof);
+    let mut add = |link: LinkId, point: &Point3, away: &Vector3, weight: Real| {
+        let Some(frame) = frames.get(link.0) else {
+            return;
+        };
+        let in_link = frame.inverse_transform_point(point);
+        robot.jacobian_into(frames, link, &in_link, &mut jac);
+        for k in 0..dof {
+            let r = Vector3::new(jac[(0, k)], jac[(1, k)], jac[(2, k)]);
+            z[k] += weight * away.dot(&r);
+        }
+    };
+    match objective {
+        Objective::LinkDistance => {
+            for p in proximities {
+                let d = 0.5 * p.distance * p.distance;
+                if d < d0 {
+                    let w = (1.0 - d / d0).powi(g - 1);
+                    add(p.link, &p.on_link, &(p.on_link - p.on_model), w);
+                }
+            }
+        }
+        Objective::ProximitySwitches => {
+            for s in switches {
+                let d = 0.5 * (s.position - s.field_centre).norm_squared();
+                if d < d0 {
+                    let w = (1.0 - d / d0).powi(g - 1);
+                    add(s.link, &s.position, &(s.position - s.field_centre), w);
+                }
+            }
+        }
+    }
+    z
+}
+
+/// Eq. 3 with the ceilings of P§3.3: `θ̇ = J⁺ẋ + α(I − J⁺J)z`, where `J` is the
+/// 3 × n positional Jacobian of the control point; then the whole vector is
+/// scaled so that its revolute part is at most γ_r and its prismatic part at
+/// most γ_p (one factor for both, so the control point keeps its direction),
+/// and so that no joint leaves its limits.
+pub fn actuator_change(
+    robot: &Robot,
+    q: &[Real],
+    jacobian: &Matrix6xX<Real>,
+    motion: &Vector3,
+    z: &DVector<Real>,
+    config: &FollowConfig,
+) -> DVector<Real> {
+    let dof = robot.dof();
+    let j = DMatrix::from_fn(3, dof, |r, c| jacobian[(r, c)]);
+    let j_pinv = if config.damping > 0.0 {
+        robot::damped_pseudo_inverse(&j, config.damping)
+    } else {
+        robot::pseudo_inverse(&j, 1e-12)
+    };
+    let xdot = DVector::from_column_slice(motion.as_slice());
+    let mut dq = &j_pinv * xdot;
+    if config.alpha > 0.0 && z.iter().any(|v| *v != 0.0) {
+        let null = robot::null_space_projector(&j, &j_pinv);
+        dq += (null * z) * config.alpha;
+    }
+    if !dq.iter().all(|v| v.is_finite()) {
+        return DVector::zeros(dof);
+    }
+    let kinds = robot.joint_kinds();
+    let (mut rev, mut pri) = (0.0, 0.0);
+    for (k, kind) in kinds.iter().enumerate() {
+        match kind {
+            JointKind::Revolute => rev += dq[k] * dq[k],
+            JointKind::Prismatic => pri += dq[k] * dq[k],
+            JointKind::Fixed => {}
+        }
+    }
+    let mut scale: Real = 1.0;
+    let (rev, pri) = (rev.sqrt(), pri.sqrt());
+    if rev > config.ceiling_revolute_rad() {
+        scale = scale.min(config.ceiling_revolute_rad() / rev);
+    }
+    if pri > config.ceiling_prismatic_m {
+        scale = scale.min(config.ceiling_prismatic_m / pri);
+    }
+    for (k, lim) in robot.limits().iter().enumerate() {
+        if let (Some(lim), Some(&qk)) = (lim, q.get(k)) {
+            let step = dq[k] * scale;
+            if qk + step > lim.max && step > 0.0 {
+                scale = scale.min(((lim.max - qk) / dq[k]).max(0.0));
+            } else if qk + step < lim.min && step < 0.0 {
+                scale = scale.min(((lim.min - qk) / dq[k]).max(0.0));
+            }
+        }
+    }
+    dq * scale
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn outside_ball_by_hand() {
+        let s = Segment3::new(Point3::new(0.0, 0.0, 0.0), Point3::new(0.0, 0.0, 1.0));
+        // Ball at the end: one piece, ending 0.1 before it.
+        let p = outside_ball(&s, &Point3::new(0.0, 0.0, 1.0), 0.1);
+        assert_eq!(p.len(), 1);
+        assert!((p[0].b.z - 0.9).abs() < 1e-12);
+        // Ball in the middle: two pieces.
+        let p = outside_ball(&s, &Point3::new(0.0, 0.0, 0.5), 0.1);
+        assert_eq!(p.len(), 2);
+        assert!((p[0].b.z - 0.4).abs() < 1e-12 && (p[1].a.z - 0.6).abs() < 1e-12);
+        // Ball away: unchanged; ball covering: nothing.
+        assert_eq!(outside_ball(&s, &Point3::new(1.0, 0.0, 0.5), 0.1), vec![s]);
+        assert!(outside_ball(&s, &Point3::new(0.0, 0.0, 0.5), 2.0).is_empty());
+    }
+
+    /// z of eq. 5 equals −∇H of eq. 4 by finite differences (App. A), with the
+    /// closest points held fixed on the link as the derivation does.
+    #[test]
+    fn reconfiguration_is_the_negative_gradient() {
+        let robot = robot::builtin("arm4").unwrap();
+        let q = [0.3, 0.7, -0.2, 0.9, 0.4, 0.5];
+        let cfg = FollowConfig::default();
+        let frames = robot.forward_kinematics(&q).unwrap();
+        // A fixed model point s near link 4's middle; l is the link point.
+        let link = LinkId(6);
+        let l_local = Point3::new(0.0, 0.0, 0.5);
+        let l = frames[6] * l_local;
+        let s = l + Vector3::new(0.05, -0.04, 0.08);
+        let prox = [LinkProximity {
+            link,
+            on_link: l,
+            on_model: s,
+            distance: (l - s).norm(),
+        }];
+        let z = reconfiguration(&robot, &frames, Objective::LinkDistance, &prox, &[], &cfg);
+        let d0 = 0.5 * cfg.influence_m * cfg.influence_m;
+        let h = |q: &[Real]| {
+            let f = robot.forward_kinematics(q).unwrap();
+            let l = f[6] * l_local;
+            let d = 0.5 * (l - s).norm_squared();
+            if d < d0 {
+                d0 / Real::from(cfg.exponent) * (1.0 - d / d0).powi(cfg.exponent as i32)
+            } else {
+                0.0
+            }
+        };
+        for k in 0..6 {
+            let (mut qp, mut qm) = (q, q);
+            qp[k] += 1e-6;
+            qm[k] -= 1e-6;
+            let grad = (h(&qp) - h(&qm)) / 2e-6;
+            assert!(
+                (z[k] + grad).abs() < 1e-7,
+                "joint {k}: z {} vs −∇H {}",
+                z[k],
+                -grad
+            );
+        }
+    }
+
+    /// The null-space term does not move the control point (first order), and
+    /// the ceiling holds.
+    #[test]
+    fn null_space_keeps_the_control_point() {
+        let robot = robot::builtin("arm4").unwrap();
+        let q = [0.3, 0.7, -0.2, 0.9, 0.4, 0.5];
+        let cfg = FollowConfig {
+            ceiling_revolute_deg: 1e6,
+            damping: 0.0,
+            ..FollowConfig::default()
+        };
+        let frames = robot.forward_kinematics(&q).unwrap();
+        let (tool_link, tool) = robot.tool;
+        let jac = robot
+            .jacobian(&q, tool_link, &Point3::from(tool.translation.vector))
+            .unwrap();
+        let z = DVector::from_vec(vec![0.1, -0.2, 0.3, 0.05, -0.1, 0.2]);
+        let dq = actuator_change(&robot, &q, &jac, &Vector3::zeros(), &z, &cfg);
+        assert!(dq.norm() > 1e-3);
+        let j3 = DMatrix::from_fn(3, 6, |r, c| jac[(r, c)]);
+        assert!((j3 * &dq).norm() < 1e-9 * dq.norm().max(1.0));
+        let _ = frames;
+        let capped = actuator_change(
+            &robot,
+            &q,
+            &jac,
+            &Vector3::zeros(),
+            &z,
+            &FollowConfig::default(),
+        );
+        assert!((capped.norm() - 3.8_f64.to_radians()).abs() < 1e-9);
+    }
+}

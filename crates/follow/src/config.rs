@@ -1,0 +1,127 @@
+//! Parameters of surface following, with Pudney's values (P§4.3) as defaults.
+
+use crate::FollowError;
+use geom::Real;
+use serde::{Deserialize, Serialize};
+
+/// Which objective generates the reconfiguration vector `z` of eq. 3.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Objective {
+    /// Eq. 4–5 (App. A): the distance of each link from the surface model.
+    #[default]
+    LinkDistance,
+    /// App. B: proximity switches on the links (the link range finders read as
+    /// binary switches: object present when a reading is within range).
+    ProximitySwitches,
+}
+
+/// Surface-following parameters (SPEC §3.5; values of P§4.3).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FollowConfig {
+    /// Desired distance δ between the control point and the surface model
+    /// (P§3.2), metres.
+    pub desired_distance_m: Real,
+    /// Maximum step σ_max of the control point (P§3.2), metres.
+    pub max_step_m: Real,
+    /// ρ: how far the control point may stray from what it follows (P§3.4.1),
+    /// metres; Pudney sets it to the sensing range.
+    pub stray_m: Real,
+    /// Ceiling γ_p on the prismatic part of each actuator change (P§3.3), metres.
+    pub ceiling_prismatic_m: Real,
+    /// Ceiling γ_r on the revolute part of each actuator change (P§3.3), degrees.
+    pub ceiling_revolute_deg: Real,
+    /// Gain α of the null-space term (eq. 3). Zero turns redundancy off.
+    pub alpha: Real,
+    /// Exponent g of the objective (eq. 4), a positive integer.
+    pub exponent: u32,
+    /// √(2 d₀): distance from the model beyond which a link has no influence
+    /// (eq. 4), metres.
+    pub influence_m: Real,
+    /// τ: the configuration is checked for progress every τ steps (P§3.4.7).
+    pub progress_steps: u32,
+    /// The reconfiguration objective.
+    pub objective: Objective,
+    /// Gap following gives up on a target point after this many steps without a
+    /// sensor point near it (P§3.4.5 "after some time"; 0 = never give up
+    /// except through the progress check).
+    pub target_patience_steps: u32,
+    /// Damping of the pseudo-inverse near singularities (0 = plain J⁺).
+    pub damping: Real,
+}
+
+impl Default for FollowConfig {
+    fn default() -> Self {
+        Self {
+            desired_distance_m: 0.1,
+            max_step_m: 0.1,
+            stray_m: 0.2,
+            ceiling_prismatic_m: 0.05,
+            ceiling_revolute_deg: 3.8,
+            alpha: 7000.0,
+            exponent: 6,
+            influence_m: 0.2,
+            progress_steps: 10,
+            objective: Objective::LinkDistance,
+            target_patience_steps: 20,
+            damping: 1e-3,
+        }
+    }
+}
+
+impl FollowConfig {
+    /// Check every field; the error names the field and what was expected.
+    pub fn validate(&self) -> Result<(), FollowError> {
+        let positive = |name: &str, v: Real| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(FollowError::Config(format!(
+                    "{name}: expected a finite value > 0, got {v}"
+                )))
+            }
+        };
+        positive("desired_distance_m", self.desired_distance_m)?;
+        positive("max_step_m", self.max_step_m)?;
+        positive("stray_m", self.stray_m)?;
+        positive("ceiling_prismatic_m", self.ceiling_prismatic_m)?;
+        positive("ceiling_revolute_deg", self.ceiling_revolute_deg)?;
+        positive("influence_m", self.influence_m)?;
+        if !(self.alpha.is_finite() && self.alpha >= 0.0) {
+            return Err(FollowError::Config(format!(
+                "alpha: expected a finite gain ≥ 0, got {}",
+                self.alpha
+            )));
+        }
+        if !(self.damping.is_finite() && self.damping >= 0.0) {
+            return Err(FollowError::Config(format!(
+                "damping: expected a finite value ≥ 0, got {}",
+                self.damping
+            )));
+        }
+        if self.exponent == 0 || self.exponent > 64 {
+            return Err(FollowError::Config(format!(
+                "exponent: expected an integer in 1..=64, got {}",
+                self.exponent
+            )));
+        }
+        if self.progress_steps == 0 {
+            return Err(FollowError::Config(
+                "progress_steps: expected at least 1".into(),
+            ));
+        }
+        if self.stray_m <= self.desired_distance_m {
+            return Err(FollowError::Config(format!(
+                "stray_m ({}) must exceed desired_distance_m ({}): eq. 6 blends over δ < ‖v₁‖ < ρ",
+                self.stray_m, self.desired_distance_m
+            )));
+        }
+        Ok(())
+    }
+
+    /// γ_r in radians.
+    pub fn ceiling_revolute_rad(&self) -> Real {
+        self.ceiling_revolute_deg.to_radians()
+    }
+}

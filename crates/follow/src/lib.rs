@@ -1,0 +1,16 @@
+#![doc = include_str!("../README.md")]
+
+pub mod actuator;
+pub mod config;
+pub mod error;
+pub mod follower;
+pub mod motion;
+pub mod path;
+pub mod query;
+pub mod reach;
+
+pub use config::{FollowConfig, Objective};
+pub use error::FollowError;
+pub use follower::{Follower, Mode, ModeCounts, Step, StepTimes, Termination};
+pub use motion::control_point_motion;
+pub use reach::place_tool;
