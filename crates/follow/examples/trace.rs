@@ -1,13 +1,14 @@
 //! Follow a built-in scene with a built-in robot in a simulated world and print
-//! what happens (a development aid): `cargo run --release -p follow --example
-//! trace -- cube point3 3000`.
+//! what happens (a development aid; `surveyor follow` is the product):
+//! `cargo run --release -p follow --example trace -- cube point3 3000 [noise_m] [alpha]`.
+//! `RLE=1` prints every change of mode, current segment or current edge.
 
-use follow::{FollowConfig, Follower, Mode};
-use geom::{Isometry3, Point3, Real};
-use rand::SeedableRng;
-use sensor::RangeFinder;
+#[path = "../tests/support/mod.rs"]
+mod support;
+
+use follow::{FollowConfig, Mode};
+use geom::Real;
 use std::collections::BTreeMap;
-use surface::{SurfaceConfig, SurfaceModel};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -15,151 +16,98 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let robot_name = args.get(2).map_or("point3", String::as_str);
     let max: usize = args.get(3).map_or(Ok(3000), |s| s.parse())?;
     let noise: Real = args.get(4).map_or(Ok(0.0), |s| s.parse())?;
-    let world = scene::builtin::scene(scene_name)
-        .ok_or("unknown scene")?
-        .build(std::path::Path::new("."))?;
-    let scene = world.as_scene().ok_or("not a mesh scene")?.clone();
-    let robot = robot::builtin(robot_name)?;
-    let mut model = SurfaceModel::new(SurfaceConfig::default())?;
-    model.add_initial_segment(&[
-        Point3::new(-2.0, -2.0, 0.0),
-        Point3::new(2.0, -2.0, 0.0),
-        Point3::new(2.0, 2.0, 0.0),
-        Point3::new(-2.0, 2.0, 0.0),
-    ])?;
-    let top = match scene_name {
-        "cube" => [0.0, 0.0, 1.0],
-        "block1" => [-0.3, 0.0, 0.8],
-        "block2" => [0.025, 0.0, 0.6],
-        _ => [0.0, 0.0, 0.8],
+    let alpha: Real = args.get(5).map_or(Ok(7000.0), |s| s.parse())?;
+    let config = FollowConfig {
+        alpha,
+        ..FollowConfig::default()
     };
-    let (base, mut q): (Isometry3, Vec<Real>) = if robot_name == "point3" {
-        (Isometry3::identity(), vec![top[0], top[1], top[2] + 0.1])
-    } else {
-        let base = Isometry3::translation(-1.6, 0.0, 0.0);
-        let target = Point3::new(top[0], top[1], top[2] + 0.1);
-        let q = follow::place_tool(
-            &robot,
-            &base,
-            &target,
-            &-geom::Vector3::z_axis(),
-            &[vec![0.0, 0.8, 0.0, 1.0, 0.0, 1.0]],
-        )?;
-        (base, q)
-    };
-    let mut follower = Follower::new(robot.clone(), base, model, FollowConfig::default())?;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    let mut run = support::Run::new(scene_name, robot_name, config, 1);
+    run.noise_m = noise;
     let mut modes: BTreeMap<Mode, usize> = BTreeMap::new();
-    let mut total_us = 0.0;
     let mut parts = [0.0; 3];
+    let mut all_us: Vec<Real> = Vec::new();
     let mut collisions = 0;
     let mut min_clear = Real::INFINITY;
+    let rle = std::env::var("RLE").is_ok();
+    let mut last_key = String::new();
     let t = std::time::Instant::now();
     let mut steps = 0;
-    let mut last_key = String::new();
     for k in 0..max {
-        let frames = robot.forward_kinematics(&q)?;
-        let readings: Vec<Option<Point3>> = robot
-            .range_finders
-            .iter()
-            .map(|m| {
-                RangeFinder {
-                    origin: m.origin,
-                    axis: m.axis,
-                    max_range_m: m.max_range_m,
-                    noise_sigma_m: noise,
-                }
-                .measure(&world, &(base * frames[m.link.0]), &mut rng)
-                .map(|s| s.point)
-            })
-            .collect();
-        let step = follower.step(&q, &readings)?;
+        let step = run.step();
         steps += 1;
-        total_us += step.times.update_us + step.times.direction_us + step.times.kinematics_us;
-        *modes.entry(step.mode).or_default() += 1;
         parts[0] += step.times.update_us;
         parts[1] += step.times.direction_us;
         parts[2] += step.times.kinematics_us;
+        all_us.push(step.times.update_us + step.times.direction_us + step.times.kinematics_us);
+        *modes.entry(step.mode).or_default() += 1;
+        let key = format!(
+            "{:?} {:?} {:?}",
+            step.mode, step.current_segment, step.current_edge
+        );
+        if (rle && key != last_key) || k % 100 == 0 {
+            let c = step.control_point;
+            println!(
+                "{k}: {key} cp ({:.3},{:.3},{:.3}) model {}",
+                c.x,
+                c.y,
+                c.z,
+                run.follower.model().len()
+            );
+            last_key = key;
+        }
         if let Some(term) = step.termination {
             println!("terminated at step {k}: {term:?}");
             break;
         }
-        for (qi, d) in q.iter_mut().zip(&step.dq) {
-            *qi += d;
-        }
-        let frames = robot.forward_kinematics(&q)?;
-        for shape in robot.posed_collision_shapes(&frames) {
-            if let robot::PosedShape::Capsule { link, capsule } = shape {
-                if link.0 == 0 {
-                    continue;
-                }
-                let c = capsule.transformed(&base);
-                let d = scene
-                    .closest_point(&c.segment.a, 5.0)
-                    .map_or(5.0, |x| x.0)
-                    .min(scene.closest_point(&c.segment.b, 5.0).map_or(5.0, |x| x.0));
-                let _ = d;
-                if scene.capsule_contact(&c, 0.0).is_some() {
-                    collisions += 1;
-                }
-                if let Some((_, dd)) = scene.capsule_contact(&c, 0.3) {
-                    min_clear = min_clear.min(dd - c.radius);
-                }
-            }
-        }
-        if std::env::var("RLE").is_ok() {
-            let key = format!(
-                "{:?} {:?} {:?}",
-                step.mode, step.current_segment, step.current_edge
-            );
-            if key != last_key {
-                println!(
-                    "{k}: {key} cp ({:.3},{:.3},{:.3}) model {}",
-                    step.control_point.x,
-                    step.control_point.y,
-                    step.control_point.z,
-                    follower.model().len()
-                );
-                last_key = key;
-            }
-        }
-        if k % 100 == 0 || std::env::var("TRACE").is_ok() {
-            println!(
-                "{k}: {:?} cp ({:.3},{:.3},{:.3}) seg {:?} edge {:?} model {} segs",
-                step.mode,
-                step.control_point.x,
-                step.control_point.y,
-                step.control_point.z,
-                step.current_segment,
-                step.current_edge,
-                follower.model().len()
-            );
+        let c = run.clearance();
+        min_clear = min_clear.min(c);
+        if c < 0.0 {
+            collisions += 1;
         }
     }
+    let n = steps as Real;
+    println!(
+        "{steps} steps in {:.2} s wall; modes {modes:?}; collisions {collisions}; min clearance {min_clear:.3} m",
+        t.elapsed().as_secs_f64()
+    );
     println!(
         "mean µs: update {:.1} direction {:.1} kinematics {:.1}",
-        parts[0] / steps as Real,
-        parts[1] / steps as Real,
-        parts[2] / steps as Real
+        parts[0] / n,
+        parts[1] / n,
+        parts[2] / n
     );
-    let st = follower.model().stats();
+    all_us.sort_by(Real::total_cmp);
+    if !all_us.is_empty() {
+        println!(
+            "step µs: median {:.1} p95 {:.1} max {:.1}",
+            all_us[all_us.len() / 2],
+            all_us[all_us.len() * 95 / 100],
+            all_us[all_us.len() - 1]
+        );
+    }
+    let inc = run.follower.incomplete_edges();
     println!(
-        "{steps} steps in {:.2} s wall; mean step {:.1} µs; modes {modes:?}; collisions {collisions}; min clearance {min_clear:.3}",
-        t.elapsed().as_secs_f64(),
-        total_us / steps as Real
+        "incomplete edges: {} (total {:.3} m); marks (unreachable segments, unclosable points, unreachable edges, unclosable edges) {:?}",
+        inc.len(),
+        inc.iter().map(follow::query::EdgeRef::length).sum::<Real>(),
+        run.follower.mark_counts()
     );
-    for seg in follower.model().segments() {
+    for seg in run.follower.model().segments() {
         if let Some(p) = seg.as_polygon() {
+            let n = p.normal();
             println!(
-                "  {:?}: {} vertices, {} points, area {:.3}, n {:?}",
+                "  {:?}: {} vertices, {} points, area {:.3}, normal ({:.3}, {:.3}, {:.3})",
                 seg.id(),
                 p.len(),
                 seg.points(),
                 p.area(),
-                p.normal().into_inner().as_slice()
+                n.x,
+                n.y,
+                n.z
             );
         }
     }
+    let st = run.follower.model().stats();
     println!(
         "model: {} segments, {} polygons, {} shared pairs, {} corners",
         st.segments, st.polygons, st.shared_edge_pairs, st.corner_vertices

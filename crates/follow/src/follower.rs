@@ -352,6 +352,34 @@ impl Follower {
         self.finished
     }
 
+    /// The current surface's incomplete edges (P§3.4): unshared, not marked
+    /// unreachable or unclosable, on segments not marked unreachable.
+    pub fn incomplete_edges(&self) -> Vec<EdgeRef> {
+        let surface: Vec<SegmentId> = self
+            .state
+            .surface
+            .iter()
+            .copied()
+            .filter(|s| !self.marks.unreachable_segments.contains(s))
+            .collect();
+        surface_edges(&self.model, &surface)
+            .into_iter()
+            .filter(|e| !self.edge_complete(e))
+            .collect()
+    }
+
+    /// How many segments and edges are marked unreachable or unclosable:
+    /// `(unreachable segments, unclosable points, unreachable edges,
+    /// unclosable edges)`.
+    pub fn mark_counts(&self) -> (usize, usize, usize, usize) {
+        (
+            self.marks.unreachable_segments.len(),
+            self.marks.unclosable_points.len(),
+            self.marks.unreachable_edges.len(),
+            self.marks.unclosable_edges.len(),
+        )
+    }
+
     /// The control point (world frame) at joints `q`.
     pub fn control_point(&self, q: &[Real]) -> Result<Point3, FollowError> {
         let tool = self.robot.tool_pose(q)?;
