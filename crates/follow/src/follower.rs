@@ -673,6 +673,9 @@ impl Follower {
     // ---- P§3.4.6: surface modelling changes --------------------------------
 
     fn track_changes(&mut self, log: &ChangeLog) {
+        // An edge only leaves the model through a change the log records
+        // (removal of its perimeter section, or deletion of its segment);
+        // mergers carry unchanged edges, keys and all, into the new segment.
         let changed: BTreeSet<EdgeKey> = log.changed_edge_keys.iter().copied().collect();
         // The current segment through mergers and deletions.
         if let Some(s) = self.state.segment {
@@ -700,13 +703,13 @@ impl Follower {
             .unclosable_points
             .retain(|s| self.model.segment(*s).is_some());
         if let Some(e) = self.state.edge
-            && (changed.contains(&e) || self.model.locate_edge(e).is_none())
+            && changed.contains(&e)
         {
             // The current edge changed: choose another (P§3.4).
             self.state.edge = None;
         }
         if let Some(e) = self.state.follow
-            && (changed.contains(&e) || self.model.locate_edge(e).is_none())
+            && changed.contains(&e)
         {
             self.state.follow = None;
         }
@@ -714,7 +717,7 @@ impl Follower {
             let from = self.state.path_follow.min(path.edges.len());
             let broken = path.edges[from..]
                 .iter()
-                .any(|e| changed.contains(&e.key) || self.model.locate_edge(e.key).is_none());
+                .any(|e| changed.contains(&e.key));
             let target_alive = self.model.segment(path.target).is_some();
             if broken || !target_alive {
                 self.state.path = None;
@@ -1163,7 +1166,7 @@ impl Follower {
             self.state.mode = Mode::Segment;
             return Flow::Again;
         };
-        let Some(e) = edge_by_key(&self.model, key) else {
+        let Some(e) = edge_by_key(&self.model, key, self.state.segment) else {
             self.state.edge = None;
             self.state.mode = Mode::Segment;
             return Flow::Again;

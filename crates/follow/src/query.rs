@@ -182,9 +182,12 @@ pub fn closest_segment_model(
     best
 }
 
-/// The end points of the edge with key `key`, with its segment and index.
-pub fn edge_by_key(model: &SurfaceModel, key: EdgeKey) -> Option<EdgeRef> {
-    let (segment, index) = model.locate_edge(key)?;
+/// The end points of the edge with key `key`, with its segment and index,
+/// looking in segment `hint` first (where it usually is) and then everywhere.
+pub fn edge_by_key(model: &SurfaceModel, key: EdgeKey, hint: Option<SegmentId>) -> Option<EdgeRef> {
+    let (segment, index) = hint
+        .and_then(|h| model.polygon(h).and_then(|p| p.edge_index(key)).map(|i| (h, i)))
+        .or_else(|| model.locate_edge(key))?;
     let poly = model.polygon(segment)?;
     let (a, b) = poly.edge_points(index)?;
     let shared = poly.edge(index)?.share.map(|s| s.neighbour);
