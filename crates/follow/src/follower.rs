@@ -1053,11 +1053,9 @@ impl Follower {
                 // The incomplete edge closest to f via the perimeter.
                 let pick = (0..n)
                     .filter(|&i| !self.edge_complete(&edges[i]))
-                    .min_by(|&i, &j| {
-                        let di = perimeter_steps(nearest, i, n);
-                        let dj = perimeter_steps(nearest, j, n);
-                        di.cmp(&dj).then(i.cmp(&j))
-                    });
+                    .map(|i| (perimeter_distance(nearest, i, n, &edges), i))
+                    .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+                    .map(|(_, i)| i);
                 let Some(i) = pick else {
                     self.state.mode = Mode::Surface;
                     self.state.path = None;
@@ -1597,16 +1595,10 @@ impl Follower {
     }
 }
 
-/// Steps from edge `from` to edge `to` along a perimeter of `n` edges, the
-/// shorter way.
-fn perimeter_steps(from: usize, to: usize, n: usize) -> usize {
-    let fwd = (to + n - from) % n;
-    fwd.min(n - fwd)
-}
-
-/// Whether the anticlockwise route from edge `from` to edge `to` is the
-/// shorter (by length) of the two.
-fn shorter_anticlockwise(from: usize, to: usize, n: usize, edges: &[EdgeRef]) -> bool {
+/// Lengths of the anticlockwise and clockwise routes along a perimeter of
+/// `n` edges from edge `from` to edge `to` (the edges passed on the way and
+/// `to` itself).
+fn routes(from: usize, to: usize, n: usize, edges: &[EdgeRef]) -> (Real, Real) {
     let mut ccw = 0.0;
     let mut k = from;
     while k != to {
@@ -1619,6 +1611,19 @@ fn shorter_anticlockwise(from: usize, to: usize, n: usize, edges: &[EdgeRef]) ->
         k = (k + n - 1) % n;
         cw += edges[k].length();
     }
+    (ccw, cw)
+}
+
+/// Distance from edge `from` to edge `to` via the perimeter, the shorter way.
+fn perimeter_distance(from: usize, to: usize, n: usize, edges: &[EdgeRef]) -> Real {
+    let (ccw, cw) = routes(from, to, n, edges);
+    ccw.min(cw)
+}
+
+/// Whether the anticlockwise route from edge `from` to edge `to` is the
+/// shorter (by length) of the two.
+fn shorter_anticlockwise(from: usize, to: usize, n: usize, edges: &[EdgeRef]) -> bool {
+    let (ccw, cw) = routes(from, to, n, edges);
     ccw <= cw
 }
 
