@@ -715,9 +715,7 @@ impl Follower {
         }
         if let Some(path) = &self.state.path {
             let from = self.state.path_follow.min(path.edges.len());
-            let broken = path.edges[from..]
-                .iter()
-                .any(|e| changed.contains(&e.key));
+            let broken = path.edges[from..].iter().any(|e| changed.contains(&e.key));
             let target_alive = self.model.segment(path.target).is_some();
             if broken || !target_alive {
                 self.state.path = None;
@@ -1051,9 +1049,10 @@ impl Follower {
             Some(i) if current_ok => i,
             _ => {
                 // The incomplete edge closest to f via the perimeter.
+                let perimeter = Perimeter::new(&edges);
                 let pick = (0..n)
                     .filter(|&i| !self.edge_complete(&edges[i]))
-                    .map(|i| (perimeter_distance(nearest, i, n, &edges), i))
+                    .map(|i| (perimeter.distance(nearest, i), i))
                     .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
                     .map(|(_, i)| i);
                 let Some(i) = pick else {
@@ -1614,10 +1613,42 @@ fn routes(from: usize, to: usize, n: usize, edges: &[EdgeRef]) -> (Real, Real) {
     (ccw, cw)
 }
 
-/// Distance from edge `from` to edge `to` via the perimeter, the shorter way.
-fn perimeter_distance(from: usize, to: usize, n: usize, edges: &[EdgeRef]) -> Real {
-    let (ccw, cw) = routes(from, to, n, edges);
-    ccw.min(cw)
+/// Cumulative edge lengths of a perimeter, for route lengths in O(1).
+struct Perimeter {
+    /// `cum[k]`: total length of edges `0..k`.
+    cum: Vec<Real>,
+}
+
+impl Perimeter {
+    fn new(edges: &[EdgeRef]) -> Self {
+        let mut cum = Vec::with_capacity(edges.len() + 1);
+        let mut total = 0.0;
+        cum.push(0.0);
+        for e in edges {
+            total += e.length();
+            cum.push(total);
+        }
+        Self { cum }
+    }
+
+    /// Distance from edge `from` to edge `to` via the perimeter, the shorter
+    /// way (as [`routes`] counts it: the edges passed and `to` itself).
+    fn distance(&self, from: usize, to: usize) -> Real {
+        let total = self.cum[self.cum.len() - 1];
+        // Anticlockwise: edges from+1 ..= to (wrapping).
+        let ccw = if to >= from {
+            self.cum[to + 1] - self.cum[from + 1]
+        } else {
+            total - self.cum[from + 1] + self.cum[to + 1]
+        };
+        // Clockwise: edges to ..= from-1 (wrapping).
+        let cw = if from >= to {
+            self.cum[from] - self.cum[to]
+        } else {
+            total - self.cum[to] + self.cum[from]
+        };
+        ccw.min(cw)
+    }
 }
 
 /// Whether the anticlockwise route from edge `from` to edge `to` is the
@@ -1637,3 +1668,39 @@ fn slice_range(line: &SliceLine, e: &EdgeRef, width: Real) -> (i64, i64) {
 
 /// Counts per mode, for run summaries.
 pub type ModeCounts = BTreeMap<Mode, u64>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The O(1) route length equals walking the perimeter both ways.
+    #[test]
+    fn perimeter_distance_equals_walking() {
+        let pts: Vec<Point3> = [0.0, 0.3, 0.35, 1.2, 1.5, 2.9]
+            .iter()
+            .enumerate()
+            .map(|(k, a): (usize, &Real)| Point3::new(a.cos() * (1.0 + k as Real), a.sin(), 0.0))
+            .collect();
+        let n = pts.len();
+        let edges: Vec<EdgeRef> = (0..n)
+            .map(|i| EdgeRef {
+                key: EdgeKey(i as u32),
+                segment: SegmentId(1),
+                index: i,
+                a: pts[i],
+                b: pts[(i + 1) % n],
+                shared_with: None,
+            })
+            .collect();
+        let p = Perimeter::new(&edges);
+        for from in 0..n {
+            for to in 0..n {
+                let (ccw, cw) = routes(from, to, n, &edges);
+                assert!(
+                    (p.distance(from, to) - ccw.min(cw)).abs() < 1e-12,
+                    "{from} → {to}"
+                );
+            }
+        }
+    }
+}

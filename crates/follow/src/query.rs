@@ -186,7 +186,12 @@ pub fn closest_segment_model(
 /// looking in segment `hint` first (where it usually is) and then everywhere.
 pub fn edge_by_key(model: &SurfaceModel, key: EdgeKey, hint: Option<SegmentId>) -> Option<EdgeRef> {
     let (segment, index) = hint
-        .and_then(|h| model.polygon(h).and_then(|p| p.edge_index(key)).map(|i| (h, i)))
+        .and_then(|h| {
+            model
+                .polygon(h)
+                .and_then(|p| p.edge_index(key))
+                .map(|i| (h, i))
+        })
         .or_else(|| model.locate_edge(key))?;
     let poly = model.polygon(segment)?;
     let (a, b) = poly.edge_points(index)?;
