@@ -364,7 +364,7 @@ fn merge_points(
 /// the perimeter is known to be simple: built and checked by the extension, or
 /// projected through less than 10⁻³ rad (lengths change by a factor of at least
 /// `cos θ > 1 − 5·10⁻⁷`).
-fn merge_point_polygon(
+pub(crate) fn merge_point_polygon(
     tol: &Tolerances,
     p: &PointSegment,
     g: &Polygon,
@@ -409,18 +409,6 @@ fn merge_point_polygon(
         },
         verified,
     ))
-}
-
-/// [`merge_point_polygon`] for the figure tests.
-#[cfg(test)]
-pub(crate) fn merge_point_polygon_for_tests(
-    tol: &Tolerances,
-    p: &PointSegment,
-    g: &Polygon,
-    pca: &Pca,
-    fresh: &mut dyn FnMut() -> EdgeKey,
-) -> Result<(Polygon, bool), MergeFailure> {
-    merge_point_polygon(tol, p, g, pca, fresh)
 }
 
 /// `axis` or its opposite, whichever has a positive dot product with `towards`;

@@ -728,8 +728,7 @@ fn registers(v1: &View, v2: &View, lambda: Real) -> (Real, Real) {
     (convex, concave)
 }
 
-/// The registers of two segments (figure reproductions).
-#[cfg(test)]
+/// The registers of two segments (figure reproductions, [`crate::testing`]).
 pub(crate) fn registers_between(
     model: &SurfaceModel,
     s1: SegmentId,
