@@ -225,7 +225,7 @@ impl ModelInternals for SurfaceModel {
 
 /// P§2.4.2 on its own: merge a point segment (`centroid`, summed sensing axes
 /// `axis_sum`) into polygon `g`, where `pca` is the decomposition of the merged
-/// moments; `fresh` allocates edge keys. Returns the new polygon and whether its
+/// moments of `points` points; `fresh` allocates edge keys. Returns the new polygon and whether its
 /// perimeter is known to be simple.
 pub fn merge_point_polygon(
     model: &SurfaceModel,
@@ -233,8 +233,9 @@ pub fn merge_point_polygon(
     axis_sum: Vector3,
     g: &Polygon,
     pca: &Pca,
+    points: u64,
     fresh: &mut dyn FnMut() -> EdgeKey,
 ) -> Result<(Polygon, bool), MergeFailure> {
     let p = PointSegment { centroid, axis_sum };
-    crate::merge::merge_point_polygon(&model.tol, &p, g, pca, fresh)
+    crate::merge::merge_point_polygon(&model.tol, &p, g, pca, points, fresh)
 }

@@ -121,7 +121,7 @@ fn fig7_initial_plane_drift_fails_the_merger() {
         k += 1;
         surface::EdgeKey(k)
     };
-    let r = merge_point_polygon(&m, centroid, -Vector3::z(), &g, &pca, &mut fresh);
+    let r = merge_point_polygon(&m, centroid, -Vector3::z(), &g, &pca, moments.m, &mut fresh);
     assert_eq!(r.err(), Some(MergeFailure::Drift));
 }
 
