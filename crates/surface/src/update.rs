@@ -28,7 +28,7 @@
 
 use crate::changelog::ChangeLog;
 use crate::error::SurfaceError;
-use crate::fissure::{FissureMode, fill_fissures, remove_collinear};
+use crate::fissure::{FissureMode, fill_fissures, remove_collinear, remove_nearly_collinear};
 use crate::input::SensorSet;
 use crate::merge::polygon_distance;
 use crate::model::{SurfaceModel, UpdateCtx};
@@ -219,10 +219,20 @@ impl SurfaceModel {
                         tol.eps,
                         &mut fresh,
                     );
-                    (
-                        filled.len(),
-                        remove_collinear(&mut poly, tol.eps, &mut fresh),
-                    )
+                    let mut straightened = remove_collinear(&mut poly, tol.eps, &mut fresh);
+                    // Shallow dents (within the collinearity length) are filled
+                    // too, unless that leaves an invalid perimeter.
+                    if poly.is_valid(tol.eps) {
+                        let before = poly.clone();
+                        let removed =
+                            remove_nearly_collinear(&mut poly, tol.collinear, tol.eps, &mut fresh);
+                        if poly.is_valid(tol.eps) {
+                            straightened += removed;
+                        } else {
+                            poly = before;
+                        }
+                    }
+                    (filled.len(), straightened)
                 };
                 if filled + straightened == 0 || !poly.is_valid(tol.eps) {
                     return None;

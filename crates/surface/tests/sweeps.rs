@@ -384,6 +384,12 @@ fn check_acceptance(scene: &str, m: &SurfaceModel, judge: Judge) {
 /// The noisy acceptance (σ = λ/5) over several seeds: every seed's model must
 /// pass; all are reported before the test fails.
 fn check_noisy_seeds(scene: &str, seeds: &[u64]) {
+    let failures = noisy_failures(scene, seeds);
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// What the noisy sweeps of `scene` on `seeds` fail of the acceptance.
+fn noisy_failures(scene: &str, seeds: &[u64]) -> Vec<String> {
     let mut failures = Vec::new();
     for &seed in seeds {
         let sweep = Sweep {
@@ -400,7 +406,7 @@ fn check_noisy_seeds(scene: &str, seeds: &[u64]) {
                 .map(|f| format!("seed {seed}: {f}")),
         );
     }
-    assert!(failures.is_empty(), "{failures:#?}");
+    failures
 }
 
 fn on_surface(p: &TruePlane, x: &Point3, mesh: &scene::Scene) -> bool {
@@ -522,9 +528,11 @@ fn cylinder_sweep_noisy() {
 #[ignore = "long: ten more noisy seeds per scene"]
 fn noisy_sweeps_more_seeds() {
     let seeds: Vec<u64> = (8..18).collect();
-    for scene in ["cube", "block1", "block2"] {
-        check_noisy_seeds(scene, &seeds);
-    }
+    let failures: Vec<String> = ["cube", "block1", "block2"]
+        .iter()
+        .flat_map(|scene| noisy_failures(scene, &seeds))
+        .collect();
+    assert!(failures.is_empty(), "{failures:#?}");
 }
 
 /// More sweeps (other seeds, noise levels and steps), invariants only. Run with
