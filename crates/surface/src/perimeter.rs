@@ -367,7 +367,7 @@ pub(crate) fn is_simple_fast(poly: &[Point2], tol: Real) -> bool {
     // Sweep along x: edges sorted by the left side of their boxes; each edge
     // meets only the following ones whose boxes start before its box ends.
     let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&i, &j| boxes[i].0.total_cmp(&boxes[j].0).then(i.cmp(&j)));
+    order.sort_unstable_by(|&i, &j| boxes[i].0.total_cmp(&boxes[j].0).then(i.cmp(&j)));
     for (k, &u) in order.iter().enumerate() {
         let bu = boxes[u];
         for &w in &order[k + 1..] {

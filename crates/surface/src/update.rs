@@ -210,7 +210,7 @@ impl SurfaceModel {
                 let p = m.poly(s)?;
                 let frame = p.frame();
                 let mut poly = Poly2::from_polygon(p, &frame);
-                let (filled, straightened) = {
+                let (filled, straightened, known_valid) = {
                     let mut fresh = Self::key_source(&mut m.ids.edge);
                     let filled = fill_fissures(
                         &mut poly,
@@ -219,22 +219,22 @@ impl SurfaceModel {
                         tol.eps,
                         &mut fresh,
                     );
-                    let mut straightened = remove_collinear(&mut poly, tol.eps, &mut fresh);
+                    let straightened = remove_collinear(&mut poly, tol.eps, &mut fresh);
                     // Shallow dents (within the collinearity length) are filled
                     // too, unless that leaves an invalid perimeter.
-                    if poly.is_valid(tol.eps) {
-                        let before = poly.clone();
-                        let removed =
-                            remove_nearly_collinear(&mut poly, tol.collinear, tol.eps, &mut fresh);
-                        if poly.is_valid(tol.eps) {
-                            straightened += removed;
-                        } else {
-                            poly = before;
-                        }
+                    let before = poly.clone();
+                    let dents =
+                        remove_nearly_collinear(&mut poly, tol.collinear, tol.eps, &mut fresh);
+                    if dents == 0 {
+                        (filled.len(), straightened, false)
+                    } else if poly.is_valid(tol.eps) {
+                        (filled.len(), straightened + dents, true)
+                    } else {
+                        poly = before;
+                        (filled.len(), straightened, false)
                     }
-                    (filled.len(), straightened)
                 };
-                if filled + straightened == 0 || !poly.is_valid(tol.eps) {
+                if filled + straightened == 0 || !(known_valid || poly.is_valid(tol.eps)) {
                     return None;
                 }
                 m.poly_mut(s)?.nodes = poly.to_nodes(&frame);
