@@ -311,6 +311,7 @@ fn fill_window(
             }
         }
     }
+    let mut area: Option<Real> = None;
     for (kind, from, to) in candidates {
         let removes = match kind {
             FissureType::IV => 2,
@@ -341,7 +342,11 @@ fn fill_window(
             continue;
         }
         if restricted {
-            if next.len() < 3 || !next.is_valid(eps) || next.area() <= poly.area() {
+            // Cheapest first: the area before the simplicity check.
+            if next.len() < 3 || next.area() <= *area.get_or_insert_with(|| poly.area()) {
+                continue;
+            }
+            if !next.is_valid(eps) {
                 continue;
             }
         } else if next.len() >= 3 && next.area().abs() >= poly.area().abs() && next.len() >= n {
