@@ -345,14 +345,13 @@ impl SurfaceModel {
         let (Some(v1), Some(v2)) = (View::new(self, s1, line), View::new(self, s2, line)) else {
             return false;
         };
+        // Edges shared with a third segment can be on no section (P§2.6: the
+        // only shared edges on P and Q are shared between S₁ and S₂).
         let strip = |v: &View, shared_only: bool| -> Vec<(Real, Real)> {
             let mut iv: Vec<(Real, Real)> = (0..v.poly.len())
-                .filter(|&e| {
-                    !shared_only
-                        || v.poly
-                            .edge(e)
-                            .share
-                            .is_some_and(|sh| sh.neighbour == s1 || sh.neighbour == s2)
+                .filter(|&e| match v.poly.edge(e).share {
+                    Some(sh) => sh.neighbour == s1 || sh.neighbour == s2,
+                    None => !shared_only,
                 })
                 .filter_map(|e| {
                     let (u0, u1) = v.strip_part(e, lambda)?;
