@@ -1,13 +1,15 @@
 //! Per-set update time of the surface model on the scripted point3 sweeps of
-//! the cube and block1 scenes (acceptance 4).
+//! the cube and block1 scenes (acceptance 4), and of the cube under range noise
+//! σ = λ/5 (`cube-noisy`, issue 9).
 //!
 //! Run with `cargo bench -p surface --bench update`. First, each stream is
 //! replayed once and every update timed: the bench prints the median, 95th
 //! percentile and maximum per update, for point3's sensor sets (9–17 points over a
 //! face) and for the same points regrouped into sets of 26. Then criterion
-//! estimates the mean time of one update of a 26-point set over a mix of model
-//! states (every 8th set of the stream, each applied to a copy of the model as it
-//! was just before that set).
+//! estimates the time of one update of a sensor set, and of a 26-point set, over
+//! a mix of model states (every 8th set of the stream, each applied to a copy of
+//! the model as it was just before that set); its `estimates.json` under
+//! `target/criterion/` holds the median.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 #[path = "../tests/support/mod.rs"]
@@ -73,22 +75,35 @@ fn regroup_26(sets: &[SensorSet]) -> Vec<SensorSet> {
         .collect()
 }
 
-fn bench_scene(c: &mut Criterion, scene: &str) {
-    let raw = sweep_sets(scene, &Sweep::default());
-    replay_times(&format!("{scene} (sensor sets)"), &raw);
+fn bench_scene(c: &mut Criterion, scene: &str, sweep: &Sweep, label: &str) {
+    let raw = sweep_sets(scene, sweep);
+    replay_times(&format!("{label} (sensor sets)"), &raw);
     let sets = regroup_26(&raw);
-    replay_times(&format!("{scene} (26-point sets)"), &sets);
-    // Snapshots of the model before every 8th set.
+    replay_times(&format!("{label} (26-point sets)"), &sets);
+    bench_sets(c, &format!("update/{label}/sensor set"), &raw, |_| true);
+    bench_sets(c, &format!("update/{label}/26-point set"), &sets, |s| {
+        s.len() == 26
+    });
+}
+
+/// Criterion: one update, over snapshots of the model before every 8th set of
+/// `sets` (those `keep` accepts).
+fn bench_sets(
+    c: &mut Criterion,
+    name: &str,
+    sets: &[SensorSet],
+    keep: impl Fn(&SensorSet) -> bool,
+) {
     let mut m = fresh_model();
     let mut cases = Vec::new();
     for (k, s) in sets.iter().enumerate() {
-        if k % 8 == 0 && s.len() == 26 {
+        if k % 8 == 0 && keep(s) {
             cases.push((m.clone(), s.clone()));
         }
         m.update(s).unwrap();
     }
     let mut next = 0usize;
-    c.bench_function(&format!("update/{scene}/26-point set"), |b| {
+    c.bench_function(name, |b| {
         b.iter_batched(
             || {
                 next = (next + 1) % cases.len();
@@ -105,14 +120,24 @@ fn bench_scene(c: &mut Criterion, scene: &str) {
 }
 
 fn benches(c: &mut Criterion) {
-    // `SURFACE_BENCH_SCENES=block1` limits the scenes (for profiling).
+    // `SURFACE_BENCH_SCENES=block1,cube-noisy` limits the cases (for profiling).
     let only = std::env::var("SURFACE_BENCH_SCENES").ok();
-    for scene in ["cube", "block1"] {
+    // The noisy case: range noise σ = λ/5 (issue 9).
+    let noisy = Sweep {
+        noise_sigma: 0.01,
+        seed: 7,
+        ..Sweep::default()
+    };
+    for (scene, sweep, label) in [
+        ("cube", Sweep::default(), "cube"),
+        ("block1", Sweep::default(), "block1"),
+        ("cube", noisy, "cube-noisy"),
+    ] {
         if only
             .as_deref()
-            .is_none_or(|o| o.split(',').any(|x| x == scene))
+            .is_none_or(|o| o.split(',').any(|x| x == label))
         {
-            bench_scene(c, scene);
+            bench_scene(c, scene, &sweep, label);
         }
     }
 }

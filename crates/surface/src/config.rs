@@ -146,6 +146,14 @@ pub(crate) struct Tolerances {
     /// Sine of the smallest angle between two intersection lines that still
     /// defines a corner point (P§2.7 "must not be parallel"): `10⁻³`.
     pub sin_corner: Real,
+    /// Collinearity length `collinear_fraction·λ` (P§2.2): perimeter vertices
+    /// closer than this to the edge joining their neighbours are removed
+    /// (see [`crate::fissure`]).
+    pub collinear: Real,
+    /// ψ (P§2.9) as a point count: a polygon representing fewer points is still
+    /// "developing"; its initial plane follows its plane of best fit (see
+    /// [`crate::merge`]).
+    pub psi: Real,
 }
 
 impl Tolerances {
@@ -163,6 +171,8 @@ impl Tolerances {
             sin_parallel: (0.5 * mu).sin(),
             sin_mu: mu.sin(),
             sin_corner: 1e-3,
+            collinear: spread,
+            psi: config.psi,
         }
     }
 }

@@ -5,8 +5,6 @@ pub mod config;
 pub mod corner;
 pub mod error;
 pub mod export;
-#[cfg(test)]
-mod figures;
 pub mod fissure;
 pub mod index;
 pub mod input;
@@ -20,6 +18,8 @@ pub mod replay;
 pub mod reposition;
 pub mod segment;
 pub mod share;
+#[doc(hidden)]
+pub mod testing;
 pub mod update;
 
 pub use changelog::{ChangeLog, Merger};

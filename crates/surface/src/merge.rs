@@ -151,7 +151,8 @@ impl SurfaceModel {
                     *keys += 1;
                     EdgeKey(*keys)
                 };
-                let (poly, verified) = merge_point_polygon(&tol, p, g, &pca, &mut fresh)?;
+                let (poly, verified) =
+                    merge_point_polygon(&tol, p, g, &pca, moments.m, &mut fresh)?;
                 Ok((moments, SegmentKind::Polygon(poly), verified))
             }
             (SegmentKind::Polygon(_), SegmentKind::Polygon(_)) => Err(MergeFailure::NotMergeable),
@@ -364,11 +365,12 @@ fn merge_points(
 /// the perimeter is known to be simple: built and checked by the extension, or
 /// projected through less than 10⁻³ rad (lengths change by a factor of at least
 /// `cos θ > 1 − 5·10⁻⁷`).
-fn merge_point_polygon(
+pub(crate) fn merge_point_polygon(
     tol: &Tolerances,
     p: &PointSegment,
     g: &Polygon,
     pca: &Pca,
+    points: u64,
     fresh: &mut dyn FnMut() -> EdgeKey,
 ) -> Result<(Polygon, bool), MergeFailure> {
     if p.axis_sum.dot(&g.normal) > 0.0 {
@@ -390,6 +392,20 @@ fn merge_point_polygon(
     // Orthogonal projection between planes less than 2μ apart is an
     // orientation-preserving affine map: the projected perimeter stays simple
     // (the transaction's validation checks the result otherwise).
+    // The initial plane stays fixed (P§2.4.2) once the polygon represents ψ
+    // points. Before that it follows the plane of best fit: under range noise
+    // the diamond of the first few points (P§2.4.1) can be tilted by more than
+    // μ, and a fixed tilted initial plane then refuses the points of the very
+    // surface it came from, which pile up in small stray polygons beside it.
+    // ψ is the thesis' own count for a segment that has not yet "had a chance
+    // to develop" (P§2.9). The drift check above still compares each merger
+    // with the plane before it, so no single point can tilt a young polygon
+    // by more than μ (Fig. 7).
+    let initial_plane = if (points as Real) < tol.psi {
+        Plane::from_point_normal(&pca.centroid, normal)
+    } else {
+        init
+    };
     let frame = PlaneFrame::new(pca.centroid, normal);
     let proj = Poly2::from_polygon(g, &frame);
     let q = frame.to_2d(&p.centroid);
@@ -403,24 +419,12 @@ fn merge_point_polygon(
             initial: false,
             centroid: pca.centroid,
             normal,
-            initial_plane: init,
+            initial_plane,
             nodes: perimeter.to_nodes(&frame),
             rev,
         },
         verified,
     ))
-}
-
-/// [`merge_point_polygon`] for the figure tests.
-#[cfg(test)]
-pub(crate) fn merge_point_polygon_for_tests(
-    tol: &Tolerances,
-    p: &PointSegment,
-    g: &Polygon,
-    pca: &Pca,
-    fresh: &mut dyn FnMut() -> EdgeKey,
-) -> Result<(Polygon, bool), MergeFailure> {
-    merge_point_polygon(tol, p, g, pca, fresh)
 }
 
 /// `axis` or its opposite, whichever has a positive dot product with `towards`;

@@ -342,7 +342,8 @@ impl Poly2 {
 
 /// [`polygon2::is_simple`] with a bounding-box rejection in front of every
 /// edge-pair test (perimeters are checked after every operation). Pairs whose
-/// boxes, grown by `tol`, do not overlap cannot meet; the others get the exact
+/// boxes, grown by `tol`, do not overlap cannot meet; the others, found by a
+/// sweep along x (ragged noisy perimeters have many short edges), get the exact
 /// test of `geom` on the two-edge sub-problem.
 pub(crate) fn is_simple_fast(poly: &[Point2], tol: Real) -> bool {
     let n = poly.len();
@@ -360,18 +361,26 @@ pub(crate) fn is_simple_fast(poly: &[Point2], tol: Real) -> bool {
             )
         })
         .collect();
-    for i in 0..n {
-        let a = &poly[i];
-        let b = &poly[(i + 1) % n];
-        if (b - a).norm() <= tol {
-            return false;
-        }
-        let bi = boxes[i];
-        for j in (i + 1)..n {
-            let bj = boxes[j];
-            if bi.1 < bj.0 || bj.1 < bi.0 || bi.3 < bj.2 || bj.3 < bi.2 {
+    if (0..n).any(|i| (poly[(i + 1) % n] - poly[i]).norm() <= tol) {
+        return false;
+    }
+    // Sweep along x: edges sorted by the left side of their boxes; each edge
+    // meets only the following ones whose boxes start before its box ends.
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_unstable_by(|&i, &j| boxes[i].0.total_cmp(&boxes[j].0).then(i.cmp(&j)));
+    for (k, &u) in order.iter().enumerate() {
+        let bu = boxes[u];
+        for &w in &order[k + 1..] {
+            let bw = boxes[w];
+            if bw.0 > bu.1 {
+                break;
+            }
+            if bu.3 < bw.2 || bw.3 < bu.2 {
                 continue;
             }
+            let (i, j) = (u.min(w), u.max(w));
+            let a = &poly[i];
+            let b = &poly[(i + 1) % n];
             let c = &poly[j];
             let d = &poly[(j + 1) % n];
             let adjacency = EdgeAdjacency::of(i, j, n);

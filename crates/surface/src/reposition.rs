@@ -25,7 +25,6 @@ use crate::model::{Flag, SurfaceModel};
 use crate::perimeter::Poly2;
 use crate::segment::{PairId, SegmentId};
 use geom::Point3;
-#[cfg(test)]
 use geom::Real;
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -294,8 +293,8 @@ impl SurfaceModel {
     }
 }
 
-/// Used by tests: the largest distance of a shared-edge vertex of `s` from its line.
-#[cfg(test)]
+/// The largest distance of a shared-edge vertex of `s` from its line (for the
+/// figure tests, [`crate::testing`]).
 pub(crate) fn max_line_offset(model: &SurfaceModel, s: SegmentId) -> Real {
     let Some(p) = model.poly(s) else { return 0.0 };
     let n = p.nodes.len();

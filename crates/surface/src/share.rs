@@ -17,7 +17,9 @@
 //!   their own segment, though they do not coincide;
 //! * `l₁ ≠ l₂`, with the direction of the concavity;
 //! * `p₁` sights `l₁`, `p₂` sights `l₂` (in S₁), `q₁` sights `l₂`, `q₂` sights `l₁`
-//!   (in S₂), and `l₁` sights `l₂` relative to what remains of both perimeters;
+//!   (in S₂), and `l₁` sights `l₂`, all relative to what remains of both
+//!   perimeters (P§2.6 states the first four relative to the whole perimeter;
+//!   see `check_and_build` for why);
 //! * the only shared edges on `P` and `Q` are shared between S₁ and S₂, and each
 //!   one's corresponding edge lies on the other section; some non-shared edge lies
 //!   on `P` or `Q`;
@@ -343,14 +345,13 @@ impl SurfaceModel {
         let (Some(v1), Some(v2)) = (View::new(self, s1, line), View::new(self, s2, line)) else {
             return false;
         };
+        // Edges shared with a third segment can be on no section (P§2.6: the
+        // only shared edges on P and Q are shared between S₁ and S₂).
         let strip = |v: &View, shared_only: bool| -> Vec<(Real, Real)> {
             let mut iv: Vec<(Real, Real)> = (0..v.poly.len())
-                .filter(|&e| {
-                    !shared_only
-                        || v.poly
-                            .edge(e)
-                            .share
-                            .is_some_and(|sh| sh.neighbour == s1 || sh.neighbour == s2)
+                .filter(|&e| match v.poly.edge(e).share {
+                    Some(sh) => sh.neighbour == s1 || sh.neighbour == s2,
+                    None => !shared_only,
                 })
                 .filter_map(|e| {
                     let (u0, u1) = v.strip_part(e, lambda)?;
@@ -541,18 +542,22 @@ impl SurfaceModel {
         let (l1b, l2b) = (v2.at(a.t2), v2.at(b.t2));
         let (xp1, xp2) = (v1.poly.point_at(p1), v1.poly.point_at(p2));
         let (xq1, xq2) = (v2.poly.point_at(q1), v2.poly.point_at(q2));
-        // Sight of the new connecting edges.
-        let sees = |v: &View, x: &Point2, y: &Point2| v.poly.sight(x, y, tol.eps, |_| false);
-        if !sees(v1, &xp1, &l1a)
-            || !sees(v1, &xp2, &l2a)
-            || !sees(v2, &xq1, &l2b)
-            || !sees(v2, &xq2, &l1b)
-        {
+        // Sight of the new connecting edges, relative to what remains of each
+        // perimeter once P and Q are removed. P§2.6 says "relative to the
+        // perimeter", for the purpose that "the new edges formed will not cross
+        // the resulting perimeters"; edges of P and Q are not part of those.
+        // Against the whole perimeter, a vertex a fraction of a millimetre off
+        // the line (range noise) whose next edge runs along the line fails
+        // sight of its own projection, and a shared edge once unshared there
+        // can never be formed again. The result is validated in any case.
+        let kept1: Vec<usize> = (0..v1.poly.len()).filter(|e| !edges1.contains(e)).collect();
+        let kept2: Vec<usize> = (0..v2.poly.len()).filter(|e| !edges2.contains(e)).collect();
+        let sees1 = |x: &Point2, y: &Point2| v1.poly.sight(x, y, tol.eps, |e| !kept1.contains(&e));
+        let sees2 = |x: &Point2, y: &Point2| v2.poly.sight(x, y, tol.eps, |e| !kept2.contains(&e));
+        if !sees1(&xp1, &l1a) || !sees1(&xp2, &l2a) || !sees2(&xq1, &l2b) || !sees2(&xq2, &l1b) {
             return None;
         }
         // l₁ sights l₂ relative to what remains of each perimeter.
-        let kept1: Vec<usize> = (0..v1.poly.len()).filter(|e| !edges1.contains(e)).collect();
-        let kept2: Vec<usize> = (0..v2.poly.len()).filter(|e| !edges2.contains(e)).collect();
         if !v1.poly.sight(&l1a, &l2a, tol.eps, |e| !kept1.contains(&e))
             || !v2.poly.sight(&l1b, &l2b, tol.eps, |e| !kept2.contains(&e))
         {
@@ -728,8 +733,7 @@ fn registers(v1: &View, v2: &View, lambda: Real) -> (Real, Real) {
     (convex, concave)
 }
 
-/// The registers of two segments (figure reproductions).
-#[cfg(test)]
+/// The registers of two segments (figure reproductions, [`crate::testing`]).
 pub(crate) fn registers_between(
     model: &SurfaceModel,
     s1: SegmentId,

@@ -28,7 +28,7 @@
 
 use crate::changelog::ChangeLog;
 use crate::error::SurfaceError;
-use crate::fissure::{FissureMode, fill_fissures, remove_collinear};
+use crate::fissure::{FissureMode, fill_fissures, remove_collinear, remove_nearly_collinear};
 use crate::input::SensorSet;
 use crate::merge::polygon_distance;
 use crate::model::{SurfaceModel, UpdateCtx};
@@ -210,7 +210,7 @@ impl SurfaceModel {
                 let p = m.poly(s)?;
                 let frame = p.frame();
                 let mut poly = Poly2::from_polygon(p, &frame);
-                let (filled, straightened) = {
+                let (filled, straightened, known_valid) = {
                     let mut fresh = Self::key_source(&mut m.ids.edge);
                     let filled = fill_fissures(
                         &mut poly,
@@ -219,12 +219,22 @@ impl SurfaceModel {
                         tol.eps,
                         &mut fresh,
                     );
-                    (
-                        filled.len(),
-                        remove_collinear(&mut poly, tol.eps, &mut fresh),
-                    )
+                    let straightened = remove_collinear(&mut poly, tol.eps, &mut fresh);
+                    // Shallow dents (within the collinearity length) are filled
+                    // too, unless that leaves an invalid perimeter.
+                    let before = poly.clone();
+                    let dents =
+                        remove_nearly_collinear(&mut poly, tol.collinear, tol.eps, &mut fresh);
+                    if dents == 0 {
+                        (filled.len(), straightened, false)
+                    } else if poly.is_valid(tol.eps) {
+                        (filled.len(), straightened + dents, true)
+                    } else {
+                        poly = before;
+                        (filled.len(), straightened, false)
+                    }
                 };
-                if filled + straightened == 0 || !poly.is_valid(tol.eps) {
+                if filled + straightened == 0 || !(known_valid || poly.is_valid(tol.eps)) {
                     return None;
                 }
                 m.poly_mut(s)?.nodes = poly.to_nodes(&frame);
@@ -248,6 +258,12 @@ impl SurfaceModel {
         for s2 in candidates {
             if s2 == s1 {
                 continue;
+            }
+            if self.delete_if_stray(s1, s2) {
+                if self.segments.contains_key(&s1) {
+                    continue;
+                }
+                return;
             }
             let (Some(a), Some(b)) = (self.poly(s1), self.poly(s2)) else {
                 if self.segments.contains_key(&s1) {
@@ -308,6 +324,59 @@ impl SurfaceModel {
         if n1 < self.config.psi && n1 / n2 < self.config.phi {
             self.run(|m| m.delete_segment(small));
         }
+    }
+
+    /// The smaller of `s1`, `s2` when it is redundant by the counts of P§2.9
+    /// (`n₁ < ψ`, `n₁/n₂ < φ`) and, beyond the thesis, lies on the larger one's
+    /// surface: every vertex within λ of its plane, its plane crossing that
+    /// plane (vertices on both sides), and within λ of its polygon.
+    ///
+    /// P§2.9 tests for redundancy only after a failed attempt to share edges
+    /// between non-neighbours, and the thesis notes (P ch. 5) that redundant
+    /// segments escape it "because they have formed shared edges". Under range
+    /// noise that is the common case: a few points beside a large face fit a
+    /// plane tilted by more than μ (so no merger is attempted, P§2.3), then
+    /// share edges with the face, notching it and blocking its shared edges
+    /// and corners with its other neighbours. Such a polygon describes nothing
+    /// the larger one does not describe to within λ. A genuine new face beside
+    /// an edge lies on one side of the larger plane, so it is kept.
+    fn stray_of(&self, s1: SegmentId, s2: SegmentId) -> Option<SegmentId> {
+        let (a, b) = (self.get(s1)?, self.get(s2)?);
+        if a.is_initial() || b.is_initial() {
+            return None;
+        }
+        let (small, big) = match a.moments.m.cmp(&b.moments.m) {
+            std::cmp::Ordering::Less => (a, b),
+            std::cmp::Ordering::Greater => (b, a),
+            std::cmp::Ordering::Equal => return None,
+        };
+        let (n1, n2) = (small.moments.m as f64, big.moments.m as f64);
+        if !(n1 < self.config.psi && n1 / n2 < self.config.phi) {
+            return None;
+        }
+        let (p, q) = (small.as_polygon()?, big.as_polygon()?);
+        let plane = q.plane();
+        let lambda = self.tol.lambda;
+        let (mut below, mut above) = (false, false);
+        for v in p.vertices() {
+            let h = plane.signed_distance(&v);
+            if h.abs() >= lambda {
+                return None;
+            }
+            below |= h < 0.0;
+            above |= h > 0.0;
+        }
+        (below && above && polygon_distance(p, q) < lambda).then_some(small.id)
+    }
+
+    /// Delete the stray of `s1`, `s2` (see [`Self::stray_of`]); `true` when
+    /// one was deleted.
+    fn delete_if_stray(&mut self, s1: SegmentId, s2: SegmentId) -> bool {
+        let Some(stray) = self.stray_of(s1, s2) else {
+            return false;
+        };
+        self.run(|m| m.delete_segment(stray));
+        true
     }
 
     fn finish_log(&mut self) -> ChangeLog {
