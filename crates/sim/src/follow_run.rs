@@ -291,6 +291,14 @@ fn joints_for(
     )?)
 }
 
+/// The option a start pose came from, for errors.
+fn start_what(start: Option<&StartPose>) -> &'static str {
+    match start {
+        Some(StartPose::Joints(_)) => "joints",
+        _ => "start",
+    }
+}
+
 fn check_start(robot: &Robot, q: &[Real], what: &str) -> Result<(), FollowRunError> {
     robot
         .check_within_limits(q)
@@ -354,7 +362,7 @@ impl FollowSetup {
                 joints_for(&robot, &world_from_base, &target, None)?
             }
         };
-        check_start(&robot, &start_joints, "start")?;
+        check_start(&robot, &start_joints, start_what(options.start.as_ref()))?;
         let initial_segments = match &options.initial_segments {
             Some(v) => to_points(v),
             None => to_points(&s.initial_segments),
@@ -439,7 +447,7 @@ impl FollowSetup {
                 None,
             )?,
         };
-        check_start(&robot, &start_joints, "start")?;
+        check_start(&robot, &start_joints, start_what(options.start.as_ref()))?;
         let initial_segments = match &options.initial_segments {
             Some(v) => to_points(v),
             None => vec![table_under(&bounds)],

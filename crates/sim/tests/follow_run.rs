@@ -222,7 +222,7 @@ fn bad_options_are_refused_before_anything_runs() {
         start: Some(StartPose::Joints(vec![0.0, 0.0])),
         ..FollowRunOptions::default()
     });
-    assert!(e.to_string().contains("start"), "{e}");
+    assert!(e.to_string().starts_with("joints: "), "{e}");
     let e = err(FollowRunOptions {
         noise_sigma_m: Some(-1.0),
         ..FollowRunOptions::default()
