@@ -889,9 +889,11 @@ pub struct RunJson<'a> {
     /// The error that ended the run, when it was one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<&'a str>,
-    /// Ground-truth contacts (`null` without a mesh ground truth).
+    /// Poses or motions with a ground-truth contact: the start pose, and each
+    /// step whose motion or end pose touched the scene (`null` without a mesh
+    /// ground truth).
     pub collisions: Option<usize>,
-    /// The contacts.
+    /// The contacts (per link at a pose, the first along a motion).
     pub collision_list: &'a [Collision],
     /// Smallest ground-truth clearance of the links, metres.
     pub min_clearance_m: Option<Real>,
@@ -958,10 +960,12 @@ impl FollowRun {
                 RunEnd::Error(e) => Some(e),
                 _ => None,
             },
-            collisions: self
-                .episode
-                .min_clearance_m
-                .map(|_| self.episode.collisions.len()),
+            collisions: self.episode.min_clearance_m.map(|_| {
+                let mut steps: Vec<Option<u64>> =
+                    self.episode.collisions.iter().map(|c| c.step).collect();
+                steps.dedup();
+                steps.len()
+            }),
             collision_list: &self.episode.collisions,
             min_clearance_m: self.episode.min_clearance_m,
             motion_checks: self.episode.motion_checks,

@@ -200,6 +200,11 @@ fn a_start_pose_through_the_top_face_is_a_collision_at_the_start() {
         run.episode.collisions
     );
     assert_eq!(run.episode.min_clearance_m, Some(0.0));
+    // run.json counts poses and motions with a contact, the start among them.
+    let json: serde_json::Value = serde_json::from_str(&run.outputs().unwrap()[4].1).unwrap();
+    let n = json["collisions"].as_u64().unwrap();
+    assert!(n >= 1 && n as usize <= run.episode.collisions.len(), "{n}");
+    assert_eq!(json["collision_list"][0]["step"], serde_json::Value::Null);
 }
 
 #[test]
