@@ -786,9 +786,12 @@ pub fn run_episode<H: Arm + RangeSensors>(
             match motion_contacts(&robot, &q, &next, &t.world_from_base, t.scene, motion_step) {
                 Ok(m) => {
                     motion_checks += m.checks;
-                    // The end pose is checked below with every link; here only
-                    // contacts strictly inside the motion.
-                    if let Some(c) = m.first_contact.filter(|c| c.t < 1.0) {
+                    // Both end poses are checked with every link on their own
+                    // (the start as the previous step's end); here only a
+                    // contact strictly inside the motion. (`motion_contacts`
+                    // stops at the first contact, so a motion that starts in
+                    // contact is not searched further.)
+                    if let Some(c) = m.first_contact.filter(|c| c.t > 0.0 && c.t < 1.0) {
                         collisions.push(Collision {
                             step: Some(n),
                             link: robot.links[c.contact.link.0].name.clone(),
