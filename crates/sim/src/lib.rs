@@ -13,7 +13,9 @@
 //! | [`surface_score`] | [`surface_score::score_surface_model`]: a surface model against the true faces, edges and corners |
 //! | [`table_fit`] | [`table_fit::fit_table`]: a table plane fitted to scan points, as world frame and initial segment |
 //! | [`scan_job`] | the `surveyor scan` job as library calls |
+//! | [`follow_run`] | [`follow_run::run_episode`]: a `follow::Follower` through the hardware traits with ground-truth safety; [`follow_run::FollowSetup`] (scenario or scene file → rig + follower), [`follow_run::FollowRun::outputs`] (the `surveyor follow` files) |
 
+pub mod follow_run;
 pub mod metrics;
 pub mod range_sensors;
 pub mod rig;

@@ -1,5 +1,6 @@
 //! Argument definitions and the one library call behind each command.
 
+mod follow;
 mod maps;
 mod model;
 mod output;
@@ -53,6 +54,9 @@ enum Command {
     Segment(maps::SegmentArgs),
     /// Pudney's incremental surface model from a stream of sensor sets (P ch. 2).
     Model(model::ModelArgs),
+    /// Pudney's surface following (P ch. 3) in a simulated world: the model, the
+    /// steps, the path and a run summary scored against the ground truth.
+    Follow(Box<follow::FollowArgs>),
 }
 
 #[derive(Debug, Subcommand)]
@@ -204,6 +208,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Sld(a) => maps::sld(&a),
         Command::Segment(a) => maps::segment(&a),
         Command::Model(a) => model::model(&a),
+        Command::Follow(a) => follow::follow(&a),
     }
 }
 

@@ -1,0 +1,238 @@
+//! `surveyor follow`: Pudney's surface following (P ch. 3) in a simulated
+//! world, one episode ([`sim::follow_run`]), with its outputs in a folder.
+
+use super::output::{Staged, config_toml, load_config};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use geom::Real;
+use indicatif::{ProgressBar, ProgressStyle};
+use sim::Scenario;
+use sim::follow_run::{
+    DEFAULT_MAX_SETS, FollowRunConfig, FollowRunOptions, FollowSetup, RunEnd, StartPose,
+};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Outputs in --out: surface_model.json and surface_model.obj (the model), steps.csv (one row per \
+step: step, mode, x, y, z, q1..qn, set_size, update_us, direction_us, kinematics_us, \
+link_clearance_m, current_segment, current_edge), path.ply (the control-point path, vertices \
+and edges) and run.json (sets, steps, completed, termination, collisions, min_clearance_m, \
+step_us, modes, the score against the true scene, the options).
+
+The same inputs and --seed give the same run; only the wall-clock columns of steps.csv \
+(update_us, direction_us, kinematics_us) differ. With --no-timings they are written empty, \
+and steps.csv and surface_model.json are then byte-identical from run to run.
+
+Ctrl-C stops the run after the current step and writes the outputs of the steps so far \
+(termination \"interrupted\").")]
+pub struct FollowArgs {
+    /// Built-in scenario name (cube, block1, block2, cylinder, ...) or scenario file.
+    #[arg(long, required_unless_present_any = ["scene", "print_config"], conflicts_with = "scene")]
+    scenario: Option<String>,
+    /// A mesh (OBJ, STL, PLY) or point cloud (PCD, PLY, text) placed as-is in the
+    /// world frame, instead of a scenario. The robot (point3 unless --robot) starts
+    /// δ above the centre of the top of its bounding box; without --initial the
+    /// model starts with a table at the bottom of the bounding box (a square one
+    /// box size, at least 0.5 m, beyond it on every side).
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// With --scene: scale factor applied to the file's coordinates [default: 1].
+    #[arg(long)]
+    scale: Option<Real>,
+    /// A-priori segments instead of the scenario's: `{"segments": [[[x,y,z], ...], ...]}`,
+    /// each anticlockwise about its outward normal.
+    #[arg(long)]
+    initial: Option<PathBuf>,
+    /// Another robot: point3, arm4 or a URDF file (FILE.urdf). On the built-in
+    /// scenes arm4 stands at (-1.6, 0, 0); without --start/--joints the robot
+    /// starts with its control point where the scenario's robot has it, tool down.
+    #[arg(long)]
+    robot: Option<String>,
+    /// Start with the control point here (world frame, metres), tool pointing down.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        num_args = 1,
+        conflicts_with = "joints"
+    )]
+    start: Option<Vec<Real>>,
+    /// Start at these joint values (radians, metres for prismatic joints).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, num_args = 1)]
+    joints: Option<Vec<Real>>,
+    /// Range noise σ of every reading, metres (default: the scenario's).
+    #[arg(long, allow_negative_numbers = true)]
+    noise_m: Option<Real>,
+    /// Seed of the range noise.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Most sensor sets to take (one per step).
+    #[arg(long, default_value_t = DEFAULT_MAX_SETS)]
+    max_sets: u64,
+    /// Parameters (TOML): a [follow] table (FollowConfig: desired_distance_m,
+    /// max_step_m, ...) and a [surface] table (SurfaceConfig: lambda, mu_deg, ...).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Print the configuration in effect as TOML and exit.
+    #[arg(long)]
+    print_config: bool,
+    /// Write the timing columns of steps.csv empty (byte-identical reruns).
+    #[arg(long)]
+    no_timings: bool,
+    /// Output folder (created if missing).
+    #[arg(long, required_unless_present = "print_config")]
+    out: Option<PathBuf>,
+}
+
+/// The options of the run from the flags, each checked with the flag named.
+fn options(a: &FollowArgs, config: FollowRunConfig) -> Result<FollowRunOptions> {
+    let start = match (&a.start, &a.joints) {
+        (Some(_), Some(_)) => bail!("give --start or --joints, not both"),
+        (Some(p), None) => Some(StartPose::ControlPoint(super::three(
+            Some(p),
+            "--start",
+            "metres",
+            scene::MAX_COORDINATE_M,
+        )?)),
+        (None, Some(q)) => {
+            if let Some(i) = q.iter().position(|v| !v.is_finite()) {
+                bail!(
+                    "--joints: joint {} is {}; expected a finite value",
+                    i + 1,
+                    q[i]
+                );
+            }
+            Some(StartPose::Joints(q.clone()))
+        }
+        (None, None) => None,
+    };
+    if let Some(s) = a.noise_m
+        && !(s.is_finite() && s >= 0.0)
+    {
+        bail!("--noise-m {s}: expected a finite standard deviation ≥ 0 (metres)");
+    }
+    if a.max_sets == 0 {
+        bail!("--max-sets 0: expected at least 1 sensor set");
+    }
+    if a.scale.is_some() && a.scene.is_none() {
+        bail!("--scale applies to a --scene file only");
+    }
+    if let Some(s) = a.scale
+        && !(s.is_finite() && s > 0.0)
+    {
+        bail!("--scale {s}: expected a finite factor > 0");
+    }
+    if let Some(r) = &a.robot
+        && !r.to_ascii_lowercase().ends_with(".urdf")
+        && !matches!(r.as_str(), "point3" | "arm4")
+    {
+        bail!("--robot {r}: unknown robot; expected point3, arm4 or a URDF file (FILE.urdf)");
+    }
+    let initial_segments = match &a.initial {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("reading {}", path.display()))?;
+            let segs = surface::read_initial_segments_json(&text, &path.display().to_string())?;
+            Some(
+                segs.iter()
+                    .map(|s| s.iter().map(|p| [p.x, p.y, p.z]).collect())
+                    .collect(),
+            )
+        }
+        None => None,
+    };
+    Ok(FollowRunOptions {
+        seed: a.seed,
+        max_sets: a.max_sets,
+        noise_sigma_m: a.noise_m,
+        robot: a.robot.clone(),
+        start,
+        initial_segments,
+        timings: !a.no_timings,
+        config,
+    })
+}
+
+pub fn follow(a: &FollowArgs) -> Result<()> {
+    let config: FollowRunConfig = load_config(a.config.as_deref())?;
+    if a.print_config {
+        print!("{}", config_toml(&config)?);
+        return Ok(());
+    }
+    let Some(out) = &a.out else {
+        bail!("--out is required");
+    };
+    let opts = options(a, config)?;
+    let setup = match (&a.scenario, &a.scene) {
+        (_, Some(file)) => FollowSetup::from_scene_file(file, a.scale.unwrap_or(1.0), &opts)?,
+        (Some(name), None) => FollowSetup::from_scenario(&Scenario::load(name)?, &opts)?,
+        (None, None) => bail!("give --scenario NAME|FILE or --scene FILE"),
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = Arc::clone(&stop);
+        if let Err(e) = ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed)) {
+            eprintln!("note: Ctrl-C will end the run without writing outputs ({e})");
+        }
+    }
+    let pb = ProgressBar::new(opts.max_sets);
+    if let Ok(style) =
+        ProgressStyle::with_template("{msg:>28} [{bar:30}] {pos}/{len} sets {elapsed}")
+    {
+        pb.set_style(style.progress_chars("=> "));
+    }
+    let run = setup.run(&stop, &mut |row, follower| {
+        pb.set_position(row.step + 1);
+        if row.step % 10 == 0 {
+            pb.set_message(format!(
+                "{} · {} segments",
+                row.mode.name(),
+                follower.model().len()
+            ));
+        }
+    });
+    pb.finish_and_clear();
+    let run = run?;
+    let mut staged = Staged::new();
+    staged.ensure_dir(out)?;
+    for (name, text) in run.outputs()? {
+        let path = staged.file_in(out, name)?;
+        std::fs::write(&path, text)
+            .with_context(|| format!("writing {}", out.join(name).display()))?;
+    }
+    staged.commit()?;
+    let summary = run.run_json();
+    let collisions = summary
+        .collisions
+        .map_or_else(|| "no ground truth for".to_owned(), |n| n.to_string());
+    say!(
+        "{} sets, termination {}, {collisions} collisions, mean step {:.1} µs (median {:.1}, 95th percentile {:.1}) → {}",
+        summary.sets,
+        summary.termination,
+        summary.step_us.mean,
+        summary.step_us.median,
+        summary.step_us.p95,
+        out.display()
+    )?;
+    if let Some(score) = &run.score {
+        say!(
+            "model: {} segments; coverage {:.1}% of the counted faces, shared edges {:.1}%, {} of {} corners",
+            run.model.len(),
+            100.0 * score.coverage,
+            100.0 * score.edge_coverage,
+            score.corners_found,
+            score.corners.len()
+        )?;
+    }
+    if let RunEnd::Error(e) = &run.episode.end {
+        bail!(
+            "the run stopped on an error after {} steps (the outputs of those steps are in {}): {e}",
+            run.episode.rows.len(),
+            out.display()
+        );
+    }
+    Ok(())
+}
