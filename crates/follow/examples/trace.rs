@@ -63,6 +63,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         min_clear = min_clear.min(c);
         if c < 0.0 {
             collisions += 1;
+            if std::env::var("COLL").is_ok() {
+                let cp = step.control_point;
+                println!(
+                    "collision after step {k}: {:?} true clearance {c:.3}, model link clearance {:?}, cp ({:.3},{:.3},{:.3}) |dq| {:.4} motion {:.3}",
+                    step.mode,
+                    step.link_clearance,
+                    cp.x,
+                    cp.y,
+                    cp.z,
+                    step.dq.iter().map(|d| d * d).sum::<Real>().sqrt(),
+                    step.motion.norm()
+                );
+            }
         }
     }
     let n = steps as Real;

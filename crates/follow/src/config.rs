@@ -49,6 +49,10 @@ pub struct FollowConfig {
     pub target_patience_steps: u32,
     /// Damping of the pseudo-inverse near singularities (0 = plain J⁺).
     pub damping: Real,
+    /// A link closer to the model than its radius plus this margin may not be
+    /// brought closer by the control-point motion (our addition to P§3.3,
+    /// see [`crate::actuator::actuator_change`]), metres.
+    pub link_margin_m: Real,
 }
 
 impl Default for FollowConfig {
@@ -66,6 +70,7 @@ impl Default for FollowConfig {
             objective: Objective::LinkDistance,
             target_patience_steps: 20,
             damping: 1e-3,
+            link_margin_m: 0.05,
         }
     }
 }
@@ -92,6 +97,12 @@ impl FollowConfig {
             return Err(FollowError::Config(format!(
                 "alpha: expected a finite gain ≥ 0, got {}",
                 self.alpha
+            )));
+        }
+        if !(self.link_margin_m.is_finite() && self.link_margin_m >= 0.0) {
+            return Err(FollowError::Config(format!(
+                "link_margin_m: expected a finite distance ≥ 0, got {}",
+                self.link_margin_m
             )));
         }
         if !(self.damping.is_finite() && self.damping >= 0.0) {

@@ -543,7 +543,28 @@ impl Follower {
         proximities: &[LinkProximity],
         switches: &[SwitchContact],
     ) -> Vec<Real> {
-        // Jacobians in the world frame: rotate the base-frame columns.
+        // `frames` are world frames, so the Jacobians are in the world frame.
+        let margin = self.config.link_margin_m;
+        let dof = self.robot.dof();
+        let mut guards = Vec::new();
+        for p in proximities {
+            let away = p.on_link - p.on_model;
+            if p.distance >= p.radius + margin || p.distance <= 0.0 {
+                continue;
+            }
+            let Some(frame) = frames.get(p.link.0) else {
+                continue;
+            };
+            let in_link = frame.inverse_transform_point(&p.on_link);
+            self.robot
+                .jacobian_into(frames, p.link, &in_link, &mut self.jacobian);
+            let n = away / p.distance;
+            guards.push(nalgebra::DVector::from_fn(dof, |k, _| {
+                n.x * self.jacobian[(0, k)]
+                    + n.y * self.jacobian[(1, k)]
+                    + n.z * self.jacobian[(2, k)]
+            }));
+        }
         self.robot
             .jacobian_into(frames, tool_link, tool_in_link, &mut self.jacobian);
         let z = reconfiguration(
@@ -554,10 +575,18 @@ impl Follower {
             switches,
             &self.config,
         );
-        actuator_change(&self.robot, q, &self.jacobian, motion, &z, &self.config)
-            .iter()
-            .copied()
-            .collect()
+        actuator_change(
+            &self.robot,
+            q,
+            &self.jacobian,
+            motion,
+            &z,
+            &guards,
+            &self.config,
+        )
+        .iter()
+        .copied()
+        .collect()
     }
 
     /// App. B: the link range finders read as proximity switches; one that
