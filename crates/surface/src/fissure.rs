@@ -23,6 +23,10 @@
 //! vertices (types I, IV, V and VI remove at least one vertex; II and III replace
 //! one, so the cap bounds the rare chains of those).
 //!
+//! After the thesis' types, pockets behind a mouth narrower than λ are closed
+//! when they would collapse as a hole (`close_pockets`, our addition), and
+//! the cascade runs again.
+//!
 //! To collapse a hole's perimeter (P§2.4.3) the restrictions on shared edges and
 //! sight are lifted, and filling continues until fewer than three vertices
 //! remain.
