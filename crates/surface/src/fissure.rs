@@ -237,6 +237,15 @@ pub(crate) fn close_pockets(
         if n < 8 {
             return closed;
         }
+        // Twice the signed area of a pocket from prefix sums of the edges'
+        // cross products (over the perimeter taken twice).
+        let mut prefix = Vec::with_capacity(2 * n + 1);
+        prefix.push(0.0);
+        for m in 0..2 * n {
+            let (a, b) = (poly.pt(m), poly.pt(m + 1));
+            let last = prefix.last().copied().unwrap_or(0.0);
+            prefix.push(last + (a.x * b.y - a.y * b.x));
+        }
         // Sections start at each vertex and run over non-shared edges only.
         for i in 0..n {
             let vi = poly.pt(i);
@@ -251,10 +260,11 @@ pub(crate) fn close_pockets(
                 if (vj - vi).norm() >= lambda {
                     continue;
                 }
-                let pocket: Vec<Point2> = (0..=k).map(|m| poly.pt(i + m)).collect();
-                if geom::polygon2::signed_area(&pocket) >= 0.0 {
+                let twice_area = prefix[i + k] - prefix[i] + (vj.x * vi.y - vj.y * vi.x);
+                if twice_area >= 0.0 {
                     continue;
                 }
+                let pocket: Vec<Point2> = (0..=k).map(|m| poly.pt(i + m)).collect();
                 if !poly.sight(&vi, &vj, eps, |_| false) {
                     continue;
                 }
