@@ -7,7 +7,7 @@
 //! |---|---|---|---|
 //! | point + point | P§2.4.1, Fig. 5–6 | sensing axes within 90°; `s²_pt < λ²` (point) or `s²_pp < λ²` (polygon); for a polygon, the summed axes more than μ out of the plane (the outside must be decidable) | centroid with summed axes, or the diamond `c ± √u₁v₁, c ± √u₂v₂` on the plane of best fit, outward normal against the summed axes |
 //! | point + polygon | P§2.4.2, Fig. 7–9 | axis and outward normal more than 90° apart; planar result; `s²_pp < λ²`; initial plane of the polygon within μ (normal) and λ (centroid) of the new plane | the projected perimeter, extended to the projected point by the five rules; unchanged when the point is inside or the closest perimeter point is on a shared edge (Fig. 9b–c) |
-//! | polygon + polygon | P§2.4.3, Fig. 10–13 | neighbours dissolved first; planar result; `s²_pp < λ²`; both planes within μ (normal) and λ (centroid) of the new plane | the union of the projections (holes collapsed by fissures), or a bridge between them; retained shared edges are checked for local and global ordering |
+//! | polygon + polygon | P§2.4.3, Fig. 10–13 | neighbours dissolved first; planar result; `s²_pp < λ²`; both planes within μ (normal) and λ (centroid) of the new plane | the union of the projections (holes collapsed by fissures), or a bridge between them; retained shared edges are checked for local and global ordering; with no bridge, a polygon of fewer than ψ points without shared edges is absorbed by extending the other's perimeter to its vertices (our addition, see `absorb`) |
 //!
 //! Type (P§2.2): Pudney's `s²_pt < s²_pp` test can never hold (`s²_pt` is the
 //! covariance trace, `s²_pp` its smallest eigenvalue), so the type is decided by
@@ -19,7 +19,7 @@
 
 use crate::config::Tolerances;
 use crate::model::{Flag, SurfaceModel};
-use crate::overlay::combine;
+use crate::overlay::{CombineError, combine};
 use crate::perimeter::{Node2, PerimPoint, Poly2};
 use crate::relations::OrderingFix;
 use crate::segment::{Edge, EdgeKey, Node, PointSegment, Polygon, Segment, SegmentId, SegmentKind};
@@ -209,6 +209,10 @@ impl SurfaceModel {
         // Combine; unshare the shared edges on discarded sections and combine
         // again, until nothing shared is discarded. Every round unshares at least
         // one pair, so the rounds are bounded by the pairs of S₁ and S₂.
+        let (ma, mb) = (
+            self.get(s1).ok_or(missing)?.moments.m,
+            self.get(s2).ok_or(missing)?.moments.m,
+        );
         let rounds = 2
             + self.poly(s1).ok_or(missing)?.shared_edge_count()
             + self.poly(s2).ok_or(missing)?.shared_edge_count();
@@ -220,7 +224,32 @@ impl SurfaceModel {
             }
             let combined = {
                 let mut fresh = Self::key_source(&mut self.ids.edge);
-                combine(&a, &b, tol.lambda, tol.eps, &mut fresh).map_err(MergeFailure::Combine)?
+                match combine(&a, &b, tol.lambda, tol.eps, &mut fresh) {
+                    Ok(c) => c,
+                    Err(CombineError::NoBridge) => {
+                        // A young polygon without shared edges beside the other:
+                        // its vertices are merged as points (see `absorb`).
+                        let (big, small, m_small) =
+                            if ma >= mb { (&a, &b, mb) } else { (&b, &a, ma) };
+                        let young = (m_small as Real) < tol.psi
+                            && small.nodes.iter().all(|n| n.edge.share.is_none());
+                        let absorbed = if young {
+                            absorb(big, small, tol.lambda, tol.eps, &mut fresh)
+                        } else {
+                            None
+                        };
+                        let poly = absorbed.ok_or(MergeFailure::Combine(CombineError::NoBridge))?;
+                        return Ok(Polygon {
+                            initial: false,
+                            centroid: pca.centroid,
+                            normal,
+                            initial_plane: plane,
+                            nodes: poly.to_nodes(&frame),
+                            rev: crate::segment::Revisions::fresh(),
+                        });
+                    }
+                    Err(e) => return Err(MergeFailure::Combine(e)),
+                }
             };
             if combined.dropped.is_empty() {
                 if !combined.poly.is_valid(tol.eps) {
@@ -521,8 +550,11 @@ pub(crate) fn extend_to_point(
             let (a, b) = poly.seg(e);
             let (lo, _) = circle_params(&a, &b, &q, lambda);
             if lo > 0.0 && lo < t_hi {
+                // Just inside the circle; a point within `eps` of a vertex is
+                // that vertex (a perimeter point there would leave a
+                // zero-length edge, and the merger failed).
                 let t = lo + (t_hi - lo) * 1e-6;
-                back.push(poly.snap(PerimPoint { edge: e, t }, eps * 1e-3));
+                back.push(poly.snap(PerimPoint { edge: e, t }, eps));
                 break;
             }
             if !inside(&a) {
@@ -544,7 +576,7 @@ pub(crate) fn extend_to_point(
             let (_, hi) = circle_params(&a, &b, &q, lambda);
             if hi < 1.0 && hi > t_lo {
                 let t = hi - (hi - t_lo) * 1e-6;
-                fwd.push(poly.snap(PerimPoint { edge: e, t }, eps * 1e-3));
+                fwd.push(poly.snap(PerimPoint { edge: e, t }, eps));
                 break;
             }
             if !inside(&b) {
@@ -583,6 +615,58 @@ pub(crate) fn extend_to_point(
         }
     }
     Extension::Failed
+}
+
+/// Absorb a small polygon `small` lying beside `big` (not overlapping it, no
+/// bridge of P§2.4.3 found): `big`'s perimeter is extended (P§2.4.2) to each
+/// vertex of `small` in turn, nearest first, as if its points had been merged
+/// one by one. `None` unless every extension succeeds and the result contains
+/// `small` (every vertex inside, no edge of `small` crossing the perimeter).
+///
+/// Our addition to P§2.4.3. The bridge considers only vertices as `p₁, p₂`
+/// and only their closest points as `q₁, q₂` (the thesis' economy, "at the
+/// expense of the possibility of missing valid perimeter points"): a diamond
+/// of a few points (P§2.4.1) beside a polygon offers one vertex within λ, and
+/// the bridge is never found. Had those points arrived after the polygon had
+/// grown next to them, each would have merged by P§2.4.2. Without this, such
+/// diamonds stay beside the face as separate segments, notching its model, and
+/// every point near them merges into them instead of the face. Only polygons
+/// of fewer than ψ points without shared edges (the segments that have not
+/// "had a chance to develop", P§2.9) are absorbed this way.
+pub(crate) fn absorb(
+    big: &Poly2,
+    small: &Poly2,
+    lambda: Real,
+    eps: Real,
+    fresh: &mut dyn FnMut() -> EdgeKey,
+) -> Option<Poly2> {
+    let mut current = big.clone();
+    let mut left: Vec<Point2> = small.points();
+    while !left.is_empty() {
+        let pts = current.points();
+        left.retain(|v| polygon2::locate_point(&pts, v, eps) == Containment::Outside);
+        let Some((k, _)) = left
+            .iter()
+            .enumerate()
+            .map(|(k, v)| (k, current.closest(v).1))
+            .min_by(|x, y| x.1.total_cmp(&y.1))
+        else {
+            break;
+        };
+        let v = left.swap_remove(k);
+        match extend_to_point(&current, v, lambda, eps, fresh) {
+            Extension::Extended(next) => current = next,
+            Extension::Unchanged | Extension::Failed => return None,
+        }
+    }
+    let pts = current.points();
+    let n = small.len();
+    let contained = (0..n).all(|i| {
+        let (a, b) = small.seg(i);
+        polygon2::locate_point(&pts, &a, eps) != Containment::Outside
+            && current.sight(&a, &b, eps, |_| false)
+    });
+    (contained && current.is_valid(eps)).then_some(current)
 }
 
 /// Parameters `(lo, hi)` along segment `a b` between which it lies within `r` of
@@ -708,5 +792,81 @@ mod tests {
     fn fig9c_contained_point() {
         assert_eq!(ext(&square(), Point2::new(0.5, 0.5)), Extension::Unchanged);
         assert_eq!(ext(&square(), Point2::new(0.5, 1.2)), Extension::Failed);
+    }
+
+    /// P§2.4.2 with the λ-circle leaving an edge a hair before its end vertex
+    /// (the vertex lies 10⁻¹⁰ beyond λ of the point): the extension takes the
+    /// vertex as `p₂` instead of a perimeter point within `eps` of it (whose
+    /// perimeter would not be simple), and the area gained is the triangle over
+    /// the circle's chord.
+    #[test]
+    fn circle_exit_next_to_a_vertex() {
+        let lambda: Real = 0.05;
+        let (h, half) = (0.03, 0.04); // half-chord of the λ-circle at height 0.03
+        let pts = [
+            (0.0, 0.0),
+            (0.5 + half + 1e-10, 0.0),
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (0.0, 1.0),
+        ];
+        let sq = Poly2 {
+            nodes: pts
+                .iter()
+                .enumerate()
+                .map(|(i, &(x, y))| Node2::plain(Point2::new(x, y), EdgeKey(i as u32)))
+                .collect(),
+        };
+        let q = Point2::new(0.5, -h);
+        assert!((sq.pt(1) - q).norm() > lambda);
+        let Extension::Extended(p) = ext(&sq, q) else {
+            panic!("expected an extension");
+        };
+        assert!(p.is_valid(1e-9));
+        let gain = p.area() - 1.0;
+        assert!((gain - 0.5 * (2.0 * half) * h).abs() < 1e-9, "{gain}");
+    }
+
+    fn poly2(pts: &[(Real, Real)]) -> Poly2 {
+        Poly2 {
+            nodes: pts
+                .iter()
+                .enumerate()
+                .map(|(i, &(x, y))| Node2::plain(Point2::new(x, y), EdgeKey(i as u32)))
+                .collect(),
+        }
+    }
+
+    /// A diamond of a few points beside a face (P§2.4.1): the bridge of
+    /// P§2.4.3 finds one vertex within λ and fails; absorbing it by successive
+    /// extensions gives a valid perimeter containing both, within λ of them.
+    #[test]
+    fn diamond_beside_a_face_is_absorbed() {
+        let face = poly2(&[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]);
+        // Tip 3 cm right of the face's right edge, 4 cm across.
+        let diamond = poly2(&[(1.03, 0.5), (1.05, 0.48), (1.07, 0.5), (1.05, 0.52)]);
+        let mut k = 100;
+        let mut fresh = || {
+            k += 1;
+            EdgeKey(k)
+        };
+        assert_eq!(
+            crate::overlay::combine(&face, &diamond, 0.05, 1e-6, &mut fresh).unwrap_err(),
+            CombineError::NoBridge
+        );
+        let out = absorb(&face, &diamond, 0.05, 1e-6, &mut fresh).expect("absorbed");
+        assert!(out.is_valid(1e-6));
+        let pts = out.points();
+        for v in face.points().iter().chain(diamond.points().iter()) {
+            assert_ne!(polygon2::locate_point(&pts, v, 1e-9), Containment::Outside);
+        }
+        // Oracle: the new region lies within λ of the diamond (x ≤ 1.07) and
+        // the result is no larger than the face plus a λ-wide band beside it.
+        assert!(pts.iter().all(|v| v.x <= 1.07 + 1e-12));
+        assert!(out.area() > 1.0 + 0.5 * 0.04 * 0.04);
+        assert!(out.area() < 1.0 + 0.07 * 0.1);
+        // Too far (6 cm): nothing to extend to.
+        let far = poly2(&[(1.06, 0.5), (1.08, 0.48), (1.10, 0.5), (1.08, 0.52)]);
+        assert!(absorb(&face, &far, 0.05, 1e-6, &mut fresh).is_none());
     }
 }

@@ -236,6 +236,42 @@ fn sections(view: &View, t_start: Real, t_end: Real, lambda: Real, eps: Real) ->
     out
 }
 
+/// The union of the t-ranges of the parts of `view`'s edges within λ of the
+/// line, as sorted disjoint intervals, each piece widened by `eps`. A section
+/// of [`sections`] is a connected path through such parts from `t ≈ t_start`
+/// to `t ≈ t_end` (each within `eps`), so its t-values fill the range between
+/// them: no section exists unless one interval holds that range (see
+/// [`covers`]). This only decides which candidates are searched, never what
+/// a search finds.
+fn strip_cover(view: &View, lambda: Real, eps: Real) -> Vec<(Real, Real)> {
+    let mut pieces: Vec<(Real, Real)> = (0..view.poly.len())
+        .filter_map(|e| {
+            let (lo, hi) = view.strip_part(e, lambda)?;
+            let (a, b) = view.poly.seg(e);
+            let (ta, tb) = (view.t(&(a + (b - a) * lo)), view.t(&(a + (b - a) * hi)));
+            Some((ta.min(tb) - eps, ta.max(tb) + eps))
+        })
+        .collect();
+    pieces.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut out: Vec<(Real, Real)> = Vec::with_capacity(pieces.len());
+    for (lo, hi) in pieces {
+        match out.last_mut() {
+            Some(last) if lo <= last.1 => last.1 = last.1.max(hi),
+            _ => out.push((lo, hi)),
+        }
+    }
+    out
+}
+
+/// `true` when one interval of `cover` holds `[min(t0, t1) + eps, max(t0, t1) − eps]`.
+fn covers(cover: &[(Real, Real)], t0: Real, t1: Real, eps: Real) -> bool {
+    let (lo, hi) = (t0.min(t1) + eps, t0.max(t1) - eps);
+    if hi <= lo {
+        return true;
+    }
+    cover.iter().any(|&(a, b)| a <= lo && hi <= b)
+}
+
 /// A candidate endpoint value of `L`: the parameter in each segment's view.
 #[derive(Clone, Copy, Debug)]
 struct Anchor {
@@ -438,10 +474,21 @@ impl SurfaceModel {
         }
         anchors.sort_by(|a, b| a.t1.total_cmp(&b.t1).then(a.t2.total_cmp(&b.t2)));
         anchors.dedup_by(|a, b| (a.t1 - b.t1).abs() <= tol.eps && (a.t2 - b.t2).abs() <= tol.eps);
+        // A candidate can only have sections where each perimeter's pieces in
+        // the strip cover its t-range (see `strip_cover`): the others are
+        // dropped before the O(n) section search.
+        let (cover1, cover2) = (
+            strip_cover(&v1, tol.lambda, tol.eps),
+            strip_cover(&v2, tol.lambda, tol.eps),
+        );
         let mut candidates: Vec<(Real, Anchor, Anchor)> = Vec::new();
         for a in &anchors {
             for b in &anchors {
-                if sigma * (b.t1 - a.t1) > tol.eps && sigma * (b.t2 - a.t2) > tol.eps {
+                if sigma * (b.t1 - a.t1) > tol.eps
+                    && sigma * (b.t2 - a.t2) > tol.eps
+                    && covers(&cover1, a.t1, b.t1, tol.eps)
+                    && covers(&cover2, b.t2, a.t2, tol.eps)
+                {
                     candidates.push(((b.t1 - a.t1).abs(), *a, *b));
                 }
             }
@@ -743,4 +790,80 @@ pub(crate) fn registers_between(
     let v1 = View::new(model, s1, &line)?;
     let v2 = View::new(model, s2, &line)?;
     Some(registers(&v1, &v2, model.tol.lambda))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::perimeter::Node2;
+    use geom::{Point3, Vector3};
+    use rand::{RngExt, SeedableRng};
+
+    /// A ragged star-shaped polygon around the origin and a line near it.
+    fn random_view(rng: &mut rand_chacha::ChaCha8Rng) -> View {
+        let n = rng.random_range(5..60);
+        let mut angles: Vec<Real> = (0..n)
+            .map(|_| rng.random_range(0.0..std::f64::consts::TAU))
+            .collect();
+        angles.sort_by(Real::total_cmp);
+        angles.dedup_by(|a, b| (*a - *b).abs() < 1e-3);
+        let nodes = angles
+            .iter()
+            .enumerate()
+            .map(|(i, &a)| {
+                let r = rng.random_range(0.05..0.3);
+                Node2::plain(Point2::new(r * a.cos(), r * a.sin()), EdgeKey(i as u32))
+            })
+            .collect();
+        let dir_angle: Real = rng.random_range(0.0..std::f64::consts::TAU);
+        View {
+            frame: PlaneFrame::new(Point3::origin(), Vector3::z_axis()),
+            poly: Poly2 { nodes },
+            origin: Point2::new(rng.random_range(-0.2..0.2), rng.random_range(-0.2..0.2)),
+            dir: Vector2::new(dir_angle.cos(), dir_angle.sin()),
+        }
+    }
+
+    /// The candidate pre-filter of `plan_shared_edge` is sound: whenever
+    /// `covers` rejects a range, the section search finds nothing there (so
+    /// filtering changes no plan). Ranges between the parameters of vertices
+    /// in the strip (the anchors) and random ones, on ragged perimeters.
+    #[test]
+    fn strip_cover_rejects_only_ranges_without_sections() {
+        let (lambda, eps) = (0.05, 5e-6);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let (mut rejected, mut found) = (0, 0);
+        for _ in 0..400 {
+            let view = random_view(&mut rng);
+            if !view.poly.is_valid(eps) {
+                continue;
+            }
+            let cover = strip_cover(&view, lambda, eps);
+            let mut ts: Vec<Real> = view
+                .poly
+                .points()
+                .iter()
+                .filter(|p| view.h(p).abs() < lambda)
+                .map(|p| view.t(p))
+                .collect();
+            for _ in 0..6 {
+                ts.push(rng.random_range(-0.35..0.35));
+            }
+            for &t0 in &ts {
+                for &t1 in &ts {
+                    let secs = sections(&view, t0, t1, lambda, eps);
+                    if covers(&cover, t0, t1, eps) {
+                        found += usize::from(!secs.is_empty());
+                    } else {
+                        rejected += 1;
+                        assert!(secs.is_empty(), "rejected [{t0}, {t1}] has {secs:?}");
+                    }
+                }
+            }
+        }
+        assert!(
+            rejected > 1000 && found > 1000,
+            "{rejected} rejected, {found} found"
+        );
+    }
 }

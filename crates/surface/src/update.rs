@@ -28,7 +28,9 @@
 
 use crate::changelog::ChangeLog;
 use crate::error::SurfaceError;
-use crate::fissure::{FissureMode, fill_fissures, remove_collinear, remove_nearly_collinear};
+use crate::fissure::{
+    FissureMode, close_pockets, fill_fissures, remove_collinear, remove_nearly_collinear,
+};
 use crate::input::SensorSet;
 use crate::merge::polygon_distance;
 use crate::model::{SurfaceModel, UpdateCtx};
@@ -212,13 +214,26 @@ impl SurfaceModel {
                 let mut poly = Poly2::from_polygon(p, &frame);
                 let (filled, straightened, known_valid) = {
                     let mut fresh = Self::key_source(&mut m.ids.edge);
-                    let filled = fill_fissures(
+                    let mut filled = fill_fissures(
                         &mut poly,
                         FissureMode::Restricted,
                         tol.lambda,
                         tol.eps,
                         &mut fresh,
-                    );
+                    )
+                    .len();
+                    let pockets = close_pockets(&mut poly, tol.lambda, tol.eps, &mut fresh);
+                    if pockets > 0 {
+                        filled += pockets
+                            + fill_fissures(
+                                &mut poly,
+                                FissureMode::Restricted,
+                                tol.lambda,
+                                tol.eps,
+                                &mut fresh,
+                            )
+                            .len();
+                    }
                     let straightened = remove_collinear(&mut poly, tol.eps, &mut fresh);
                     // Shallow dents (within the collinearity length) are filled
                     // too, unless that leaves an invalid perimeter.
@@ -226,12 +241,12 @@ impl SurfaceModel {
                     let dents =
                         remove_nearly_collinear(&mut poly, tol.collinear, tol.eps, &mut fresh);
                     if dents == 0 {
-                        (filled.len(), straightened, false)
+                        (filled, straightened, false)
                     } else if poly.is_valid(tol.eps) {
-                        (filled.len(), straightened + dents, true)
+                        (filled, straightened + dents, true)
                     } else {
                         poly = before;
-                        (filled.len(), straightened, false)
+                        (filled, straightened, false)
                     }
                 };
                 if filled + straightened == 0 || !(known_valid || poly.is_valid(tol.eps)) {
