@@ -162,9 +162,13 @@ struct PointSlices {
 /// segments.
 #[derive(Clone, Debug, Default, PartialEq)]
 struct Marks {
-    unreachable_segments: BTreeSet<SegmentId>,
+    /// Unreachable segments, each with whether the control point has since
+    /// been closest to something else (only then does being brought closest
+    /// to it again re-mark it incomplete).
+    unreachable_segments: BTreeMap<SegmentId, bool>,
     unclosable_points: BTreeSet<SegmentId>,
-    unreachable_edges: BTreeSet<EdgeKey>,
+    /// Unreachable edges, with the same flag.
+    unreachable_edges: BTreeMap<EdgeKey, bool>,
     unclosable_edges: BTreeSet<EdgeKey>,
 }
 
@@ -360,7 +364,7 @@ impl Follower {
             .surface
             .iter()
             .copied()
-            .filter(|s| !self.marks.unreachable_segments.contains(s))
+            .filter(|s| !self.marks.unreachable_segments.contains_key(s))
             .collect();
         surface_edges(&self.model, &surface)
             .into_iter()
@@ -672,13 +676,13 @@ impl Follower {
         match self.state.mode {
             Mode::Surface => {
                 if let Some(s) = self.state.segment.take() {
-                    self.marks.unreachable_segments.insert(s);
+                    self.marks.unreachable_segments.insert(s, false);
                 }
                 self.state.path = None;
             }
             Mode::Segment => {
                 if let Some(e) = self.state.edge.take() {
-                    self.marks.unreachable_edges.insert(e);
+                    self.marks.unreachable_edges.insert(e, false);
                 }
             }
             Mode::Edge => self.slice_used(),
@@ -727,7 +731,7 @@ impl Follower {
         // new segment: its marks are dropped, P§3.4.6).
         self.marks
             .unreachable_segments
-            .retain(|s| self.model.segment(*s).is_some());
+            .retain(|s, _| self.model.segment(*s).is_some());
         self.marks
             .unclosable_points
             .retain(|s| self.model.segment(*s).is_some());
@@ -779,22 +783,42 @@ impl Follower {
         seen
     }
 
-    /// Re-mark as incomplete what the control point is now closest to (P§3.4.1,
-    /// P§3.4.2).
+    /// Re-mark as incomplete what the control point is *subsequently* brought
+    /// closest to (P§3.4.1, P§3.4.2): a mark made while the control point was
+    /// stuck next to its goal must not be undone at once, or a stalled robot
+    /// gives up and takes up the same goal forever.
     fn remark(&mut self, c: &ModelPoint) {
-        self.marks.unreachable_segments.remove(&c.segment);
-        if let Feature::Edge(i) = c.feature
-            && let Some(e) = self.model.polygon(c.segment).and_then(|p| p.edge(i))
-        {
-            self.marks.unreachable_edges.remove(&e.key);
-        }
+        let closest_edge = match c.feature {
+            Feature::Edge(i) => self
+                .model
+                .polygon(c.segment)
+                .and_then(|p| p.edge(i))
+                .map(|e| e.key),
+            _ => None,
+        };
+        self.marks.unreachable_segments.retain(|s, left| {
+            if *s == c.segment {
+                !*left
+            } else {
+                *left = true;
+                true
+            }
+        });
+        self.marks.unreachable_edges.retain(|e, left| {
+            if Some(*e) == closest_edge {
+                !*left
+            } else {
+                *left = true;
+                true
+            }
+        });
     }
 
     // ---- completeness (P§3.4) ----------------------------------------------
 
     fn edge_complete(&self, e: &EdgeRef) -> bool {
         e.shared_with.is_some()
-            || self.marks.unreachable_edges.contains(&e.key)
+            || self.marks.unreachable_edges.contains_key(&e.key)
             || self.marks.unclosable_edges.contains(&e.key)
             // A-priori segments (P§4.3) stand for known surface: their free
             // edges are where the description stops, not the border of an
@@ -803,7 +827,7 @@ impl Follower {
     }
 
     fn segment_complete(&self, id: SegmentId) -> bool {
-        if self.marks.unreachable_segments.contains(&id)
+        if self.marks.unreachable_segments.contains_key(&id)
             || self.marks.unclosable_points.contains(&id)
         {
             return true;
@@ -820,7 +844,7 @@ impl Follower {
         (0..poly.len()).all(|i| {
             poly.edge(i).is_none_or(|e| {
                 e.share.is_some()
-                    || self.marks.unreachable_edges.contains(&e.key)
+                    || self.marks.unreachable_edges.contains_key(&e.key)
                     || self.marks.unclosable_edges.contains(&e.key)
             })
         })
