@@ -1,7 +1,8 @@
 //! The follower in simulated built-in scenes (P§4.3), checked against the
 //! ground truth: the robot never touches the scene, the model keeps its
-//! invariants, the top face gets modelled, redundancy keeps arm4's links off
-//! block1 (issue 9, acceptance 2), and runs are deterministic.
+//! invariants and lies within λ of the truth, redundancy keeps arm4's links
+//! off block1 (issue 9, acceptance 2), and runs are deterministic. Completing
+//! the cube (acceptance 1) is written out but ignored while it fails.
 
 mod support;
 
@@ -89,7 +90,8 @@ fn point3_follows_the_cube_top_safely_with_a_valid_model() {
 /// judge it: the run ends by the algorithm's own rule within 1.5 × Pudney's
 /// 693 sets with the top face ≥ 95 % modelled. Open: today the model of a face
 /// built from the follower's sets grows notches whose edges keep the follower
-/// busy (about 45 % of the top after 100 sets, 49 % after 400), so the run does
+/// busy (45 % of the top after 100 sets and 49 % after 400 when measured on
+/// 2026-11-23, before the later surface fixes), so the run does
 /// not complete; the full per-face check lives with the runner in `sim`.
 #[test]
 #[ignore = "issue 9 open: surface following does not yet complete the cube"]
