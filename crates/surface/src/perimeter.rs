@@ -255,14 +255,13 @@ impl Poly2 {
         // Only edges whose boxes meet the sight line's box can cross it.
         let (x0, x1) = (a.x.min(b.x) - eps, a.x.max(b.x) + eps);
         let (y0, y1) = (a.y.min(b.y) - eps, a.y.max(b.y) + eps);
-        let edges: Vec<(Point2, Point2)> = (0..n)
-            .filter(|&i| !skip(i))
-            .map(|i| self.seg(i))
-            .filter(|(c, d)| {
-                !(c.x.max(d.x) < x0 || c.x.min(d.x) > x1 || c.y.max(d.y) < y0 || c.y.min(d.y) > y1)
-            })
-            .collect();
-        polygon2::can_sight(a, b, edges.iter().map(|(c, d)| (c, d)), eps)
+        let edges = (0..n).filter_map(|i| {
+            let (c, d) = (&self.nodes[i].p, &self.nodes[(i + 1) % n].p);
+            let apart =
+                c.x.max(d.x) < x0 || c.x.min(d.x) > x1 || c.y.max(d.y) < y0 || c.y.min(d.y) > y1;
+            (!apart && !skip(i)).then_some((c, d))
+        });
+        polygon2::can_sight(a, b, edges, eps)
     }
 
     /// Replace the section that runs anticlockwise from `from` to `to` by new

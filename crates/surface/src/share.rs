@@ -541,10 +541,19 @@ impl SurfaceModel {
         // Shared edges on P and Q: only with each other, whole, corresponding.
         let edges1 = v1.poly.section_edges(p1, p2);
         let edges2 = v2.poly.section_edges(q1, q2);
+        // Membership of P's and Q's edges, by edge index.
+        let mask = |n: usize, edges: &[usize]| {
+            let mut m = vec![false; n];
+            for &e in edges {
+                m[e % n.max(1)] = true;
+            }
+            m
+        };
+        let (on1, on2) = (mask(v1.poly.len(), &edges1), mask(v2.poly.len(), &edges2));
         let mut plain = false;
-        for (view, edges, from, to, other, other_edges, other_view) in [
-            (v1, &edges1, p1, p2, s2, &edges2, v2),
-            (v2, &edges2, q1, q2, s1, &edges1, v1),
+        for (view, edges, from, to, other, other_on, other_view) in [
+            (v1, &edges1, p1, p2, s2, &on2, v2),
+            (v2, &edges2, q1, q2, s1, &on1, v1),
         ] {
             for &e in edges {
                 match view.poly.edge(e).share {
@@ -563,7 +572,7 @@ impl SurfaceModel {
                             .nodes
                             .iter()
                             .position(|x| x.edge.share.is_some_and(|s| s.pair == sh.pair))?;
-                        if !other_edges.contains(&partner) {
+                        if !other_on[partner] {
                             return None;
                         }
                     }
@@ -597,17 +606,13 @@ impl SurfaceModel {
         // the line (range noise) whose next edge runs along the line fails
         // sight of its own projection, and a shared edge once unshared there
         // can never be formed again. The result is validated in any case.
-        let kept1: Vec<usize> = (0..v1.poly.len()).filter(|e| !edges1.contains(e)).collect();
-        let kept2: Vec<usize> = (0..v2.poly.len()).filter(|e| !edges2.contains(e)).collect();
-        let sees1 = |x: &Point2, y: &Point2| v1.poly.sight(x, y, tol.eps, |e| !kept1.contains(&e));
-        let sees2 = |x: &Point2, y: &Point2| v2.poly.sight(x, y, tol.eps, |e| !kept2.contains(&e));
+        let sees1 = |x: &Point2, y: &Point2| v1.poly.sight(x, y, tol.eps, |e| on1[e]);
+        let sees2 = |x: &Point2, y: &Point2| v2.poly.sight(x, y, tol.eps, |e| on2[e]);
         if !sees1(&xp1, &l1a) || !sees1(&xp2, &l2a) || !sees2(&xq1, &l2b) || !sees2(&xq2, &l1b) {
             return None;
         }
         // l₁ sights l₂ relative to what remains of each perimeter.
-        if !v1.poly.sight(&l1a, &l2a, tol.eps, |e| !kept1.contains(&e))
-            || !v2.poly.sight(&l1b, &l2b, tol.eps, |e| !kept2.contains(&e))
-        {
+        if !sees1(&l1a, &l2a) || !sees2(&l1b, &l2b) {
             return None;
         }
         // Build.
