@@ -1615,9 +1615,22 @@ impl Follower {
                 gap.sensor = None;
                 continue;
             };
-            gap.steps_on_target += 1;
             let dir = target - axis_point;
             let d = dir.norm();
+            // A gap we fill (P§3.4.5 gives up a target "after some time"):
+            // once the controlled sensor's axis passes within `AIM` of the
+            // target at the pose the set in hand was taken from, that set is
+            // what aiming at the target yields, and with the sensor on target
+            // the robot stands still (σ ≤ d), so later sets repeat it. No
+            // point near the target in it: give the target up now rather
+            // than idle until the progress check (P§3.4.7) or the patience.
+            if d < AIM_FRACTION * lambda {
+                gap.next += 1;
+                gap.sensor = None;
+                gap.steps_on_target = 0;
+                continue;
+            }
+            gap.steps_on_target += 1;
             self.state.gap = Some(gap);
             let _ = cp;
             return Flow::Go(Directive {
@@ -1646,6 +1659,11 @@ impl Follower {
         Some(Segment3::new(o, o + a.into_inner() * m.max_range_m).closest_point(target))
     }
 }
+
+/// Gap following deems the controlled sensor aimed at its target when its
+/// sensing axis passes within this fraction of λ of it (λ/20 = 2.5 mm at
+/// Pudney's λ; the detection radius is λ/2).
+const AIM_FRACTION: Real = 0.05;
 
 /// Lengths of the anticlockwise and clockwise routes along a perimeter of
 /// `n` edges from edge `from` to edge `to` (the edges passed on the way and
@@ -1725,6 +1743,46 @@ pub type ModeCounts = BTreeMap<Mode, u64>;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Gap following at point3 standing at (0, 0, 0.1): the range finder
+    /// pointing straight down has its axis through (0, 0, 0.05) (hand
+    /// geometry: origin at the control point, axis −z), so the first target
+    /// is aimed at; the set in hand holds nothing within λ/2 of it (its only
+    /// point, (0, 0, 0.0), is 0.05 away), so that target is given up at once
+    /// and the step aims at the second target instead of standing still.
+    #[test]
+    fn an_aimed_target_without_a_point_near_it_is_given_up_at_once() {
+        let robot = robot::builtin("point3").expect("point3");
+        let model = SurfaceModel::new(surface::SurfaceConfig::default()).expect("model");
+        let mut f = Follower::new(robot, Isometry3::identity(), model, FollowConfig::default())
+            .expect("follower");
+        let q = [0.0, 0.0, 0.1];
+        f.frames = f.robot.forward_kinematics(&q).expect("fk");
+        let cp = f.control_point(&q).expect("cp");
+        assert!((cp - Point3::new(0.0, 0.0, 0.1)).norm() < 1e-12);
+        f.last_points = vec![Point3::new(0.0, 0.0, 0.0)];
+        let first = Point3::new(0.0, 0.0, 0.05);
+        let second = Point3::new(0.06, 0.0, 0.0);
+        f.state.edge = Some(EdgeKey(7));
+        f.state.mode = Mode::Gap;
+        f.state.gap = Some(Gap {
+            from: Mode::Edge,
+            targets: vec![first, second],
+            next: 0,
+            sensor: None,
+            steps_on_target: 0,
+        });
+        let Flow::Go(d) = f.gap_following(&cp) else {
+            panic!("gap following should direct the control point");
+        };
+        let gap = f.state.gap.clone().expect("still gap following");
+        assert_eq!(gap.next, 1, "the aimed-at first target is given up");
+        assert_eq!(gap.steps_on_target, 1);
+        // Towards the second target: a positive step, not the zero step
+        // limit of an already aimed sensor.
+        assert!(d.dir.norm() > 1e-3);
+        assert!(d.step_limit.is_none_or(|l| l > 1e-3));
+    }
 
     /// The O(1) route length equals walking the perimeter both ways.
     #[test]
