@@ -223,6 +223,10 @@ pub fn reconfiguration(
     z
 }
 
+/// How close to a limit a joint counts as being at it (rad or m): the limit
+/// scaling below stops a joint exactly on its limit, up to rounding.
+const AT_LIMIT: Real = 1e-9;
+
 /// Eq. 3 with the ceilings of P§3.3: `θ̇ = J⁺ẋ + α(I − J⁺J)z`, where `J` is the
 /// 3 × n positional Jacobian of the control point; then the whole vector is
 /// scaled so that its revolute part is at most γ_r and its prismatic part at
@@ -237,6 +241,15 @@ pub fn reconfiguration(
 /// does not stop a link that the control point's motion drags onto an edge
 /// (arm4 brushed block1 in 22 of 1800 steps); the stalled control point then
 /// lets the progress check give the goal up (P§3.4.7).
+///
+/// Joint limits (our addition; P§3.3 has none): a joint already at a limit
+/// that eq. 3 would drive further is locked for the step — its column of `J`
+/// and its entry of `z` are zeroed, so both terms of eq. 3 are solved by the
+/// other joints — and eq. 3, the guard included, is solved again until no
+/// locked joint remains pushed out. The guard is thus checked on the motion
+/// actually taken. Without the lock, the limit scaling alone stops the
+/// whole step for as long as eq. 3 pushes on the limit (arm4 froze with its
+/// yaw at π on block1).
 pub fn actuator_change(
     robot: &Robot,
     q: &[Real],
@@ -247,23 +260,27 @@ pub fn actuator_change(
     config: &FollowConfig,
 ) -> DVector<Real> {
     let dof = robot.dof();
-    let j = DMatrix::from_fn(3, dof, |r, c| jacobian[(r, c)]);
-    let j_pinv = if config.damping > 0.0 {
-        robot::damped_pseudo_inverse(&j, config.damping)
-    } else {
-        robot::pseudo_inverse(&j, 1e-12)
-    };
-    let xdot = DVector::from_column_slice(motion.as_slice());
-    let mut dq = &j_pinv * xdot;
-    if guards.iter().any(|g| g.dot(&dq) < 0.0) {
-        dq.fill(0.0);
-    }
-    if config.alpha > 0.0 && z.iter().any(|v| *v != 0.0) {
-        let null = robot::null_space_projector(&j, &j_pinv);
-        dq += (null * z) * config.alpha;
-    }
-    if !dq.iter().all(|v| v.is_finite()) {
-        return DVector::zeros(dof);
+    let limits = robot.limits();
+    let mut locked = vec![false; dof];
+    let mut dq = DVector::zeros(dof);
+    for _ in 0..=dof {
+        dq = eq3(jacobian, motion, z, guards, &locked, config);
+        if !dq.iter().all(|v| v.is_finite()) {
+            return DVector::zeros(dof);
+        }
+        let mut more = false;
+        for (k, lim) in limits.iter().enumerate() {
+            if let (Some(lim), Some(&qk), false) = (lim, q.get(k), locked[k])
+                && ((qk >= lim.max - AT_LIMIT && dq[k] > 0.0)
+                    || (qk <= lim.min + AT_LIMIT && dq[k] < 0.0))
+            {
+                locked[k] = true;
+                more = true;
+            }
+        }
+        if !more {
+            break;
+        }
     }
     let kinds = robot.joint_kinds();
     let (mut rev, mut pri) = (0.0, 0.0);
@@ -282,7 +299,7 @@ pub fn actuator_change(
     if pri > config.ceiling_prismatic_m {
         scale = scale.min(config.ceiling_prismatic_m / pri);
     }
-    for (k, lim) in robot.limits().iter().enumerate() {
+    for (k, lim) in limits.iter().enumerate() {
         if let (Some(lim), Some(&qk)) = (lim, q.get(k)) {
             let step = dq[k] * scale;
             if qk + step > lim.max && step > 0.0 {
@@ -293,6 +310,48 @@ pub fn actuator_change(
         }
     }
     dq * scale
+}
+
+/// Eq. 3 with the joints in `locked` held still (their columns of `J` and
+/// entries of `z` zeroed: `J⁺` then has zero rows and `I − J⁺J` zero
+/// off-diagonal entries for them), the guard applied to its control-point term.
+fn eq3(
+    jacobian: &Matrix6xX<Real>,
+    motion: &Vector3,
+    z: &DVector<Real>,
+    guards: &[DVector<Real>],
+    locked: &[bool],
+    config: &FollowConfig,
+) -> DVector<Real> {
+    let dof = locked.len();
+    let j = DMatrix::from_fn(
+        3,
+        dof,
+        |r, c| {
+            if locked[c] { 0.0 } else { jacobian[(r, c)] }
+        },
+    );
+    let j_pinv = if config.damping > 0.0 {
+        robot::damped_pseudo_inverse(&j, config.damping)
+    } else {
+        robot::pseudo_inverse(&j, 1e-12)
+    };
+    let xdot = DVector::from_column_slice(motion.as_slice());
+    let mut dq = &j_pinv * xdot;
+    if guards.iter().any(|g| g.dot(&dq) < 0.0) {
+        dq.fill(0.0);
+    }
+    let z = DVector::from_fn(dof, |k, _| if locked[k] { 0.0 } else { z[k] });
+    if config.alpha > 0.0 && z.iter().any(|v| *v != 0.0) {
+        let null = robot::null_space_projector(&j, &j_pinv);
+        dq += (null * z) * config.alpha;
+    }
+    for (v, l) in dq.iter_mut().zip(locked) {
+        if *l {
+            *v = 0.0;
+        }
+    }
+    dq
 }
 
 #[cfg(test)]
@@ -437,5 +496,54 @@ mod tests {
             &cfg,
         );
         assert!((kept - free).norm() < 1e-12);
+    }
+
+    /// A joint at its limit that eq. 3 would drive further is held there while
+    /// the other joints still move the control point as asked (checked by
+    /// forward kinematics); before, the limit scaling stopped the whole step.
+    #[test]
+    fn a_joint_at_its_limit_is_locked_not_the_whole_step() {
+        let robot = robot::builtin("arm4").unwrap();
+        let cfg = FollowConfig {
+            ceiling_revolute_deg: 1e6,
+            damping: 0.0,
+            ..FollowConfig::default()
+        };
+        let (tool_link, tool) = robot.tool;
+        let tool_point = Point3::from(tool.translation.vector);
+        let lim = robot.limits()[0].unwrap();
+        let q = [lim.max, 0.7, -0.2, 0.9, 0.4, 0.5];
+        let jac = robot.jacobian(&q, tool_link, &tool_point).unwrap();
+        let z = DVector::zeros(6);
+        // A motion the free solution makes with joint 1 turning up its limit.
+        let mut motion = Vector3::new(0.01, 0.0, -0.02);
+        let free = |m: &Vector3| {
+            let j = DMatrix::from_fn(3, 6, |r, c| jac[(r, c)]);
+            robot::pseudo_inverse(&j, 1e-12) * DVector::from_column_slice(m.as_slice())
+        };
+        if free(&motion)[0] < 0.0 {
+            motion = -motion;
+        }
+        assert!(free(&motion)[0] > 1e-4);
+        let dq = actuator_change(&robot, &q, &jac, &motion, &z, &[], &cfg);
+        assert_eq!(dq[0], 0.0, "joint 1 stays on its limit");
+        let cp = |q: &[Real]| robot.tool_pose(q).unwrap() * Point3::origin();
+        let q1: Vec<Real> = q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect();
+        let moved = cp(&q1) - cp(&q);
+        assert!(
+            (moved - motion).norm() < 0.1 * motion.norm(),
+            "moved {moved:?} for {motion:?}"
+        );
+        // The guard judges the motion taken: a guard row that the locked
+        // solution closes on (and the free one does not) stops it.
+        let locked = dq.clone();
+        let f = free(&motion);
+        let g = -&locked + &f * (locked.dot(&f) / f.norm_squared());
+        assert!(g.dot(&f).abs() < 1e-12 && g.dot(&locked) < 0.0);
+        let stopped = actuator_change(&robot, &q, &jac, &motion, &z, &[g], &cfg);
+        assert_eq!(stopped.norm(), 0.0);
+        // Driven off its limit, the joint is free again.
+        let back = actuator_change(&robot, &q, &jac, &-motion, &z, &[], &cfg);
+        assert!(back[0] < 0.0);
     }
 }
