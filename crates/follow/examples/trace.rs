@@ -1,7 +1,10 @@
 //! Follow a built-in scene with a built-in robot in a simulated world and print
 //! what happens (a development aid; `surveyor follow` is the product):
 //! `cargo run --release -p follow --example trace -- cube point3 3000 [noise_m] [alpha]`.
-//! `RLE=1` prints every change of mode, current segment or current edge.
+//! `RLE=1` prints every change of mode, current segment or current edge;
+//! `COLL=1` every collision (`COLLX=1` adds which link points touch, with the
+//! scene's and the model's distance there); `RANGE=a-b` steps a..b in detail
+//! (how far the control point moved against the motion asked).
 
 #[path = "../tests/support/mod.rs"]
 mod support;
@@ -32,6 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut last_key = String::new();
     let t = std::time::Instant::now();
     let mut steps = 0;
+    let mut last_cp = geom::Point3::origin();
     for k in 0..max {
         let step = run.step();
         steps += 1;
@@ -59,6 +63,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             println!("terminated at step {k}: {term:?}");
             break;
         }
+        let prev_cp = last_cp;
+        last_cp = step.control_point;
+        let in_range = std::env::var("RANGE").ok().and_then(|r| {
+            let (a, b) = r.split_once('-')?;
+            Some((a.parse::<usize>().ok()?..b.parse::<usize>().ok()?).contains(&k))
+        });
+        if in_range == Some(true) {
+            let dq = step.dq.iter().map(|d| d * d).sum::<Real>().sqrt();
+            println!(
+                "  {k} {:?} model_distance {:.4} moved ({:.4},{:.4},{:.4}) motion ({:.3},{:.3},{:.3}) |dq| {dq:.4} clear {:?}",
+                step.mode,
+                step.model_distance,
+                step.control_point.x - prev_cp.x,
+                step.control_point.y - prev_cp.y,
+                step.control_point.z - prev_cp.z,
+                step.motion.x,
+                step.motion.y,
+                step.motion.z,
+                step.link_clearance
+            );
+        }
         let c = run.clearance();
         min_clear = min_clear.min(c);
         if c < 0.0 {
@@ -75,6 +100,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     step.dq.iter().map(|d| d * d).sum::<Real>().sqrt(),
                     step.motion.norm()
                 );
+                if std::env::var("COLLX").is_ok() {
+                    run.explain_collision();
+                }
             }
         }
     }

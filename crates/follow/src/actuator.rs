@@ -223,6 +223,10 @@ pub fn reconfiguration(
     z
 }
 
+/// How close to a limit a joint counts as being at it (rad or m): the limit
+/// scaling below stops a joint exactly on its limit, up to rounding.
+const AT_LIMIT: Real = 1e-9;
+
 /// Eq. 3 with the ceilings of P§3.3: `θ̇ = J⁺ẋ + α(I − J⁺J)z`, where `J` is the
 /// 3 × n positional Jacobian of the control point; then the whole vector is
 /// scaled so that its revolute part is at most γ_r and its prismatic part at
@@ -237,6 +241,15 @@ pub fn reconfiguration(
 /// does not stop a link that the control point's motion drags onto an edge
 /// (arm4 brushed block1 in 22 of 1800 steps); the stalled control point then
 /// lets the progress check give the goal up (P§3.4.7).
+///
+/// Joint limits (our addition; P§3.3 has none): a joint already at a limit
+/// that eq. 3 would drive further is locked for the step — its column of `J`
+/// and its entry of `z` are zeroed, so both terms of eq. 3 are solved by the
+/// other joints — and eq. 3, the guard included, is solved again until no
+/// locked joint remains pushed out. The guard is thus checked on the motion
+/// actually taken. Without the lock, the limit scaling alone stops the
+/// whole step for as long as eq. 3 pushes on the limit (arm4 froze with its
+/// yaw at π on block1).
 pub fn actuator_change(
     robot: &Robot,
     q: &[Real],
@@ -247,25 +260,40 @@ pub fn actuator_change(
     config: &FollowConfig,
 ) -> DVector<Real> {
     let dof = robot.dof();
-    let j = DMatrix::from_fn(3, dof, |r, c| jacobian[(r, c)]);
-    let j_pinv = if config.damping > 0.0 {
-        robot::damped_pseudo_inverse(&j, config.damping)
-    } else {
-        robot::pseudo_inverse(&j, 1e-12)
-    };
-    let xdot = DVector::from_column_slice(motion.as_slice());
-    let mut dq = &j_pinv * xdot;
-    if guards.iter().any(|g| g.dot(&dq) < 0.0) {
-        dq.fill(0.0);
+    let limits = robot.limits();
+    let mut locked = vec![false; dof];
+    let mut dq = DVector::zeros(dof);
+    for _ in 0..=dof {
+        dq = eq3(jacobian, motion, z, guards, &locked, config);
+        if !dq.iter().all(|v| v.is_finite()) {
+            return DVector::zeros(dof);
+        }
+        let mut more = false;
+        for (k, lim) in limits.iter().enumerate() {
+            if let (Some(lim), Some(&qk), false) = (lim, q.get(k), locked[k])
+                && ((qk >= lim.max - AT_LIMIT && dq[k] > 0.0)
+                    || (qk <= lim.min + AT_LIMIT && dq[k] < 0.0))
+            {
+                locked[k] = true;
+                more = true;
+            }
+        }
+        if !more {
+            break;
+        }
     }
-    if config.alpha > 0.0 && z.iter().any(|v| *v != 0.0) {
-        let null = robot::null_space_projector(&j, &j_pinv);
-        dq += (null * z) * config.alpha;
+    let dq = &dq * ceiling_scale(robot, q, &dq, config);
+    match second_order(robot, q, &dq, &locked, config) {
+        // The correction is second order; scaling it back under the ceilings
+        // leaves a remainder of the order of the excess times that.
+        Some(fixed) => &fixed * ceiling_scale(robot, q, &fixed, config),
+        None => dq,
     }
-    if !dq.iter().all(|v| v.is_finite()) {
-        return DVector::zeros(dof);
-    }
-    let kinds = robot.joint_kinds();
+}
+
+/// The one factor (≤ 1) that brings `dq` within the ceilings γ_r and γ_p
+/// (P§3.3).
+fn ceiling_factor(kinds: &[JointKind], dq: &DVector<Real>, config: &FollowConfig) -> Real {
     let (mut rev, mut pri) = (0.0, 0.0);
     for (k, kind) in kinds.iter().enumerate() {
         match kind {
@@ -282,6 +310,13 @@ pub fn actuator_change(
     if pri > config.ceiling_prismatic_m {
         scale = scale.min(config.ceiling_prismatic_m / pri);
     }
+    scale
+}
+
+/// The one factor (≤ 1) that brings `dq` within the ceilings γ_r and γ_p
+/// (P§3.3) and keeps every joint within its limits.
+fn ceiling_scale(robot: &Robot, q: &[Real], dq: &DVector<Real>, config: &FollowConfig) -> Real {
+    let mut scale = ceiling_factor(&robot.joint_kinds(), dq, config);
     for (k, lim) in robot.limits().iter().enumerate() {
         if let (Some(lim), Some(&qk)) = (lim, q.get(k)) {
             let step = dq[k] * scale;
@@ -292,7 +327,92 @@ pub fn actuator_change(
             }
         }
     }
-    dq * scale
+    scale
+}
+
+/// Eq. 3 is a rate equation; taken as a finite step of up to γ_r (3.8°) its
+/// control point moves by `J θ̇` only to first order. When the
+/// reconfiguration fills the ceiling, the ceiling shrinks the control-point
+/// term to a sliver and the second-order remainder (millimetres a step on
+/// arm4) outgrows it: the control point crept into block1 while its motion
+/// asked to back off. So the remainder is measured by forward kinematics and
+/// cancelled by one Newton step `J⁺ r` (our gap fill, joints locked as in
+/// eq. 3), which makes the step move the control point as eq. 3 says. The
+/// correction (`None` when there is none to make) is dropped if it is not
+/// small (a second-order term is); the caller scales the result back under
+/// the ceilings and limits.
+fn second_order(
+    robot: &Robot,
+    q: &[Real],
+    dq: &DVector<Real>,
+    locked: &[bool],
+    config: &FollowConfig,
+) -> Option<DVector<Real>> {
+    let (tool_link, tool) = robot.tool;
+    let tool_point = Point3::from(tool.translation.vector);
+    let q1: Vec<Real> = q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect();
+    let (Ok(j0), Ok(j1), Ok(p0), Ok(p1)) = (
+        robot.jacobian(q, tool_link, &tool_point),
+        robot.jacobian(&q1, tool_link, &tool_point),
+        robot.tool_pose(q),
+        robot.tool_pose(&q1),
+    ) else {
+        return None;
+    };
+    let predicted = Vector3::from_fn(|r, _| (0..dq.len()).map(|c| j0[(r, c)] * dq[c]).sum());
+    let residual = predicted - (p1.translation.vector - p0.translation.vector);
+    if residual.norm() < 1e-12 {
+        // A linear robot (point3) or a step too small to matter.
+        return None;
+    }
+    let none = DVector::zeros(dq.len());
+    let fix = eq3(&j1, &residual, &none, &[], locked, config);
+    if !fix.iter().all(|v| v.is_finite()) || fix.norm() > 0.5 * dq.norm() {
+        return None;
+    }
+    Some(dq + fix)
+}
+
+/// Eq. 3 with the joints in `locked` held still (their columns of `J` and
+/// entries of `z` zeroed: `J⁺` then has zero rows and `I − J⁺J` zero
+/// off-diagonal entries for them), the guard applied to its control-point term.
+fn eq3(
+    jacobian: &Matrix6xX<Real>,
+    motion: &Vector3,
+    z: &DVector<Real>,
+    guards: &[DVector<Real>],
+    locked: &[bool],
+    config: &FollowConfig,
+) -> DVector<Real> {
+    let dof = locked.len();
+    let j = DMatrix::from_fn(
+        3,
+        dof,
+        |r, c| {
+            if locked[c] { 0.0 } else { jacobian[(r, c)] }
+        },
+    );
+    let j_pinv = if config.damping > 0.0 {
+        robot::damped_pseudo_inverse(&j, config.damping)
+    } else {
+        robot::pseudo_inverse(&j, 1e-12)
+    };
+    let xdot = DVector::from_column_slice(motion.as_slice());
+    let mut dq = &j_pinv * xdot;
+    if guards.iter().any(|g| g.dot(&dq) < 0.0) {
+        dq.fill(0.0);
+    }
+    let z = DVector::from_fn(dof, |k, _| if locked[k] { 0.0 } else { z[k] });
+    if config.alpha > 0.0 && z.iter().any(|v| *v != 0.0) {
+        let null = robot::null_space_projector(&j, &j_pinv);
+        dq += (null * z) * config.alpha;
+    }
+    for (v, l) in dq.iter_mut().zip(locked) {
+        if *l {
+            *v = 0.0;
+        }
+    }
+    dq
 }
 
 #[cfg(test)]
@@ -392,7 +512,10 @@ mod tests {
             &[],
             &FollowConfig::default(),
         );
-        assert!((capped.norm() - 3.8_f64.to_radians()).abs() < 1e-9);
+        // At the ceiling (the second-order correction may leave it a little
+        // under).
+        let gamma = 3.8_f64.to_radians();
+        assert!(capped.norm() <= gamma + 1e-12 && capped.norm() > 0.99 * gamma);
     }
 
     /// A guarded link that the control-point motion would bring closer stops
@@ -437,5 +560,93 @@ mod tests {
             &cfg,
         );
         assert!((kept - free).norm() < 1e-12);
+    }
+
+    /// A joint at its limit that eq. 3 would drive further is held there while
+    /// the other joints still move the control point as asked (checked by
+    /// forward kinematics); before, the limit scaling stopped the whole step.
+    #[test]
+    fn a_joint_at_its_limit_is_locked_not_the_whole_step() {
+        let robot = robot::builtin("arm4").unwrap();
+        let cfg = FollowConfig {
+            ceiling_revolute_deg: 1e6,
+            damping: 0.0,
+            ..FollowConfig::default()
+        };
+        let (tool_link, tool) = robot.tool;
+        let tool_point = Point3::from(tool.translation.vector);
+        let lim = robot.limits()[0].unwrap();
+        let q = [lim.max, 0.7, -0.2, 0.9, 0.4, 0.5];
+        let jac = robot.jacobian(&q, tool_link, &tool_point).unwrap();
+        let z = DVector::zeros(6);
+        // A motion the free solution makes with joint 1 turning up its limit.
+        let mut motion = Vector3::new(0.01, 0.0, -0.02);
+        let free = |m: &Vector3| {
+            let j = DMatrix::from_fn(3, 6, |r, c| jac[(r, c)]);
+            robot::pseudo_inverse(&j, 1e-12) * DVector::from_column_slice(m.as_slice())
+        };
+        if free(&motion)[0] < 0.0 {
+            motion = -motion;
+        }
+        assert!(free(&motion)[0] > 1e-4);
+        let dq = actuator_change(&robot, &q, &jac, &motion, &z, &[], &cfg);
+        assert_eq!(dq[0], 0.0, "joint 1 stays on its limit");
+        let cp = |q: &[Real]| robot.tool_pose(q).unwrap() * Point3::origin();
+        let q1: Vec<Real> = q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect();
+        let moved = cp(&q1) - cp(&q);
+        assert!(
+            (moved - motion).norm() < 0.1 * motion.norm(),
+            "moved {moved:?} for {motion:?}"
+        );
+        // The guard judges the motion taken: a guard row that the locked
+        // solution closes on (and the free one does not) stops it.
+        let locked = dq.clone();
+        let f = free(&motion);
+        let g = -&locked + &f * (locked.dot(&f) / f.norm_squared());
+        assert!(g.dot(&f).abs() < 1e-12 && g.dot(&locked) < 0.0);
+        let stopped = actuator_change(&robot, &q, &jac, &motion, &z, &[g], &cfg);
+        assert_eq!(stopped.norm(), 0.0);
+        // Driven off its limit, the joint is free again.
+        let back = actuator_change(&robot, &q, &jac, &-motion, &z, &[], &cfg);
+        assert!(back[0] < 0.0);
+    }
+
+    /// A step of eq. 3 moves the control point by the first-order `J θ̇`
+    /// (checked by forward kinematics), even when the reconfiguration fills the
+    /// ceiling: before, a bare null-space step of 3.8° moved it by millimetres.
+    #[test]
+    fn a_full_step_moves_the_control_point_as_asked() {
+        let robot = robot::builtin("arm4").unwrap();
+        let cfg = FollowConfig::default();
+        let (tool_link, tool) = robot.tool;
+        let tool_point = Point3::from(tool.translation.vector);
+        let cp = |q: &[Real]| robot.tool_pose(q).unwrap() * Point3::origin();
+        let z = DVector::from_vec(vec![0.1, -0.2, 0.3, 0.05, -0.1, 0.2]);
+        for (q, motion) in [
+            ([0.3, 0.7, -0.2, 0.9, 0.4, 0.5], Vector3::zeros()),
+            (
+                [1.0, 1.2, 0.4, 1.5, -0.6, 1.1],
+                Vector3::new(0.002, 0.0, -0.001),
+            ),
+        ] {
+            let jac = robot.jacobian(&q, tool_link, &tool_point).unwrap();
+            let dq = actuator_change(&robot, &q, &jac, &motion, &z, &[], &cfg);
+            assert!(dq.norm() > 0.05, "the ceiling is filled");
+            let q1: Vec<Real> = q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect();
+            let moved = cp(&q1) - cp(&q);
+            // The ceiling scales the whole step: the control point moves
+            // along the motion asked, no farther, and nowhere for none.
+            let (along, across) = match geom::unit(motion) {
+                Some(u) => {
+                    let along = moved.dot(&u);
+                    (along, (moved - u.into_inner() * along).norm())
+                }
+                None => (0.0, moved.norm()),
+            };
+            assert!(
+                across < 2e-5 && along >= -2e-5 && along <= motion.norm() + 1e-9,
+                "moved {moved:?} for {motion:?}"
+            );
+        }
     }
 }

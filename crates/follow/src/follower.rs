@@ -727,14 +727,34 @@ impl Follower {
         if let Some(s) = self.state.edge_segment {
             self.state.edge_segment = log.resolve(s);
         }
-        // Marks follow their segments through mergers (a merged segment is a
-        // new segment: its marks are dropped, P§3.4.6).
-        self.marks
-            .unreachable_segments
-            .retain(|s, _| self.model.segment(*s).is_some());
-        self.marks
-            .unclosable_points
-            .retain(|s| self.model.segment(*s).is_some());
+        // Marks follow their segments through mergers as the current segment
+        // does (P§3.4.6 says so only of the current segment; the thesis is
+        // silent on marks). A segment merged with an unreachable one is
+        // unreachable until the control point is brought closest to it
+        // (P§3.4.1's re-marking), and an unclosable point segment stays
+        // unclosable while it is still a point segment. Dropping the marks
+        // let a robot standing still, re-sensing the same points (so merging
+        // its goal every step), take up the goal it just gave up at once.
+        let mut unreachable: BTreeMap<SegmentId, bool> = BTreeMap::new();
+        for (s, left) in std::mem::take(&mut self.marks.unreachable_segments) {
+            if let Some(n) = log.resolve(s)
+                && self.model.segment(n).is_some()
+            {
+                // Still-stuck (`left` false) wins when two marks merge.
+                let e = unreachable.entry(n).or_insert(left);
+                *e = *e && left;
+            }
+        }
+        self.marks.unreachable_segments = unreachable;
+        self.marks.unclosable_points = std::mem::take(&mut self.marks.unclosable_points)
+            .into_iter()
+            .filter_map(|s| log.resolve(s))
+            .filter(|s| {
+                self.model
+                    .segment(*s)
+                    .is_some_and(|g| g.as_point().is_some())
+            })
+            .collect();
         if let Some(e) = self.state.edge
             && changed.contains(&e)
         {
@@ -746,12 +766,25 @@ impl Follower {
         {
             self.state.follow = None;
         }
-        if let Some(path) = &self.state.path {
+        // The path's target and the owners of its edges through mergers, as
+        // the current segment (P§3.4.6): a target merged with new points is
+        // still the goal, and recomputing the path on every merger reset the
+        // progress check (P§3.4.7) of a robot standing still for good.
+        if let Some(path) = self.state.path.as_mut() {
             let from = self.state.path_follow.min(path.edges.len());
             let broken = path.edges[from..].iter().any(|e| changed.contains(&e.key));
-            let target_alive = self.model.segment(path.target).is_some();
-            if broken || !target_alive {
-                self.state.path = None;
+            let target = log
+                .resolve(path.target)
+                .filter(|t| self.model.segment(*t).is_some());
+            match target {
+                Some(t) if !broken => {
+                    path.target = t;
+                    for e in &mut path.edges {
+                        e.segment = log.resolve(e.segment).unwrap_or(e.segment);
+                        e.shared_with = e.shared_with.map(|n| log.resolve(n).unwrap_or(n));
+                    }
+                }
+                _ => self.state.path = None,
             }
         }
         // The current surface: what its members became, and everything now
@@ -1813,5 +1846,96 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// point3 over the floor z = 0 after a few steps: a model with a polygon.
+    fn floor_follower() -> (Follower, SegmentId) {
+        let robot = robot::builtin("point3").unwrap();
+        let model = SurfaceModel::new(surface::SurfaceConfig::default()).unwrap();
+        let mut f =
+            Follower::new(robot, Isometry3::identity(), model, FollowConfig::default()).unwrap();
+        let mut q = vec![0.0, 0.0, 0.15];
+        for _ in 0..20 {
+            let readings: Vec<Option<Point3>> = f
+                .sensor_rays(&q)
+                .unwrap()
+                .iter()
+                .map(|(o, a)| {
+                    let t = -o.z / a.z;
+                    (a.z < 0.0 && t <= 0.2).then(|| o + a.into_inner() * t)
+                })
+                .collect();
+            let step = f.step(&q, &readings).unwrap();
+            for (qi, d) in q.iter_mut().zip(&step.dq) {
+                *qi += d;
+            }
+        }
+        let poly = f
+            .model
+            .segments()
+            .find(|s| s.as_polygon().is_some())
+            .map(surface::Segment::id)
+            .unwrap();
+        (f, poly)
+    }
+
+    /// P§3.4.6: a path whose target was merged keeps going to what the target
+    /// became (before, it was dropped and recomputed, which reset the progress
+    /// check every step of a robot that stood still); one whose target was
+    /// deleted is dropped.
+    #[test]
+    fn the_path_target_follows_mergers() {
+        let (mut f, poly) = floor_follower();
+        let gone = SegmentId(u32::MAX - 1);
+        let other = SegmentId(u32::MAX - 2);
+        assert!(f.model.segment(gone).is_none());
+        let log = ChangeLog {
+            mergers: vec![surface::Merger {
+                from: [gone, other],
+                into: poly,
+            }],
+            ..ChangeLog::default()
+        };
+        let path = EdgePath {
+            edges: Vec::new(),
+            forward: Vec::new(),
+            target: gone,
+        };
+        f.state.path = Some(path.clone());
+        f.track_changes(&log);
+        assert_eq!(f.state.path.as_ref().map(|p| p.target), Some(poly));
+        // Deleted: no successor, no path.
+        f.state.path = Some(path);
+        let log = ChangeLog {
+            deleted: vec![gone],
+            ..ChangeLog::default()
+        };
+        f.track_changes(&log);
+        assert!(f.state.path.is_none());
+    }
+
+    /// Marks follow mergers: an unreachable segment's successor is
+    /// unreachable (its flag kept); an unclosable point segment merged into a
+    /// polygon is not a point any more and its mark goes.
+    #[test]
+    fn segment_marks_follow_mergers() {
+        let (mut f, poly) = floor_follower();
+        let (a, b) = (SegmentId(u32::MAX - 1), SegmentId(u32::MAX - 2));
+        f.marks.unreachable_segments.insert(a, true);
+        f.marks.unclosable_points.insert(b);
+        let log = ChangeLog {
+            mergers: vec![surface::Merger {
+                from: [a, b],
+                into: poly,
+            }],
+            ..ChangeLog::default()
+        };
+        f.track_changes(&log);
+        assert_eq!(
+            f.marks.unreachable_segments.iter().collect::<Vec<_>>(),
+            vec![(&poly, &true)]
+        );
+        assert!(f.marks.unclosable_points.is_empty());
+        assert!(f.segment_complete(poly));
     }
 }

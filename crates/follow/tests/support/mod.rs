@@ -135,4 +135,48 @@ impl Run {
         }
         best
     }
+
+    /// Development aid: for each link touching the scene, where along its
+    /// axis, the true distance there and the model's distance there.
+    #[allow(dead_code)]
+    pub fn explain_collision(&self) {
+        let frames = self.robot.forward_kinematics(&self.q).unwrap();
+        let cp = self.follower.control_point(&self.q).unwrap();
+        for shape in self.robot.posed_collision_shapes(&frames) {
+            if let PosedShape::Capsule { link, capsule } = shape {
+                if link.0 == 0 {
+                    continue;
+                }
+                let c = capsule.transformed(&self.base);
+                for k in 0..=50 {
+                    let t = Real::from(k) / 50.0;
+                    let p = c.segment.point_at(t);
+                    let mut d: Real = 1.0;
+                    for face in self
+                        .scene
+                        .triangles_near(&geom::Aabb::from_points([&p]).loosened(0.2))
+                    {
+                        d = d.min(
+                            self.scene
+                                .mesh()
+                                .triangle(face as usize)
+                                .distance_to_point(&p),
+                        );
+                    }
+                    if d < c.radius {
+                        let m = follow::query::closest_model_point(self.follower.model(), &p, 1.0)
+                            .map_or(Real::INFINITY, |m| m.distance);
+                        println!(
+                            "   link {} t {t:.2} p ({:.3},{:.3},{:.3}) from cp {:.3}: scene {d:.3} model {m:.3}",
+                            link.0,
+                            p.x,
+                            p.y,
+                            p.z,
+                            (p - cp).norm()
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
