@@ -1,7 +1,7 @@
 //! The surface-following episode runner (issue 9) on the built-in scenes:
 //! budgets, recording, determinism, the stop flag, ground-truth safety and
-//! bad options. The follower does not complete surfaces yet, so runs are
-//! bounded by `max_sets` and completion is not asserted.
+//! bad options. Runs here are bounded by `max_sets`; whole runs to the
+//! follower's own end are in `follow_complete.rs`.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may panic
 
 use geom::{Point3, Real};
