@@ -336,8 +336,8 @@ fn fill_window(
     if n >= 4 && three_free && (v3 - v2).norm() < lambda {
         // IV
         if n >= min_left + 2
-            && turn(&d12, &d23) + turn(&d23, &d34) < -MIN_TURN
             && (v4 - v1).norm() < lambda
+            && turn(&d12, &d23) + turn(&d23, &d34) < -MIN_TURN
         {
             candidates.push((
                 FissureType::IV,
@@ -347,7 +347,7 @@ fn fill_window(
         }
         if n > min_left {
             // V: type II on v1 v3 v4.
-            if turn(&(v3 - v1), &d34) < -FRAC_PI_2 && distance_point_segment(&v1, &v3, &v4) < lambda
+            if distance_point_segment(&v1, &v3, &v4) < lambda && turn(&(v3 - v1), &d34) < -FRAC_PI_2
             {
                 let t = param_on_segment(&v1, &v3, &v4);
                 candidates.push((
@@ -360,7 +360,7 @@ fn fill_window(
                 ));
             }
             // VI: type III on v1 v2 v4.
-            if turn(&d12, &(v4 - v2)) < -FRAC_PI_2 && distance_point_segment(&v4, &v1, &v2) < lambda
+            if distance_point_segment(&v4, &v1, &v2) < lambda && turn(&d12, &(v4 - v2)) < -FRAC_PI_2
             {
                 let t = param_on_segment(&v4, &v1, &v2);
                 candidates.push((
@@ -371,9 +371,13 @@ fn fill_window(
             }
         }
     }
-    if two_free {
+    // Cheap distance tests before the turn (an atan2), which most windows never need.
+    let near13 = (v3 - v1).norm() < lambda;
+    let near_12 = |p: &Point2| distance_point_segment(p, &v1, &v2) < lambda;
+    let near_23 = |p: &Point2| distance_point_segment(p, &v2, &v3) < lambda;
+    if two_free && ((n > min_left && near13) || near_23(&v1) || near_12(&v3)) {
         let t2 = turn(&d12, &d23);
-        if n > min_left && t2 < -MIN_TURN && (v3 - v1).norm() < lambda {
+        if n > min_left && t2 < -MIN_TURN && near13 {
             candidates.push((
                 FissureType::I,
                 PerimPoint::vertex(i),

@@ -147,21 +147,14 @@ struct Section {
     length: Real,
 }
 
-/// Sections of `view.poly` starting where `t = t_start` and ending where
-/// `t = t_end`, lying within λ of the line and projecting into the range.
-fn sections(view: &View, t_start: Real, t_end: Real, lambda: Real, eps: Real) -> Vec<Section> {
+/// The perimeter points of `view.poly` where `t = t_start`, within λ of the
+/// line: where the sections of [`sections`] from `t_start` begin. They depend
+/// on `t_start` only, so a search over many ends computes them once.
+fn starts_at(view: &View, t_start: Real, lambda: Real, eps: Real) -> Vec<PerimPoint> {
     let poly = &view.poly;
-    let n = poly.len();
-    let lo = t_start.min(t_end) - eps;
-    let hi = t_start.max(t_end) + eps;
     let in_strip = |p: &Point2| view.h(p).abs() < lambda;
-    let in_range = |p: &Point2| {
-        let t = view.t(p);
-        t >= lo && t <= hi
-    };
-    // Starts.
     let mut starts = Vec::new();
-    for e in 0..n {
+    for e in 0..poly.len() {
         let (a, b) = poly.seg(e);
         let (ta, tb) = (view.t(&a), view.t(&b));
         if (ta - t_start).abs() <= eps {
@@ -176,8 +169,31 @@ fn sections(view: &View, t_start: Real, t_end: Real, lambda: Real, eps: Real) ->
             }
         }
     }
+    starts
+}
+
+/// Sections of `view.poly` starting at `starts` (those of [`starts_at`] for
+/// `t_start`) and ending where `t = t_end`, lying within λ of the line and
+/// projecting into the range.
+fn sections(
+    view: &View,
+    starts: &[PerimPoint],
+    t_start: Real,
+    t_end: Real,
+    lambda: Real,
+    eps: Real,
+) -> Vec<Section> {
+    let poly = &view.poly;
+    let n = poly.len();
+    let lo = t_start.min(t_end) - eps;
+    let hi = t_start.max(t_end) + eps;
+    let in_strip = |p: &Point2| view.h(p).abs() < lambda;
+    let in_range = |p: &Point2| {
+        let t = view.t(p);
+        t >= lo && t <= hi
+    };
     let mut out = Vec::new();
-    for start in starts {
+    for &start in starts {
         let (mut e, mut u0) = (start.edge, start.t);
         for step in 0..=n {
             if step > 0 && e == start.edge && u0 <= start.t {
@@ -481,26 +497,32 @@ impl SurfaceModel {
             strip_cover(&v1, tol.lambda, tol.eps),
             strip_cover(&v2, tol.lambda, tol.eps),
         );
-        let mut candidates: Vec<(Real, Anchor, Anchor)> = Vec::new();
-        for a in &anchors {
-            for b in &anchors {
+        let mut candidates: Vec<(Real, usize, usize)> = Vec::new();
+        for (i, a) in anchors.iter().enumerate() {
+            for (j, b) in anchors.iter().enumerate() {
                 if sigma * (b.t1 - a.t1) > tol.eps
                     && sigma * (b.t2 - a.t2) > tol.eps
                     && covers(&cover1, a.t1, b.t1, tol.eps)
                     && covers(&cover2, b.t2, a.t2, tol.eps)
                 {
-                    candidates.push(((b.t1 - a.t1).abs(), *a, *b));
+                    candidates.push(((b.t1 - a.t1).abs(), i, j));
                 }
             }
         }
         candidates.sort_by(|x, y| y.0.total_cmp(&x.0));
+        // Section starts per anchor (P from a's t₁, Q from b's t₂), found once.
+        let mut starts1: Vec<Option<Vec<PerimPoint>>> = vec![None; anchors.len()];
+        let mut starts2: Vec<Option<Vec<PerimPoint>>> = vec![None; anchors.len()];
         let mut tries = 0;
-        for (_, a, b) in candidates {
-            let secs1 = sections(&v1, a.t1, b.t1, tol.lambda, tol.eps);
+        for (_, i, j) in candidates {
+            let (a, b) = (anchors[i], anchors[j]);
+            let from1 = starts1[i].get_or_insert_with(|| starts_at(&v1, a.t1, tol.lambda, tol.eps));
+            let secs1 = sections(&v1, from1, a.t1, b.t1, tol.lambda, tol.eps);
             if secs1.is_empty() {
                 continue;
             }
-            let secs2 = sections(&v2, b.t2, a.t2, tol.lambda, tol.eps);
+            let from2 = starts2[j].get_or_insert_with(|| starts_at(&v2, b.t2, tol.lambda, tol.eps));
+            let secs2 = sections(&v2, from2, b.t2, a.t2, tol.lambda, tol.eps);
             for sec1 in secs1.iter().take(4) {
                 for sec2 in secs2.iter().take(4) {
                     tries += 1;
@@ -856,7 +878,8 @@ mod tests {
             }
             for &t0 in &ts {
                 for &t1 in &ts {
-                    let secs = sections(&view, t0, t1, lambda, eps);
+                    let starts = starts_at(&view, t0, lambda, eps);
+                    let secs = sections(&view, &starts, t0, t1, lambda, eps);
                     if covers(&cover, t0, t1, eps) {
                         found += usize::from(!secs.is_empty());
                     } else {
