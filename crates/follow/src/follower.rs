@@ -58,9 +58,11 @@ impl Mode {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Termination {
-    /// The current surface is complete (P§3.4: the algorithm's own rule).
+    /// The current surface is complete (P§3.4: the algorithm's own rule) and
+    /// no other incomplete surface lies within sensing range.
     SurfaceComplete,
-    /// The current surface was deleted by surface modelling (P§3.4.6).
+    /// The current surface was deleted by surface modelling (P§3.4.6) and no
+    /// other incomplete surface lies within sensing range.
     SurfaceDeleted,
     /// No incomplete surface within sensing range at the start.
     NoSurfaceInRange,
@@ -894,7 +896,15 @@ impl Follower {
             self.choose_surface(cp)?;
         }
         if self.state.surface.is_empty() {
-            return Err(Termination::SurfaceDeleted);
+            // P§3.4.6 stops when the current surface is deleted; as for a
+            // complete one ([`Self::next_surface`]), an incomplete surface
+            // within sensing range takes its place first.
+            if self.choose_surface(cp).is_err() {
+                return Err(Termination::SurfaceDeleted);
+            }
+            self.state.segment = None;
+            self.state.path = None;
+            self.reset_progress();
         }
         // Mode switches within one step are bounded; a cycle would be a bug,
         // and the step then moves nowhere rather than spinning.
@@ -961,7 +971,7 @@ impl Follower {
                 .filter(|s| !self.segment_complete(*s))
                 .collect();
             if goals.is_empty() {
-                return Flow::Stop(Termination::SurfaceComplete);
+                return self.next_surface(cp);
             }
             if goals.contains(&closest.segment) {
                 return self.reach_segment(closest.segment);
@@ -984,7 +994,7 @@ impl Follower {
                             .then(a.segment.cmp(&b.segment))
                     });
                 let Some(n) = nearest else {
-                    return Flow::Stop(Termination::SurfaceComplete);
+                    return self.next_surface(cp);
                 };
                 if n.distance <= self.config.stray_m {
                     return self.reach_segment(n.segment);
@@ -1024,6 +1034,26 @@ impl Follower {
         let mut owners = vec![e.segment];
         owners.extend(e.shared_with);
         Flow::Go(self.towards_and_along(cp, &e, &along, &owners))
+    }
+
+    /// The current surface is complete. Pudney stops here (Fig. 28); we first
+    /// apply Fig. 28's first line again: an incomplete surface still within
+    /// sensing range becomes the current surface. Under range noise the
+    /// first sets of a face form small polygons whose planes differ by more
+    /// than μ, so they neither merge nor share edges, and every slice of such a
+    /// fragment finds model outside its edges (P§3.4.3): the fragment the
+    /// robot started on was complete after a few steps and the run ended with
+    /// 1 % of the cube modelled. Only an empty neighbourhood ends the run.
+    fn next_surface(&mut self, cp: &Point3) -> Flow {
+        match self.choose_surface(cp) {
+            Ok(()) => {
+                self.state.segment = None;
+                self.state.path = None;
+                self.reset_progress();
+                Flow::Again
+            }
+            Err(_) => Flow::Stop(Termination::SurfaceComplete),
+        }
     }
 
     fn reach_segment(&mut self, s: SegmentId) -> Flow {
