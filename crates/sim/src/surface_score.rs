@@ -286,6 +286,12 @@ pub struct FaceScore {
     pub samples: usize,
     /// Area fraction of the samples within λ of a polygon on the face, `[0, 1]`.
     pub covered_fraction: Real,
+    /// Area fraction of the samples within λ of any model polygon, whatever
+    /// its normal, `[0, 1]` (initial segments excluded). On a curved surface
+    /// the true mesh's facets are narrower than μ, and a polygon spanning
+    /// several of them is "on" only those within μ of its normal; this is
+    /// "within λ of the model" alone (issue 9, acceptance 4).
+    pub within_lambda_fraction: Real,
     /// Model polygons on the face.
     pub polygons: usize,
     /// Angle between the face normal and the normal of the largest polygon on
@@ -340,6 +346,9 @@ pub struct SurfaceScore {
     pub faces: Vec<FaceScore>,
     /// Area-weighted coverage of all counted faces, `[0, 1]`.
     pub coverage: Real,
+    /// Area-weighted [`FaceScore::within_lambda_fraction`] of all counted
+    /// faces, `[0, 1]`.
+    pub within_lambda: Real,
     /// Per true edge between counted faces.
     pub edges: Vec<EdgeScore>,
     /// Length-weighted shared-edge coverage of all those edges, `[0, 1]`
@@ -524,14 +533,18 @@ pub fn score_surface_model(
                 );
             }
             let near = &polys_on_face[f.id];
-            let (mut covered, mut total) = (0.0, 0.0);
+            let within = |i: usize, p: &Point3| {
+                polys[i].bounds.distance_squared_to_point(p) < lambda * lambda
+                    && polys[i].distance(p) < lambda
+            };
+            let (mut covered, mut any, mut total) = (0.0, 0.0, 0.0);
             for (p, w) in &samples {
                 total += w;
-                if near.iter().any(|&i| {
-                    polys[i].bounds.distance_squared_to_point(p) < lambda * lambda
-                        && polys[i].distance(p) < lambda
-                }) {
+                if near.iter().any(|&i| within(i, p)) {
                     covered += w;
+                    any += w;
+                } else if (0..polys.len()).any(|i| !initial[i] && within(i, p)) {
+                    any += w;
                 }
             }
             let largest = near.iter().copied().max_by(|&a, &b| {
@@ -556,6 +569,11 @@ pub fn score_surface_model(
                 } else {
                     0.0
                 },
+                within_lambda_fraction: if total > 0.0 {
+                    (any / total).min(1.0)
+                } else {
+                    0.0
+                },
                 polygons: near.len(),
                 normal_error_deg: largest.and_then(|i| model.polygon(polys[i].id)).map(|p| {
                     p.normal()
@@ -568,15 +586,19 @@ pub fn score_surface_model(
         })
         .collect();
     let total_area: Real = face_scores.iter().map(|f| f.area_m2).sum();
-    let coverage = if total_area > 0.0 {
-        face_scores
-            .iter()
-            .map(|f| f.covered_fraction * f.area_m2)
-            .sum::<Real>()
-            / total_area
-    } else {
-        0.0
+    let area_weighted = |fraction: fn(&FaceScore) -> Real| {
+        if total_area > 0.0 {
+            face_scores
+                .iter()
+                .map(|f| fraction(f) * f.area_m2)
+                .sum::<Real>()
+                / total_area
+        } else {
+            0.0
+        }
     };
+    let coverage = area_weighted(|f| f.covered_fraction);
+    let within_lambda = area_weighted(|f| f.within_lambda_fraction);
 
     // True edges between counted faces with a dihedral angle above μ.
     let mut true_edges: BTreeMap<(usize, usize), Vec<Segment3>> = BTreeMap::new();
@@ -763,6 +785,7 @@ pub fn score_surface_model(
         config: *cfg,
         faces: face_scores,
         coverage,
+        within_lambda,
         edges: edge_scores,
         edge_coverage,
         corners,

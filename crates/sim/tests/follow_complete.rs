@@ -191,3 +191,42 @@ fn ur5_follows_the_cube_without_contact() {
         100.0 * top.covered_fraction
     );
 }
+
+/// Acceptance 4: point3 completes the cylinder (Pudney: 13 004 sets) with
+/// ≥ 90 % of its side and top within λ of the model (distance alone: the
+/// model's facets span several of the true mesh's, so per-facet coverage with
+/// normals within μ says less here). Sets and contacts are printed; the run
+/// needs more than the CLI's default budget of 20 000 sets, and it still has
+/// one contact of point3's body with the top rim, where the model lagged the
+/// surface (issue 9 keeps this open).
+#[test]
+#[ignore = "whole run: release profile, run by .ci/run"]
+fn point3_completes_the_cylinder_within_lambda() {
+    let options = FollowRunOptions {
+        robot: Some("point3".to_owned()),
+        max_sets: 80_000,
+        timings: false,
+        ..FollowRunOptions::default()
+    };
+    let setup = FollowSetup::from_scenario(&Scenario::load("cylinder").unwrap(), &options).unwrap();
+    let run = setup.run(&AtomicBool::new(false), &mut |_, _| {}).unwrap();
+    let score = run.score.as_ref().expect("a built-in scene is scored");
+    println!(
+        "cylinder / point3: {} sets (Pudney 13004), {:?}, {} contact(s), within λ {:.1} %, faces on within μ {:.1} %",
+        run.episode.rows.len(),
+        run.episode.end,
+        run.episode.collisions.len(),
+        100.0 * score.within_lambda,
+        100.0 * score.coverage
+    );
+    assert_eq!(
+        run.episode.end,
+        RunEnd::Follower(Termination::SurfaceComplete)
+    );
+    assert!(score.faces.len() > 10, "the side is counted facet by facet");
+    assert!(
+        score.within_lambda >= 0.9,
+        "{:.1} % within λ",
+        100.0 * score.within_lambda
+    );
+}

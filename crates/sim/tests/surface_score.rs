@@ -382,3 +382,49 @@ fn block1_faces_edges_and_corners() {
     assert_eq!(r.corners.len(), 8);
     assert!(r.corners.iter().any(|c| c.position == [0.0, 0.35, 0.4]));
 }
+
+/// "Within λ of the model" counts any model polygon, whatever its normal; the
+/// per-face coverage counts only polygons on the face (normal within μ).
+/// Oracle by hand: a polygon modelled from points on a plane tilted 15° (more
+/// than μ = 10°) about the y axis through the top's centre, over |x|, |y| ≤
+/// 0.1, lies at most 0.1·tan 15° = 27 mm off the top: it is on no face (per-face
+/// coverage 0 everywhere), while the top's samples within λ of it cover at least
+/// its footprint (0.2 m × 0.2 m of the 1 m² top, less what the modelled perimeter
+/// cuts off) and at most the footprint grown by λ on every side (0.3 m × 0.3 m).
+#[test]
+fn within_lambda_counts_polygons_of_any_normal() {
+    let s = scene("cube");
+    let cfg = SurfaceScoreConfig::default();
+    let tan = 15f64.to_radians().tan();
+    let mut m = SurfaceModel::new(SurfaceConfig::default()).unwrap();
+    let axis = geom::unit(Vector3::new(tan, 0.0, -1.0)).unwrap();
+    let points = rows(10, |a, b| {
+        let (x, y) = (-0.1 + 0.2 * a, -0.1 + 0.2 * b);
+        p(x, y, 1.0 + tan * x)
+    });
+    for chunk in points.chunks(11) {
+        let set = SensorSet::new(chunk.to_vec(), vec![axis; chunk.len()]).unwrap();
+        m.update(&set).unwrap();
+    }
+    let polys: Vec<_> = m.segments().filter_map(|g| g.as_polygon()).collect();
+    assert_eq!(polys.len(), 1, "one polygon from the tilted raster");
+    assert!(polys[0].normal().z < 10f64.to_radians().cos());
+    let r = score_surface_model(&s, &m, &cfg, &not_resting_on(0.0)).unwrap();
+    assert_eq!(r.coverage, 0.0);
+    let faces = true_faces(&s);
+    let top = face_with_normal(&faces, [0.0, 0.0, 1.0]).id;
+    for f in &r.faces {
+        assert_eq!(f.covered_fraction, 0.0, "{f:?}");
+        if f.face == top {
+            let area = polys[0].area() * polys[0].normal().z;
+            assert!(
+                f.within_lambda_fraction >= area - 1e-3 && f.within_lambda_fraction <= 0.09,
+                "{} (footprint {area})",
+                f.within_lambda_fraction
+            );
+        } else {
+            assert!(f.within_lambda_fraction < 0.02, "{f:?}");
+        }
+    }
+    assert!(r.within_lambda > 0.0 && r.within_lambda < 0.09 / 5.0 + 1e-9);
+}

@@ -219,9 +219,10 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     )?;
     if let Some(score) = &run.score {
         say!(
-            "model: {} segments; coverage {:.1}% of the counted faces, shared edges {:.1}%, {} of {} corners",
+            "model: {} segments; coverage {:.1}% of the counted faces ({:.1}% within λ of any polygon), shared edges {:.1}%, {} of {} corners",
             run.model.len(),
             100.0 * score.coverage,
+            100.0 * score.within_lambda,
             100.0 * score.edge_coverage,
             score.corners_found,
             score.corners.len()
