@@ -387,7 +387,7 @@ fn scenario_files_run_a_urdf_arm_and_a_point_cloud_world() {
     assert_eq!(json(&ur5, "run.json")["collisions"], 0);
     // A point-cloud world has no true surface: no collisions or score to report.
     let cloud = dir.path().join("cloud");
-    ok(&[
+    let said = ok(&[
         "follow",
         "--scenario",
         &data("scenarios/mosd_boxes.toml"),
@@ -399,4 +399,18 @@ fn scenario_files_run_a_urdf_arm_and_a_point_cloud_world() {
     let r = json(&cloud, "run.json");
     assert!(r["collisions"].is_null() && r["score"].is_null() && r["min_clearance_m"].is_null());
     assert_eq!(r["robot"], "point3");
+    // It is measured against the scan points instead: point3's 0.02 m body
+    // starts 0.1 m above a box top, so about 0.08 m clear.
+    assert!(
+        said.contains("scan: links at least") && said.contains("model polygons"),
+        "{said}"
+    );
+    let c = r["min_scan_clearance_m"].as_f64().unwrap();
+    assert!(c > 0.05 && c < 0.1, "{c}");
+    assert!(r["scan_close_poses"].is_u64());
+    assert!(r["model_to_scan"].is_object());
+    assert!(r["model_to_scan_within_lambda"].is_f64());
+    // A mesh world leaves them null.
+    let u = json(&ur5, "run.json");
+    assert!(u["min_scan_clearance_m"].is_null() && u["model_to_scan"].is_null());
 }

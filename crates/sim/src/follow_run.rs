@@ -22,6 +22,9 @@
 
 use crate::rig::{Arm, RangeSensors};
 use crate::safety::{min_clearance, motion_contacts, robot_contacts, smallest_link_radius};
+use crate::scan_check::{
+    ModelScanConfig, ModelScanScore, ScanIndex, model_to_scan, scan_clearance,
+};
 use crate::scenario::{LoadedScenario, build_robot, scene_mesh_loader};
 use crate::surface_score::{SurfaceScore, SurfaceScoreConfig, not_resting_on, score_surface_model};
 use crate::{SimError, SimRig};
@@ -486,8 +489,11 @@ impl FollowSetup {
     }
 
     /// Run the episode (see [`run_episode`]) and score the model against the
-    /// ground truth when the world is a mesh scene. `progress` is called after
-    /// every step; raising `stop` ends the run after the current step.
+    /// ground truth when the world is a mesh scene; when it is a point cloud,
+    /// measure the links' clearance from the scan points at every pose and
+    /// the model polygons' distances to the scan ([`model_to_scan`], with the
+    /// surface model's λ). `progress` is called after every step; raising
+    /// `stop` ends the run after the current step.
     pub fn run(
         mut self,
         stop: &AtomicBool,
@@ -499,10 +505,19 @@ impl FollowSetup {
             scene,
             world_from_base: self.rig.world_from_base(),
         });
+        let scan_index = match world.as_ref() {
+            World::Cloud(c) => Some(ScanIndex::new(&c.cloud().points)?),
+            World::Mesh(_) => None,
+        };
+        let scan = scan_index.as_ref().map(|scan| ScanTruth {
+            scan,
+            world_from_base: self.rig.world_from_base(),
+        });
         let episode = run_episode(
             &mut self.rig,
             &mut follower,
             truth.as_ref(),
+            scan.as_ref(),
             self.options.max_sets,
             stop,
             progress,
@@ -524,6 +539,16 @@ impl FollowSetup {
             }
             None => None,
         };
+        let scan_score = match &scan_index {
+            Some(index) => {
+                let cfg = ModelScanConfig {
+                    lambda_m: follower.model().config().lambda,
+                    ..ModelScanConfig::default()
+                };
+                Some(model_to_scan(follower.model(), index, &cfg)?)
+            }
+            None => None,
+        };
         let robot = follower.robot().name.clone();
         let end_control_point = follower.control_point(&episode.end_joints)?;
         Ok(FollowRun {
@@ -535,6 +560,7 @@ impl FollowSetup {
             episode,
             model: follower.into_model(),
             score,
+            scan_score,
         })
     }
 }
@@ -607,6 +633,16 @@ impl From<SceneError> for FollowRunError {
 pub struct GroundTruth<'a> {
     /// The scene's surfaces.
     pub scene: &'a Scene,
+    /// Where the robot's base stands.
+    pub world_from_base: Isometry3,
+}
+
+/// A real scan standing in for the truth (point-cloud worlds): the robot's
+/// clearance from its points is measured at every pose.
+#[derive(Clone, Copy, Debug)]
+pub struct ScanTruth<'a> {
+    /// The scan points (world frame).
+    pub scan: &'a ScanIndex,
     /// Where the robot's base stands.
     pub world_from_base: Isometry3,
 }
@@ -690,6 +726,23 @@ pub struct Episode {
     pub min_clearance_m: Option<Real>,
     /// Configurations checked along the motions.
     pub motion_checks: usize,
+    /// Smallest distance of the link capsules (links ≥ 1) from the scan points
+    /// over the poses visited ([`scan_clearance`]); `None` without a scan or
+    /// without link capsules.
+    pub min_scan_clearance_m: Option<Real>,
+    /// Poses (the start included) at which a link capsule came closer than
+    /// δ/2 (half the follower's desired distance) to a scan point; `None`
+    /// without a scan or without link capsules.
+    pub scan_close_poses: Option<usize>,
+}
+
+/// What [`run_episode`] measures at every pose.
+#[derive(Default)]
+struct PoseTally {
+    collisions: Vec<Collision>,
+    min_clear: Option<Real>,
+    min_scan: Option<Real>,
+    scan_close: usize,
 }
 
 /// Drive `follower` through the hardware until it terminates, `max_sets`
@@ -698,6 +751,9 @@ pub struct Episode {
 /// new pose ([`robot_contacts`]) and the straight joint motion to it
 /// ([`motion_contacts`], steps of half the smallest link radius, or
 /// [`MOTION_STEP_WITHOUT_CAPSULES_M`]) against `truth`, record the row, move.
+/// With a `scan` (a point-cloud world has no solid truth) every pose's link
+/// clearance from the scan points is measured instead ([`scan_clearance`]),
+/// and the poses closer than δ/2 (the follower's desired distance) counted.
 ///
 /// Errors before the first step (reading the joints, the start pose's
 /// checks) are returned; a failure once the run is under way ends it with
@@ -706,6 +762,7 @@ pub fn run_episode<H: Arm + RangeSensors>(
     hw: &mut H,
     follower: &mut Follower,
     truth: Option<&GroundTruth<'_>>,
+    scan: Option<&ScanTruth<'_>>,
     max_sets: u64,
     stop: &AtomicBool,
     progress: &mut dyn FnMut(&StepRow, &Follower),
@@ -715,37 +772,44 @@ pub fn run_episode<H: Arm + RangeSensors>(
         smallest_link_radius(&robot).map_or(MOTION_STEP_WITHOUT_CAPSULES_M, |r| 0.5 * r);
     let mut q = hw.joints();
     robot.check_joints(&q).map_err(SimError::from)?;
+    let scan_close_m = 0.5 * follower.config().desired_distance_m;
     let mut rows = Vec::new();
-    let mut collisions = Vec::new();
-    let mut min_clear: Option<Real> = None;
+    let mut tally = PoseTally::default();
     let mut motion_checks = 0;
     let mut frames = Vec::with_capacity(robot.links.len());
-    let mut check_pose = |q: &[Real],
-                          step: Option<u64>,
-                          collisions: &mut Vec<Collision>,
-                          min_clear: &mut Option<Real>|
-     -> Result<(), FollowRunError> {
-        if let Some(t) = truth {
-            robot.fk_into(q, &mut frames).map_err(SimError::from)?;
-            for c in robot_contacts(&robot, &frames, &t.world_from_base, t.scene) {
-                collisions.push(Collision {
-                    step,
-                    link: robot.links[c.link.0].name.clone(),
-                    t: 1.0,
-                });
+    let mut check_pose =
+        |q: &[Real], step: Option<u64>, tally: &mut PoseTally| -> Result<(), FollowRunError> {
+            if truth.is_some() || scan.is_some() {
+                robot.fk_into(q, &mut frames).map_err(SimError::from)?;
             }
-            let d = min_clearance(
-                &robot,
-                &frames,
-                &t.world_from_base,
-                t.scene,
-                CLEARANCE_SEARCH_M,
-            );
-            *min_clear = Some(min_clear.map_or(d, |m: Real| m.min(d)));
-        }
-        Ok(())
-    };
-    check_pose(&q, None, &mut collisions, &mut min_clear)?;
+            if let Some(s) = scan
+                && let Some(d) = scan_clearance(&robot, &frames, &s.world_from_base, s.scan)
+            {
+                tally.min_scan = Some(tally.min_scan.map_or(d, |m: Real| m.min(d)));
+                if d < scan_close_m {
+                    tally.scan_close += 1;
+                }
+            }
+            if let Some(t) = truth {
+                for c in robot_contacts(&robot, &frames, &t.world_from_base, t.scene) {
+                    tally.collisions.push(Collision {
+                        step,
+                        link: robot.links[c.link.0].name.clone(),
+                        t: 1.0,
+                    });
+                }
+                let d = min_clearance(
+                    &robot,
+                    &frames,
+                    &t.world_from_base,
+                    t.scene,
+                    CLEARANCE_SEARCH_M,
+                );
+                tally.min_clear = Some(tally.min_clear.map_or(d, |m: Real| m.min(d)));
+            }
+            Ok(())
+        };
+    check_pose(&q, None, &mut tally)?;
     let end = loop {
         if stop.load(Ordering::Relaxed) {
             break RunEnd::Interrupted;
@@ -792,7 +856,7 @@ pub fn run_episode<H: Arm + RangeSensors>(
                     // stops at the first contact, so a motion that starts in
                     // contact is not searched further.)
                     if let Some(c) = m.first_contact.filter(|c| c.t > 0.0 && c.t < 1.0) {
-                        collisions.push(Collision {
+                        tally.collisions.push(Collision {
                             step: Some(n),
                             link: robot.links[c.contact.link.0].name.clone(),
                             t: c.t,
@@ -806,20 +870,23 @@ pub fn run_episode<H: Arm + RangeSensors>(
             break RunEnd::Error(format!("step {n}: moving to the next pose: {e}"));
         }
         q = hw.joints();
-        if let Err(e) = check_pose(&q, Some(n), &mut collisions, &mut min_clear) {
+        if let Err(e) = check_pose(&q, Some(n), &mut tally) {
             break RunEnd::Error(e.to_string());
         }
         if let Some(r) = rows.last() {
             progress(r, follower);
         }
     };
+    let measured_scan = scan.is_some() && tally.min_scan.is_some();
     Ok(Episode {
         rows,
         end,
         end_joints: q,
-        collisions,
-        min_clearance_m: min_clear,
+        collisions: tally.collisions,
+        min_clearance_m: tally.min_clear,
         motion_checks,
+        min_scan_clearance_m: tally.min_scan,
+        scan_close_poses: measured_scan.then_some(tally.scan_close),
     })
 }
 
@@ -842,6 +909,8 @@ pub struct FollowRun {
     pub model: SurfaceModel,
     /// The model scored against the true scene (`None` for point-cloud worlds).
     pub score: Option<SurfaceScore>,
+    /// The model's polygons against the scan points (point-cloud worlds only).
+    pub scan_score: Option<ModelScanScore>,
 }
 
 /// Mean, median and 95th percentile of step times, microseconds.
@@ -900,6 +969,19 @@ pub struct RunJson<'a> {
     pub collision_list: &'a [Collision],
     /// Smallest ground-truth clearance of the links, metres.
     pub min_clearance_m: Option<Real>,
+    /// Point-cloud worlds: smallest distance of the link capsules from the
+    /// scan points over the poses visited, metres (`null` for mesh worlds).
+    pub min_scan_clearance_m: Option<Real>,
+    /// Point-cloud worlds: poses at which a link capsule came closer than
+    /// δ/2 to a scan point (`null` for mesh worlds).
+    pub scan_close_poses: Option<usize>,
+    /// Point-cloud worlds: the largest distance from a non-initial model
+    /// polygon to the nearest scan point, metres (`null` for mesh worlds or
+    /// without such polygons; details in `model_to_scan`).
+    pub model_to_scan_max_m: Option<Real>,
+    /// Point-cloud worlds: the area fraction of the non-initial model
+    /// polygons within λ of a scan point (`null` for mesh worlds).
+    pub model_to_scan_within_lambda: Option<Real>,
     /// Configurations checked along the motions.
     pub motion_checks: usize,
     /// Wall time per step (update + direction + kinematics), µs.
@@ -916,6 +998,9 @@ pub struct RunJson<'a> {
     pub model: surface::ModelStats,
     /// The model scored against the ground truth (mesh worlds).
     pub score: Option<&'a SurfaceScore>,
+    /// The model's polygons against the scan points, per polygon
+    /// (point-cloud worlds).
+    pub model_to_scan: Option<&'a ModelScanScore>,
     /// The options (with the configuration in effect).
     pub options: &'a FollowRunOptions,
 }
@@ -971,6 +1056,10 @@ impl FollowRun {
             }),
             collision_list: &self.episode.collisions,
             min_clearance_m: self.episode.min_clearance_m,
+            min_scan_clearance_m: self.episode.min_scan_clearance_m,
+            scan_close_poses: self.episode.scan_close_poses,
+            model_to_scan_max_m: self.scan_score.as_ref().and_then(|s| s.max_m),
+            model_to_scan_within_lambda: self.scan_score.as_ref().map(|s| s.within_lambda_fraction),
             motion_checks: self.episode.motion_checks,
             step_us: StepTimeStats::from_micros(&self.step_micros()),
             part_mean_us: parts,
@@ -979,6 +1068,7 @@ impl FollowRun {
             end_joints: &self.episode.end_joints,
             model: self.model.stats(),
             score: self.score.as_ref(),
+            model_to_scan: self.scan_score.as_ref(),
             options: &self.options,
         }
     }

@@ -10,6 +10,7 @@
 //! | [`metrics`] | [`metrics::coverage`], [`metrics::accuracy`] against the ground truth |
 //! | [`safety`] | [`safety::robot_contacts`]: the robot's link shapes against the scene; [`safety::motion_contacts`] along a joint-space motion |
 //! | [`range_sensors`] | [`range_sensors::RangeSensorsSpec`]: a scenario's range finders (single and rings) and range noise |
+//! | [`scan_check`] | [`scan_check::ScanIndex`] (kd-tree over scan points), [`scan_check::scan_clearance`] (link capsules against a scan), [`scan_check::model_to_scan`] (model polygons against a scan) |
 //! | [`surface_score`] | [`surface_score::score_surface_model`]: a surface model against the true faces, edges and corners |
 //! | [`table_fit`] | [`table_fit::fit_table`]: a table plane fitted to scan points, as world frame and initial segment |
 //! | [`scan_job`] | the `surveyor scan` job as library calls |
@@ -20,6 +21,7 @@ pub mod metrics;
 pub mod range_sensors;
 pub mod rig;
 pub mod safety;
+pub mod scan_check;
 pub mod scan_job;
 pub mod scenario;
 pub mod surface_score;

@@ -20,7 +20,10 @@ Outputs in --out: surface_model.json and surface_model.obj (the model), steps.cs
 step: step, mode, x, y, z, q1..qn, set_size, update_us, direction_us, kinematics_us, \
 link_clearance_m, current_segment, current_edge), path.ply (the control-point path, vertices \
 and edges) and run.json (sets, steps, completed, termination, collisions, min_clearance_m, \
-step_us, modes, the score against the true scene, the options).
+step_us, modes, the score against the true scene, the options; for a point-cloud world, \
+which has no true surface, min_scan_clearance_m and scan_close_poses: the links' clearance \
+from the scan points and the poses closer than δ/2, and model_to_scan_max_m, \
+model_to_scan_within_lambda and model_to_scan: the model polygons' distances to the scan).
 
 The same inputs and --seed give the same run; only the wall-clock columns of steps.csv \
 (update_us, direction_us, kinematics_us) differ. With --no-timings they are written empty, \
@@ -227,6 +230,26 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
             score.corners_found,
             score.corners.len()
         )?;
+    }
+    if let Some(scan) = &run.scan_score {
+        let clearance = match (summary.min_scan_clearance_m, summary.scan_close_poses) {
+            (Some(d), Some(n)) => format!(
+                "links at least {d:.4} m from the scan points ({n} poses closer than δ/2 = {:.3} m)",
+                0.5 * run.options.config.follow.desired_distance_m
+            ),
+            _ => "link clearance from the scan not measured (no link capsules)".to_owned(),
+        };
+        let model = match scan.max_m {
+            Some(m) => format!(
+                "model polygons at most {m:.4} m from the scan, {:.1}% of their area within λ = {} m, {} of {} polygons beyond λ",
+                100.0 * scan.within_lambda_fraction,
+                scan.config.lambda_m,
+                scan.polygons_beyond_lambda,
+                scan.polygons.len()
+            ),
+            None => "no model polygons to check against the scan".to_owned(),
+        };
+        say!("scan: {clearance}; {model}")?;
     }
     if let RunEnd::Error(e) = &run.episode.end {
         bail!(
