@@ -4,7 +4,8 @@
 //! `RLE=1` prints every change of mode, current segment or current edge;
 //! `COLL=1` every collision (`COLLX=1` adds which link points touch, with the
 //! scene's and the model's distance there); `RANGE=a-b` steps a..b in detail
-//! (how far the control point moved against the motion asked).
+//! (how far the control point moved against the motion asked); `SENS=a-b` the
+//! control point's range finders before steps a..b.
 
 #[path = "../tests/support/mod.rs"]
 mod support;
@@ -37,6 +38,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut steps = 0;
     let mut last_cp = geom::Point3::origin();
     for k in 0..max {
+        let sens = std::env::var("SENS").ok().and_then(|r| {
+            let (a, b) = r.split_once('-')?;
+            Some((a.parse::<usize>().ok()?..b.parse::<usize>().ok()?).contains(&k))
+        });
+        if sens == Some(true) {
+            // The control point's range finders (the first ones): ray and reading.
+            let rays = run.follower.sensor_rays(&run.q)?;
+            let readings = run.readings();
+            for (i, ((o, a), r)) in rays.iter().zip(&readings).enumerate().take(17) {
+                println!(
+                    "    sensor {i:2} from ({:.3},{:.3},{:.3}) axis ({:.2},{:.2},{:.2}) {}",
+                    o.x,
+                    o.y,
+                    o.z,
+                    a.x,
+                    a.y,
+                    a.z,
+                    r.map_or("-".to_owned(), |p| format!("hit at {:.3}", (p - o).norm()))
+                );
+            }
+        }
         let step = run.step();
         steps += 1;
         parts[0] += step.times.update_us;
@@ -62,6 +84,37 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if let Some(term) = step.termination {
             println!("terminated at step {k}: {term:?}");
             break;
+        }
+        if std::env::var("NEAR")
+            .ok()
+            .and_then(|v| v.parse::<usize>().ok())
+            == Some(k)
+        {
+            // The segments near the control point after this step's update.
+            let cp = step.control_point;
+            let model = run.follower.model();
+            for g in model.segments() {
+                if let Some(c) = follow::query::closest_on_segment(model, g.id(), &cp)
+                    && c.distance < 0.2
+                {
+                    println!(
+                        "    near {:?}: {} points, {}, closest ({:.3},{:.3},{:.3}) at {:.3}",
+                        g.id(),
+                        g.points(),
+                        g.as_polygon().map_or("point".to_owned(), |p| format!(
+                            "polygon n ({:.2},{:.2},{:.2}) {} vertices",
+                            p.normal().x,
+                            p.normal().y,
+                            p.normal().z,
+                            p.len()
+                        )),
+                        c.point.x,
+                        c.point.y,
+                        c.point.z,
+                        c.distance
+                    );
+                }
+            }
         }
         let prev_cp = last_cp;
         last_cp = step.control_point;
