@@ -42,10 +42,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let (a, b) = r.split_once('-')?;
             Some((a.parse::<usize>().ok()?..b.parse::<usize>().ok()?).contains(&k))
         });
+        let mut sensed = Vec::new();
         if sens == Some(true) {
             // The control point's range finders (the first ones): ray and reading.
             let rays = run.follower.sensor_rays(&run.q)?;
             let readings = run.readings();
+            sensed = readings.iter().flatten().copied().collect();
             for (i, ((o, a), r)) in rays.iter().zip(&readings).enumerate().take(17) {
                 println!(
                     "    sensor {i:2} from ({:.3},{:.3},{:.3}) axis ({:.2},{:.2},{:.2}) {}",
@@ -61,6 +63,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let step = run.step();
         steps += 1;
+        for p in &sensed {
+            // Where each point sensed for this step lies in the updated model.
+            let model = run.follower.model();
+            if let Some(c) = follow::query::closest_model_point(model, p, 1.0) {
+                println!(
+                    "    sensed ({:.3},{:.3},{:.3}): nearest model {:?} {:.3} away",
+                    p.x, p.y, p.z, c.segment, c.distance
+                );
+            }
+        }
         parts[0] += step.times.update_us;
         parts[1] += step.times.direction_us;
         parts[2] += step.times.kinematics_us;
