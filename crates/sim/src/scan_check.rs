@@ -420,16 +420,12 @@ pub fn model_to_scan(
         .map(|(id, frame, v, area)| score_polygon(Some(*id), frame, v, *area, scan, cfg))
         .collect();
     let max_m = polygons.iter().map(|p| p.max_m).reduce(Real::max);
-    let area: Real = polygons.iter().map(|p| p.area_m2).sum();
-    let within_lambda_fraction = if area > 0.0 {
+    let within_lambda_fraction = crate::surface_score::weighted_mean(
         polygons
             .iter()
-            .map(|p| p.within_lambda_fraction * p.area_m2)
-            .sum::<Real>()
-            / area
-    } else {
-        1.0
-    };
+            .map(|p| (p.within_lambda_fraction, p.area_m2)),
+        1.0,
+    );
     Ok(ModelScanScore {
         config: *cfg,
         polygons_beyond_lambda: polygons.iter().filter(|p| !p.within_lambda).count(),

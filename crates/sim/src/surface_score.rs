@@ -439,6 +439,20 @@ fn triangle_samples(tri: &geom::Triangle, spacing: Real, out: &mut Vec<(Point3, 
     }
 }
 
+/// The weighted mean of `(value, weight)` pairs; `empty` when the weights sum
+/// to zero (area- or length-weighted fractions of faces, edges, polygons).
+pub(crate) fn weighted_mean(
+    pairs: impl Iterator<Item = (Real, Real)> + Clone,
+    empty: Real,
+) -> Real {
+    let total: Real = pairs.clone().map(|(_, w)| w).sum();
+    if total > 0.0 {
+        pairs.map(|(v, w)| v * w).sum::<Real>() / total
+    } else {
+        empty
+    }
+}
+
 fn estimated_samples(area: Real, spacing: Real) -> Real {
     area / (spacing * spacing)
 }
@@ -585,20 +599,16 @@ pub fn score_surface_model(
             }
         })
         .collect();
-    let total_area: Real = face_scores.iter().map(|f| f.area_m2).sum();
-    let area_weighted = |fraction: fn(&FaceScore) -> Real| {
-        if total_area > 0.0 {
-            face_scores
-                .iter()
-                .map(|f| fraction(f) * f.area_m2)
-                .sum::<Real>()
-                / total_area
-        } else {
-            0.0
-        }
-    };
-    let coverage = area_weighted(|f| f.covered_fraction);
-    let within_lambda = area_weighted(|f| f.within_lambda_fraction);
+    let coverage = weighted_mean(
+        face_scores.iter().map(|f| (f.covered_fraction, f.area_m2)),
+        0.0,
+    );
+    let within_lambda = weighted_mean(
+        face_scores
+            .iter()
+            .map(|f| (f.within_lambda_fraction, f.area_m2)),
+        0.0,
+    );
 
     // True edges between counted faces with a dihedral angle above μ.
     let mut true_edges: BTreeMap<(usize, usize), Vec<Segment3>> = BTreeMap::new();
@@ -692,16 +702,10 @@ pub fn score_surface_model(
             }
         })
         .collect();
-    let total_len: Real = edge_scores.iter().map(|e| e.length_m).sum();
-    let edge_coverage = if total_len > 0.0 {
-        edge_scores
-            .iter()
-            .map(|e| e.covered_fraction * e.length_m)
-            .sum::<Real>()
-            / total_len
-    } else {
-        1.0
-    };
+    let edge_coverage = weighted_mean(
+        edge_scores.iter().map(|e| (e.covered_fraction, e.length_m)),
+        1.0,
+    );
 
     // Corners: vertices where three faces with pairwise angles above μ meet.
     let corner_vertices: Vec<Point3> = polys

@@ -24,13 +24,23 @@ fn run_to_the_end(scenario: &str, robot: &str) -> FollowRun {
 
 /// A whole run with range noise σ (`None`: noise-free) drawn from `seed`.
 fn run_noisy(scenario: &str, robot: &str, noise_sigma_m: Option<f64>, seed: u64) -> FollowRun {
+    run_with(
+        scenario,
+        FollowRunOptions {
+            robot: Some(robot.to_owned()),
+            noise_sigma_m,
+            seed,
+            ..FollowRunOptions::default()
+        },
+    )
+}
+
+/// A whole run of `scenario` (a name or file) with `options`, timings off (the
+/// default budget is the CLI's, 20 000 sets).
+fn run_with(scenario: &str, options: FollowRunOptions) -> FollowRun {
     let options = FollowRunOptions {
-        robot: Some(robot.to_owned()),
-        max_sets: 20_000,
         timings: false,
-        noise_sigma_m,
-        seed,
-        ..FollowRunOptions::default()
+        ..options
     };
     let setup = FollowSetup::from_scenario(&Scenario::load(scenario).unwrap(), &options).unwrap();
     setup.run(&AtomicBool::new(false), &mut |_, _| {}).unwrap()
@@ -150,13 +160,7 @@ fn ur5_follows_the_cube_without_contact() {
         env!("CARGO_MANIFEST_DIR"),
         "/../../data/scenarios/ur5_cube.toml"
     );
-    let options = FollowRunOptions {
-        max_sets: 20_000,
-        timings: false,
-        ..FollowRunOptions::default()
-    };
-    let setup = FollowSetup::from_scenario(&Scenario::load(scenario).unwrap(), &options).unwrap();
-    let run = setup.run(&AtomicBool::new(false), &mut |_, _| {}).unwrap();
+    let run = run_with(scenario, FollowRunOptions::default());
     let score = run.score.as_ref().expect("the scenario's scene is scored");
     println!(
         "UR5 / cube: {} sets, {:?}, min clearance {:?} m, coverage {:.1} %, faces {:?}",
@@ -202,14 +206,14 @@ fn ur5_follows_the_cube_without_contact() {
 #[test]
 #[ignore = "whole run: release profile, run by .ci/run"]
 fn point3_completes_the_cylinder_within_lambda() {
-    let options = FollowRunOptions {
-        robot: Some("point3".to_owned()),
-        max_sets: 80_000,
-        timings: false,
-        ..FollowRunOptions::default()
-    };
-    let setup = FollowSetup::from_scenario(&Scenario::load("cylinder").unwrap(), &options).unwrap();
-    let run = setup.run(&AtomicBool::new(false), &mut |_, _| {}).unwrap();
+    let run = run_with(
+        "cylinder",
+        FollowRunOptions {
+            robot: Some("point3".to_owned()),
+            max_sets: 80_000,
+            ..FollowRunOptions::default()
+        },
+    );
     let score = run.score.as_ref().expect("a built-in scene is scored");
     println!(
         "cylinder / point3: {} sets (Pudney 13004), {:?}, {} contact(s), within λ {:.1} %, faces on within μ {:.1} %",
