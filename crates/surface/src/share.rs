@@ -42,7 +42,7 @@
 //! undecided (no attempt in this update; redundancy check, P§2.9).
 
 use crate::model::SurfaceModel;
-use crate::perimeter::{Node2, PerimPoint, Poly2, cross2};
+use crate::perimeter::{Node2, PerimPoint, Poly2, SightGrid, cross2};
 use crate::relations::OrderingFix;
 use crate::segment::{Edge, EdgeKey, Node, SegmentId, Share};
 use geom::{Line3, PlaneFrame, Point2, Real, Vector2};
@@ -86,6 +86,9 @@ struct View {
     poly: Poly2,
     origin: Point2,
     dir: Vector2,
+    /// Sight index of `poly`, built on first use (the perimeter does not
+    /// change while a view lives).
+    grid: std::cell::OnceCell<SightGrid>,
 }
 
 impl View {
@@ -104,7 +107,15 @@ impl View {
             poly,
             origin,
             dir: d / len,
+            grid: std::cell::OnceCell::new(),
         })
+    }
+
+    /// [`Poly2::sight`] through the view's sight index.
+    fn sight(&self, a: &Point2, b: &Point2, eps: Real, skip: impl Fn(usize) -> bool) -> bool {
+        self.grid
+            .get_or_init(|| SightGrid::new(&self.poly))
+            .sight(&self.poly, a, b, eps, skip)
     }
 
     fn t(&self, p: &Point2) -> Real {
@@ -628,8 +639,8 @@ impl SurfaceModel {
         // the line (range noise) whose next edge runs along the line fails
         // sight of its own projection, and a shared edge once unshared there
         // can never be formed again. The result is validated in any case.
-        let sees1 = |x: &Point2, y: &Point2| v1.poly.sight(x, y, tol.eps, |e| on1[e]);
-        let sees2 = |x: &Point2, y: &Point2| v2.poly.sight(x, y, tol.eps, |e| on2[e]);
+        let sees1 = |x: &Point2, y: &Point2| v1.sight(x, y, tol.eps, |e| on1[e]);
+        let sees2 = |x: &Point2, y: &Point2| v2.sight(x, y, tol.eps, |e| on2[e]);
         if !sees1(&xp1, &l1a) || !sees1(&xp2, &l2a) || !sees2(&xq1, &l2b) || !sees2(&xq2, &l1b) {
             return None;
         }
