@@ -153,7 +153,11 @@ impl Poly2 {
     /// Simple (with coincidence tolerance `eps`) and anticlockwise.
     pub fn is_valid(&self, eps: Real) -> bool {
         let pts = self.points();
-        pts.len() >= 3 && polygon2::signed_area(&pts) > 0.0 && is_simple_fast(&pts, eps)
+        if pts.len() < 3 {
+            return false;
+        }
+        let area = polygon2::signed_area(&pts);
+        area > 0.0 && simple_with_area(&pts, eps, area)
     }
 
     /// The point at `pp`.
@@ -532,9 +536,15 @@ impl SightGrid {
 /// boxes, grown by `tol`, do not overlap cannot meet; the others, found by a
 /// sweep along x (ragged noisy perimeters have many short edges), get the exact
 /// test of `geom` on the two-edge sub-problem.
+#[cfg(test)]
 pub(crate) fn is_simple_fast(poly: &[Point2], tol: Real) -> bool {
+    poly.len() >= 3 && simple_with_area(poly, tol, polygon2::signed_area(poly))
+}
+
+/// [`is_simple_fast`] given the polygon's signed area (`n ≥ 3`).
+fn simple_with_area(poly: &[Point2], tol: Real, area: Real) -> bool {
     let n = poly.len();
-    if n < 3 || polygon2::signed_area(poly).abs() <= tol * tol {
+    if n < 3 || area.abs() <= tol * tol {
         return false;
     }
     let boxes: Vec<(Real, Real, Real, Real)> = (0..n)
@@ -553,11 +563,23 @@ pub(crate) fn is_simple_fast(poly: &[Point2], tol: Real) -> bool {
     }
     // Sweep along x: edges sorted by the left side of their boxes; each edge
     // meets only the following ones whose boxes start before its box ends.
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_unstable_by(|&i, &j| boxes[i].0.total_cmp(&boxes[j].0).then(i.cmp(&j)));
-    for (k, &u) in order.iter().enumerate() {
+    // Keys in the order of `f64::total_cmp` (its own bit transform), so the
+    // order is the same as sorting by `total_cmp` then index, on plain integers.
+    let mut order: Vec<(i64, u32)> = boxes
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let mut key = b.0.to_bits() as i64;
+            key ^= (((key >> 63) as u64) >> 1) as i64;
+            (key, i as u32)
+        })
+        .collect();
+    order.sort_unstable();
+    for (k, &(_, u)) in order.iter().enumerate() {
+        let u = u as usize;
         let bu = boxes[u];
-        for &w in &order[k + 1..] {
+        for &(_, w) in &order[k + 1..] {
+            let w = w as usize;
             let bw = boxes[w];
             if bw.0 > bu.1 {
                 break;
