@@ -448,7 +448,10 @@ fn fill_window(
             if !next.is_valid(eps) {
                 continue;
             }
-        } else if next.len() >= 3 && next.area().abs() >= poly.area().abs() && next.len() >= n {
+        } else if next.len() >= 3
+            && next.len() >= n
+            && next.area().abs() >= area.get_or_insert_with(|| poly.area()).abs()
+        {
             continue;
         }
         return Some((kind, next));

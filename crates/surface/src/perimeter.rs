@@ -147,7 +147,19 @@ impl Poly2 {
 
     /// Signed area (positive when anticlockwise).
     pub fn area(&self) -> Real {
-        polygon2::signed_area(&self.points())
+        // `polygon2::signed_area` on the nodes in place (same terms, same order).
+        let ns = &self.nodes;
+        let n = ns.len();
+        if n < 3 {
+            return 0.0;
+        }
+        let mut s = 0.0;
+        for i in 0..n {
+            let a = &ns[i].p;
+            let b = &ns[(i + 1) % n].p;
+            s += a.x * b.y - b.x * a.y;
+        }
+        0.5 * s
     }
 
     /// Simple (with coincidence tolerance `eps`) and anticlockwise.
