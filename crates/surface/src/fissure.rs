@@ -31,7 +31,7 @@
 //! sight are lifted, and filling continues until fewer than three vertices
 //! remain.
 
-use crate::perimeter::{PerimPoint, Poly2, cross2, param_on_segment, turn};
+use crate::perimeter::{PerimPoint, Poly2, SightGrid, cross2, param_on_segment, turn};
 use crate::segment::{Edge, EdgeKey};
 use geom::polygon2::distance_point_segment;
 use geom::{Point2, Real};
@@ -246,6 +246,9 @@ pub(crate) fn close_pockets(
             let last = prefix.last().copied().unwrap_or(0.0);
             prefix.push(last + (a.x * b.y - a.y * b.x));
         }
+        // Sight tests against the unchanged perimeter go through an index.
+        let mut grid: Option<SightGrid> = None;
+        let mut area: Option<Real> = None;
         // Sections start at each vertex and run over non-shared edges only.
         for i in 0..n {
             let vi = poly.pt(i);
@@ -264,10 +267,11 @@ pub(crate) fn close_pockets(
                 if twice_area >= 0.0 {
                     continue;
                 }
-                let pocket: Vec<Point2> = (0..=k).map(|m| poly.pt(i + m)).collect();
-                if !poly.sight(&vi, &vj, eps, |_| false) {
+                let grid = grid.get_or_insert_with(|| SightGrid::new(poly));
+                if !grid.sight(poly, &vi, &vj, eps, |_| false) {
                     continue;
                 }
+                let pocket: Vec<Point2> = (0..=k).map(|m| poly.pt(i + m)).collect();
                 if !collapse_hole(&pocket, lambda, eps) {
                     continue;
                 }
@@ -284,7 +288,7 @@ pub(crate) fn close_pockets(
                 ) else {
                     continue;
                 };
-                if next.area() > poly.area() && next.is_valid(eps) {
+                if next.area() > *area.get_or_insert_with(|| poly.area()) && next.is_valid(eps) {
                     *poly = next;
                     closed += 1;
                     continue 'outer;
@@ -444,7 +448,10 @@ fn fill_window(
             if !next.is_valid(eps) {
                 continue;
             }
-        } else if next.len() >= 3 && next.area().abs() >= poly.area().abs() && next.len() >= n {
+        } else if next.len() >= 3
+            && next.len() >= n
+            && next.area().abs() >= area.get_or_insert_with(|| poly.area()).abs()
+        {
             continue;
         }
         return Some((kind, next));

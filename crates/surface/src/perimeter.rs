@@ -147,13 +147,29 @@ impl Poly2 {
 
     /// Signed area (positive when anticlockwise).
     pub fn area(&self) -> Real {
-        polygon2::signed_area(&self.points())
+        // `polygon2::signed_area` on the nodes in place (same terms, same order).
+        let ns = &self.nodes;
+        let n = ns.len();
+        if n < 3 {
+            return 0.0;
+        }
+        let mut s = 0.0;
+        for i in 0..n {
+            let a = &ns[i].p;
+            let b = &ns[(i + 1) % n].p;
+            s += a.x * b.y - b.x * a.y;
+        }
+        0.5 * s
     }
 
     /// Simple (with coincidence tolerance `eps`) and anticlockwise.
     pub fn is_valid(&self, eps: Real) -> bool {
         let pts = self.points();
-        pts.len() >= 3 && polygon2::signed_area(&pts) > 0.0 && is_simple_fast(&pts, eps)
+        if pts.len() < 3 {
+            return false;
+        }
+        let area = polygon2::signed_area(&pts);
+        area > 0.0 && simple_with_area(&pts, eps, area)
     }
 
     /// The point at `pp`.
@@ -339,14 +355,208 @@ impl Poly2 {
     }
 }
 
+/// A uniform grid over the bounding boxes of a [`Poly2`]'s edges, for call
+/// sites that run many sight tests against one unchanged perimeter. A query
+/// visits the edges in the cells its box meets and applies exactly the box
+/// filter of [`Poly2::sight`] to them, so it hands [`polygon2::can_sight`] the
+/// same set of edges (in another order, which cannot change its answer: it is
+/// `false` exactly when one of the edges crosses). Cell indices are monotone
+/// in the coordinates, so two boxes that meet share a cell.
+pub(crate) struct SightGrid {
+    /// Edge boxes as `(x_min, x_max, y_min, y_max)`, computed as in `sight`.
+    boxes: Vec<(Real, Real, Real, Real)>,
+    /// First cell (x, y) of each edge's box.
+    first: Vec<(u32, u32)>,
+    /// Grid origin and cell size, and the cell counts.
+    x0: Real,
+    y0: Real,
+    wx: Real,
+    wy: Real,
+    gx: usize,
+    gy: usize,
+    /// Edges per cell (CSR): `items[start[c]..start[c + 1]]`.
+    start: Vec<u32>,
+    items: Vec<u32>,
+    /// Edges in no cell, checked by every query.
+    big: Vec<u32>,
+    /// `false` when the grid is not usable (non-finite coordinates): queries
+    /// fall back to the plain scan.
+    usable: bool,
+}
+
+impl SightGrid {
+    pub fn new(poly: &Poly2) -> Self {
+        let n = poly.len();
+        let boxes: Vec<(Real, Real, Real, Real)> = (0..n)
+            .map(|i| {
+                let (c, d) = (&poly.nodes[i].p, &poly.nodes[(i + 1) % n].p);
+                (c.x.min(d.x), c.x.max(d.x), c.y.min(d.y), c.y.max(d.y))
+            })
+            .collect();
+        let mut grid = Self {
+            boxes,
+            first: Vec::new(),
+            x0: 0.0,
+            y0: 0.0,
+            wx: 1.0,
+            wy: 1.0,
+            gx: 1,
+            gy: 1,
+            start: Vec::new(),
+            items: Vec::new(),
+            big: Vec::new(),
+            usable: false,
+        };
+        if n < 16 {
+            return grid;
+        }
+        let finite = grid
+            .boxes
+            .iter()
+            .all(|b| b.0.is_finite() && b.1.is_finite() && b.2.is_finite() && b.3.is_finite());
+        if !finite {
+            return grid;
+        }
+        let (mut x0, mut x1, mut y0, mut y1) = (Real::MAX, Real::MIN, Real::MAX, Real::MIN);
+        for b in &grid.boxes {
+            x0 = x0.min(b.0);
+            x1 = x1.max(b.1);
+            y0 = y0.min(b.2);
+            y1 = y1.max(b.3);
+        }
+        let g = ((n as Real).sqrt() as usize).clamp(1, 64);
+        let (gx, gy) = (g, g);
+        let (wx, wy) = ((x1 - x0) / gx as Real, (y1 - y0) / gy as Real);
+        grid.x0 = x0;
+        grid.y0 = y0;
+        grid.gx = gx;
+        grid.gy = gy;
+        grid.wx = if wx > 0.0 && wx.is_finite() { wx } else { 1.0 };
+        grid.wy = if wy > 0.0 && wy.is_finite() { wy } else { 1.0 };
+        let ranges: Vec<(usize, usize, usize, usize)> = grid
+            .boxes
+            .iter()
+            .map(|b| (grid.cx(b.0), grid.cx(b.1), grid.cy(b.2), grid.cy(b.3)))
+            .collect();
+        // Edges over more than a few cells are kept in one list that every
+        // query scans (with the same box filter).
+        let big = |r: &(usize, usize, usize, usize)| (r.1 - r.0 + 1) * (r.3 - r.2 + 1) > 4;
+        let mut count = vec![0u32; gx * gy + 1];
+        for r in &ranges {
+            if big(r) {
+                grid.big.push(0);
+                continue;
+            }
+            for y in r.2..=r.3 {
+                for x in r.0..=r.1 {
+                    count[y * gx + x + 1] += 1;
+                }
+            }
+        }
+        for c in 1..count.len() {
+            count[c] += count[c - 1];
+        }
+        let mut fill = count.clone();
+        let mut items = vec![0u32; count[gx * gy] as usize];
+        grid.big.clear();
+        for (e, r) in ranges.iter().enumerate() {
+            if big(r) {
+                grid.big.push(e as u32);
+                continue;
+            }
+            for y in r.2..=r.3 {
+                for x in r.0..=r.1 {
+                    let c = y * gx + x;
+                    items[fill[c] as usize] = e as u32;
+                    fill[c] += 1;
+                }
+            }
+        }
+        grid.first = ranges.iter().map(|r| (r.0 as u32, r.2 as u32)).collect();
+        grid.start = count;
+        grid.items = items;
+        grid.usable = true;
+        grid
+    }
+
+    /// Cell column of `x` (monotone non-decreasing in `x`, clamped).
+    #[inline]
+    fn cx(&self, x: Real) -> usize {
+        // Truncation is the floor for f ≥ 0 (and avoids a libm call).
+        let f = (x - self.x0) / self.wx;
+        if f > 0.0 {
+            (f as usize).min(self.gx - 1)
+        } else {
+            0
+        }
+    }
+
+    #[inline]
+    fn cy(&self, y: Real) -> usize {
+        // Truncation is the floor for f ≥ 0 (and avoids a libm call).
+        let f = (y - self.y0) / self.wy;
+        if f > 0.0 {
+            (f as usize).min(self.gy - 1)
+        } else {
+            0
+        }
+    }
+
+    /// [`Poly2::sight`] on `poly`, the perimeter this grid was built from.
+    pub fn sight(
+        &self,
+        poly: &Poly2,
+        a: &Point2,
+        b: &Point2,
+        eps: Real,
+        skip: impl Fn(usize) -> bool,
+    ) -> bool {
+        let n = poly.len();
+        debug_assert_eq!(n, self.boxes.len());
+        let (x0, x1) = (a.x.min(b.x) - eps, a.x.max(b.x) + eps);
+        let (y0, y1) = (a.y.min(b.y) - eps, a.y.max(b.y) + eps);
+        let finite = x0.is_finite() && x1.is_finite() && y0.is_finite() && y1.is_finite();
+        let keep = |i: usize| {
+            let bx = &self.boxes[i];
+            let apart = bx.1 < x0 || bx.0 > x1 || bx.3 < y0 || bx.2 > y1;
+            (!apart && !skip(i)).then(|| (&poly.nodes[i].p, &poly.nodes[(i + 1) % n].p))
+        };
+        if !self.usable || !finite {
+            return polygon2::can_sight(a, b, (0..n).filter_map(keep), eps);
+        }
+        let (qx0, qx1, qy0, qy1) = (self.cx(x0), self.cx(x1), self.cy(y0), self.cy(y1));
+        let edges = (qy0..=qy1).flat_map(move |y| {
+            (qx0..=qx1).flat_map(move |x| {
+                let c = y * self.gx + x;
+                self.items[self.start[c] as usize..self.start[c + 1] as usize]
+                    .iter()
+                    .filter_map(move |&e| {
+                        let e = e as usize;
+                        // Report an edge only in the first cell it shares with the query.
+                        let (fx, fy) = self.first[e];
+                        (x == qx0.max(fx as usize) && y == qy0.max(fy as usize)).then_some(e)
+                    })
+            })
+        });
+        let big = self.big.iter().map(|&e| e as usize);
+        polygon2::can_sight(a, b, big.chain(edges).filter_map(keep), eps)
+    }
+}
+
 /// [`polygon2::is_simple`] with a bounding-box rejection in front of every
 /// edge-pair test (perimeters are checked after every operation). Pairs whose
 /// boxes, grown by `tol`, do not overlap cannot meet; the others, found by a
 /// sweep along x (ragged noisy perimeters have many short edges), get the exact
 /// test of `geom` on the two-edge sub-problem.
+#[cfg(test)]
 pub(crate) fn is_simple_fast(poly: &[Point2], tol: Real) -> bool {
+    poly.len() >= 3 && simple_with_area(poly, tol, polygon2::signed_area(poly))
+}
+
+/// [`is_simple_fast`] given the polygon's signed area (`n ≥ 3`).
+fn simple_with_area(poly: &[Point2], tol: Real, area: Real) -> bool {
     let n = poly.len();
-    if n < 3 || polygon2::signed_area(poly).abs() <= tol * tol {
+    if n < 3 || area.abs() <= tol * tol {
         return false;
     }
     let boxes: Vec<(Real, Real, Real, Real)> = (0..n)
@@ -365,11 +575,23 @@ pub(crate) fn is_simple_fast(poly: &[Point2], tol: Real) -> bool {
     }
     // Sweep along x: edges sorted by the left side of their boxes; each edge
     // meets only the following ones whose boxes start before its box ends.
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_unstable_by(|&i, &j| boxes[i].0.total_cmp(&boxes[j].0).then(i.cmp(&j)));
-    for (k, &u) in order.iter().enumerate() {
+    // Keys in the order of `f64::total_cmp` (its own bit transform), so the
+    // order is the same as sorting by `total_cmp` then index, on plain integers.
+    let mut order: Vec<(i64, u32)> = boxes
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let mut key = b.0.to_bits() as i64;
+            key ^= (((key >> 63) as u64) >> 1) as i64;
+            (key, i as u32)
+        })
+        .collect();
+    order.sort_unstable();
+    for (k, &(_, u)) in order.iter().enumerate() {
+        let u = u as usize;
         let bu = boxes[u];
-        for &w in &order[k + 1..] {
+        for &(_, w) in &order[k + 1..] {
+            let w = w as usize;
             let bw = boxes[w];
             if bw.0 > bu.1 {
                 break;
@@ -481,6 +703,33 @@ mod tests {
         fn fast_simplicity_matches_geom(c in proptest::collection::vec(-1.0f64..1.0, 6..24)) {
             let pts: Vec<Point2> = c.chunks_exact(2).map(|p| Point2::new(p[0], p[1])).collect();
             proptest::prop_assert_eq!(is_simple_fast(&pts, 1e-6), polygon2::is_simple(&pts, 1e-6));
+        }
+    }
+
+    proptest::proptest! {
+        /// The sight index answers as the plain scan on random perimeters.
+        #[test]
+        fn sight_grid_matches_scan(
+            c in proptest::collection::vec(-1.0f64..1.0, 40..200),
+            q in proptest::collection::vec(-1.2f64..1.2, 40),
+        ) {
+            let poly = Poly2 {
+                nodes: c
+                    .chunks_exact(2)
+                    .enumerate()
+                    .map(|(i, p)| Node2::plain(Point2::new(p[0], p[1]), EdgeKey(i as u32)))
+                    .collect(),
+            };
+            let grid = SightGrid::new(&poly);
+            for s in q.chunks_exact(4) {
+                let (a, b) = (Point2::new(s[0], s[1]), Point2::new(s[2], s[3]));
+                for eps in [1e-9, 0.05] {
+                    proptest::prop_assert_eq!(
+                        grid.sight(&poly, &a, &b, eps, |e| e % 7 == 3),
+                        poly.sight(&a, &b, eps, |e| e % 7 == 3)
+                    );
+                }
+            }
         }
     }
 

@@ -42,7 +42,7 @@
 //! undecided (no attempt in this update; redundancy check, P§2.9).
 
 use crate::model::SurfaceModel;
-use crate::perimeter::{Node2, PerimPoint, Poly2, cross2};
+use crate::perimeter::{Node2, PerimPoint, Poly2, SightGrid, cross2};
 use crate::relations::OrderingFix;
 use crate::segment::{Edge, EdgeKey, Node, SegmentId, Share};
 use geom::{Line3, PlaneFrame, Point2, Real, Vector2};
@@ -86,6 +86,11 @@ struct View {
     poly: Poly2,
     origin: Point2,
     dir: Vector2,
+    /// Sight index of `poly`, built on first use (the perimeter does not
+    /// change while a view lives).
+    grid: std::cell::OnceCell<SightGrid>,
+    /// `t` and `h` of every vertex, computed on first use.
+    vth: std::cell::OnceCell<(Vec<Real>, Vec<Real>)>,
 }
 
 impl View {
@@ -104,7 +109,28 @@ impl View {
             poly,
             origin,
             dir: d / len,
+            grid: std::cell::OnceCell::new(),
+            vth: std::cell::OnceCell::new(),
         })
+    }
+
+    /// `(t, h)` of each vertex: the same values as `t(&p)` and `h(&p)`.
+    fn vertex_th(&self) -> (&[Real], &[Real]) {
+        let (t, h) = self.vth.get_or_init(|| {
+            let ps = &self.poly.nodes;
+            (
+                ps.iter().map(|n| self.t(&n.p)).collect(),
+                ps.iter().map(|n| self.h(&n.p)).collect(),
+            )
+        });
+        (t, h)
+    }
+
+    /// [`Poly2::sight`] through the view's sight index.
+    fn sight(&self, a: &Point2, b: &Point2, eps: Real, skip: impl Fn(usize) -> bool) -> bool {
+        self.grid
+            .get_or_init(|| SightGrid::new(&self.poly))
+            .sight(&self.poly, a, b, eps, skip)
     }
 
     fn t(&self, p: &Point2) -> Real {
@@ -153,15 +179,17 @@ struct Section {
 fn starts_at(view: &View, t_start: Real, lambda: Real, eps: Real) -> Vec<PerimPoint> {
     let poly = &view.poly;
     let in_strip = |p: &Point2| view.h(p).abs() < lambda;
+    let (vt, vh) = view.vertex_th();
+    let n = poly.len();
     let mut starts = Vec::new();
-    for e in 0..poly.len() {
-        let (a, b) = poly.seg(e);
-        let (ta, tb) = (view.t(&a), view.t(&b));
+    for e in 0..n {
+        let (ta, tb) = (vt[e], vt[(e + 1) % n]);
         if (ta - t_start).abs() <= eps {
-            if in_strip(&a) {
+            if vh[e].abs() < lambda {
                 starts.push(PerimPoint::vertex(e));
             }
         } else if (ta - t_start) * (tb - t_start) < 0.0 && (tb - t_start).abs() > eps {
+            let (a, b) = poly.seg(e);
             let u = (t_start - ta) / (tb - ta);
             let x = a + (b - a) * u;
             if in_strip(&x) {
@@ -187,11 +215,9 @@ fn sections(
     let n = poly.len();
     let lo = t_start.min(t_end) - eps;
     let hi = t_start.max(t_end) + eps;
-    let in_strip = |p: &Point2| view.h(p).abs() < lambda;
-    let in_range = |p: &Point2| {
-        let t = view.t(p);
-        t >= lo && t <= hi
-    };
+    // `t` and `h` of each point are computed once (vertices: from the view's
+    // table, which holds the same values).
+    let (vt, vh) = view.vertex_th();
     let mut out = Vec::new();
     for &start in starts {
         let (mut e, mut u0) = (start.edge, start.t);
@@ -201,10 +227,11 @@ fn sections(
             }
             let (a, b) = poly.seg(e);
             let pa = a + (b - a) * u0;
-            if !in_strip(&pa) || !in_range(&pa) {
+            let (tpa, hpa) = (view.t(&pa), view.h(&pa));
+            if !(hpa.abs() < lambda) || !(tpa >= lo && tpa <= hi) {
                 break;
             }
-            if step > 0 && (view.t(&pa) - t_end).abs() <= eps {
+            if step > 0 && (tpa - t_end).abs() <= eps {
                 out.push(Section {
                     start,
                     end: PerimPoint::vertex(e),
@@ -213,13 +240,13 @@ fn sections(
             }
             // Largest u1 such that [u0, u1] stays in the strip and range.
             let mut u1: Real = 1.0;
-            let (ha, hb) = (view.h(&pa), view.h(&b));
+            let (ha, hb) = (hpa, vh[(e + 1) % n]);
             if hb.abs() >= lambda {
                 let target = lambda.copysign(hb);
                 let f = (target - ha) / (hb - ha);
                 u1 = u1.min(u0 + (1.0 - u0) * f * (1.0 - 1e-9));
             }
-            let (ta, tb) = (view.t(&pa), view.t(&b));
+            let (ta, tb) = (tpa, vt[(e + 1) % n]);
             if tb > hi || tb < lo {
                 let bound = if tb > hi { hi } else { lo };
                 let f = (bound - ta) / (tb - ta);
@@ -509,7 +536,12 @@ impl SurfaceModel {
                 }
             }
         }
-        candidates.sort_by(|x, y| y.0.total_cmp(&x.0));
+        // Longest first; ties in push order, i.e. by (i, j) (as a stable sort).
+        candidates.sort_unstable_by(|x, y| {
+            y.0.total_cmp(&x.0)
+                .then(x.1.cmp(&y.1))
+                .then(x.2.cmp(&y.2))
+        });
         // Section starts per anchor (P from a's t₁, Q from b's t₂), found once.
         let mut starts1: Vec<Option<Vec<PerimPoint>>> = vec![None; anchors.len()];
         let mut starts2: Vec<Option<Vec<PerimPoint>>> = vec![None; anchors.len()];
@@ -628,8 +660,8 @@ impl SurfaceModel {
         // the line (range noise) whose next edge runs along the line fails
         // sight of its own projection, and a shared edge once unshared there
         // can never be formed again. The result is validated in any case.
-        let sees1 = |x: &Point2, y: &Point2| v1.poly.sight(x, y, tol.eps, |e| on1[e]);
-        let sees2 = |x: &Point2, y: &Point2| v2.poly.sight(x, y, tol.eps, |e| on2[e]);
+        let sees1 = |x: &Point2, y: &Point2| v1.sight(x, y, tol.eps, |e| on1[e]);
+        let sees2 = |x: &Point2, y: &Point2| v2.sight(x, y, tol.eps, |e| on2[e]);
         if !sees1(&xp1, &l1a) || !sees1(&xp2, &l2a) || !sees2(&xq1, &l2b) || !sees2(&xq2, &l1b) {
             return None;
         }
@@ -848,6 +880,8 @@ mod tests {
             poly: Poly2 { nodes },
             origin: Point2::new(rng.random_range(-0.2..0.2), rng.random_range(-0.2..0.2)),
             dir: Vector2::new(dir_angle.cos(), dir_angle.sin()),
+            grid: std::cell::OnceCell::new(),
+            vth: std::cell::OnceCell::new(),
         }
     }
 
