@@ -537,11 +537,8 @@ impl SurfaceModel {
             }
         }
         // Longest first; ties in push order, i.e. by (i, j) (as a stable sort).
-        candidates.sort_unstable_by(|x, y| {
-            y.0.total_cmp(&x.0)
-                .then(x.1.cmp(&y.1))
-                .then(x.2.cmp(&y.2))
-        });
+        candidates
+            .sort_unstable_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
         // Section starts per anchor (P from a's t₁, Q from b's t₂), found once.
         let mut starts1: Vec<Option<Vec<PerimPoint>>> = vec![None; anchors.len()];
         let mut starts2: Vec<Option<Vec<PerimPoint>>> = vec![None; anchors.len()];
