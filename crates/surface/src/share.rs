@@ -228,7 +228,9 @@ fn sections(
             let (a, b) = poly.seg(e);
             let pa = a + (b - a) * u0;
             let (tpa, hpa) = (view.t(&pa), view.h(&pa));
-            if !(hpa.abs() < lambda) || !(tpa >= lo && tpa <= hi) {
+            // In the strip and in the range (false for NaN, as before).
+            let inside = hpa.abs() < lambda && tpa >= lo && tpa <= hi;
+            if !inside {
                 break;
             }
             if step > 0 && (tpa - t_end).abs() <= eps {
