@@ -5,7 +5,10 @@
 //! `COLL=1` every collision (`COLLX=1` adds which link points touch, with the
 //! scene's and the model's distance there); `RANGE=a-b` steps a..b in detail
 //! (how far the control point moved against the motion asked); `SENS=a-b` the
-//! control point's range finders before steps a..b.
+//! control point's range finders before steps a..b and where each sensed point
+//! lies in the updated model (it reads the sensors an extra time, so with
+//! noise the run differs from one without `SENS`); `NEAR=k` the segments near
+//! the control point after step k.
 
 #[path = "../tests/support/mod.rs"]
 mod support;
