@@ -1,0 +1,48 @@
+//! Planning for AXBAM exploration (SPEC §3.7; Paul §3.2.1.3–3.2.1.4, §3.2.3,
+//! §4.3): the manipulator's configuration-space model and safe motion.
+//!
+//! - [`Roadmap`]: `n_Q` nodes sampled within the joint limits, joined in the
+//!   joint-weighted distance; A* between poses, each motion checked lazily
+//!   against the map of the moment; node usage likelihoods `L(cᵢ)`.
+//! - [`Safety`]: `dist(Q)` of eq. 3.5 against occupied **and unknown** voxels;
+//!   a pose is usable only when `dist(Q) > 1`.
+//! - [`CspaceModel`]: roadmap + `L(cᵢ)` + voxel interference `P(ʲx_c)` (eq.
+//!   4.13), built once and cached to a file.
+//!
+//! ```
+//! use geom::Isometry3;
+//! use map::{OccupancyConfig, OccupancyGrid, RegionsConfig, VoxelState};
+//! use plan::{CspaceModel, PlanConfig};
+//!
+//! let robot = robot::builtin("denso-vm6083")?;
+//! let config = PlanConfig { n_q: 60, ..PlanConfig::default() };
+//! let model = CspaceModel::build(&robot, &Isometry3::identity(), 0.1, &config)?;
+//! assert_eq!(model.roadmap().len(), 60);
+//! assert_eq!(model.roadmap().components(), 1);
+//!
+//! // An unexplored grid: every pose is unsafe (its links reach unknown space).
+//! let mut grid = OccupancyGrid::new(OccupancyConfig {
+//!     voxel_m: 0.1,
+//!     regions: RegionsConfig::around([0.0, 0.0, 0.475], [1.1, 1.3, 1.5]),
+//!     ..OccupancyConfig::default()
+//! })?;
+//! model.apply_to(&mut grid)?;
+//! assert!(grid.h2() > 0.0);
+//! let q0 = model.roadmap().node(0).to_vec();
+//! assert!(model.safety().dist(&grid, &q0)? < 1.0);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod config;
+mod error;
+pub mod interference;
+mod model;
+pub mod roadmap;
+pub mod safety;
+
+pub use config::PlanConfig;
+pub use error::PlanError;
+pub use interference::{Interference, interfering_voxels};
+pub use model::{CacheOutcome, CspaceModel};
+pub use roadmap::{Edge, MotionChecker, Path, Roadmap, RoadmapParts, weighted_distance};
+pub use safety::{Safety, SafetyChecker};

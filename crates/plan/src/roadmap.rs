@@ -1,0 +1,755 @@
+//! The configuration-space roadmap (A§3.2.1.3, §3.2.3, §4.3): `n_Q` nodes
+//! sampled uniformly within the joint limits, joined to their nearest
+//! neighbours in the joint-weighted distance `Σ wᵢ |Δqᵢ|`, A* between poses
+//! with every motion checked lazily against the map of the moment, and the
+//! node usage likelihood `L(cᵢ)` from shortest paths between all pairs of
+//! nodes (Fig. 4.7).
+
+use crate::{PlanConfig, PlanError};
+use geom::Real;
+use petgraph::algo::{astar, dijkstra};
+use petgraph::graph::{NodeIndex, UnGraph};
+use petgraph::visit::EdgeRef;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use robot::{JointKind, Robot};
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+
+/// Decides whether configurations and straight joint-space motions are safe.
+/// [`crate::SafetyChecker`] implements it against an occupancy grid; tests use
+/// their own.
+pub trait MotionChecker {
+    /// `true` when the arm may stand at `q`.
+    fn pose_ok(&mut self, q: &[Real]) -> bool;
+    /// `true` when every configuration of the straight joint-space motion from
+    /// `a` to `b` (both ends included) is safe.
+    fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool;
+}
+
+/// One roadmap edge: node indices `a < b` and the joint-weighted distance.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Edge {
+    /// Lower node index.
+    pub a: u32,
+    /// Higher node index.
+    pub b: u32,
+    /// Joint-weighted distance between the two nodes.
+    pub cost: Real,
+}
+
+/// A planned motion: waypoints from the start to the goal (both included);
+/// the arm moves in straight joint-space lines between consecutive waypoints.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Path {
+    /// The configurations passed, start first, goal last.
+    pub waypoints: Vec<Vec<Real>>,
+    /// Roadmap nodes used, in order (empty for a direct motion).
+    pub nodes: Vec<usize>,
+    /// Joint-weighted length.
+    pub cost: Real,
+}
+
+impl Path {
+    /// Sum of `|Δqᵢ|` over the whole path, radians (A eq. 3.3's travel).
+    pub fn joint_travel(&self) -> Real {
+        self.waypoints
+            .windows(2)
+            .map(|w| {
+                w[0].iter()
+                    .zip(&w[1])
+                    .map(|(a, b)| (a - b).abs())
+                    .sum::<Real>()
+            })
+            .sum()
+    }
+}
+
+/// The roadmap: sampled nodes, joint weights and edges.
+#[derive(Clone, Debug)]
+pub struct Roadmap {
+    dof: usize,
+    nodes: Vec<Real>,
+    weights: Vec<Real>,
+    edges: Vec<Edge>,
+    graph: UnGraph<(), Real>,
+}
+
+/// What a roadmap is made of, as stored in the cache file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RoadmapParts {
+    /// Joints per node.
+    pub dof: usize,
+    /// Node configurations, one row of `dof` values per node.
+    pub nodes: Vec<Vec<Real>>,
+    /// Joint weights of the distance.
+    pub weights: Vec<Real>,
+    /// Edges, `a < b`, sorted.
+    pub edges: Vec<Edge>,
+}
+
+impl Roadmap {
+    /// Sample `config.n_q` nodes uniformly within `robot`'s joint limits
+    /// (seeded), derive the joint weights unless given, and join each node to
+    /// its `config.neighbours` nearest nodes plus a minimum spanning tree.
+    pub fn build(robot: &Robot, config: &PlanConfig) -> Result<Self, PlanError> {
+        let dof = robot.dof();
+        config.validate(dof)?;
+        let ranges = joint_ranges(robot)?;
+        let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
+        let mut nodes = Vec::with_capacity(config.n_q * dof);
+        for _ in 0..config.n_q {
+            for &(lo, hi) in &ranges {
+                nodes.push(if hi > lo {
+                    rng.random_range(lo..hi)
+                } else {
+                    lo
+                });
+            }
+        }
+        let weights = if config.joint_weights.is_empty() {
+            derived_weights(robot, &nodes)?
+        } else {
+            config.joint_weights.clone()
+        };
+        let edges = connect(&nodes, &weights, config.neighbours);
+        Ok(Self::assemble(dof, nodes, weights, edges))
+    }
+
+    /// Rebuild a roadmap from stored parts, checking their consistency.
+    pub fn from_parts(parts: RoadmapParts) -> Result<Self, String> {
+        let RoadmapParts {
+            dof,
+            nodes,
+            weights,
+            edges,
+        } = parts;
+        if weights.len() != dof || weights.iter().any(|w| !(w.is_finite() && *w > 0.0)) {
+            return Err(format!("weights: expected {dof} positive values"));
+        }
+        if let Some(i) = nodes
+            .iter()
+            .position(|n| n.len() != dof || n.iter().any(|v| !v.is_finite()))
+        {
+            return Err(format!("node {i}: expected {dof} finite joint values"));
+        }
+        let n = nodes.len();
+        if let Some(e) = edges
+            .iter()
+            .find(|e| e.a >= e.b || e.b as usize >= n || !(e.cost.is_finite() && e.cost >= 0.0))
+        {
+            return Err(format!(
+                "edge {}–{}: expected a < b < {n} and a finite cost",
+                e.a, e.b
+            ));
+        }
+        Ok(Self::assemble(dof, nodes.concat(), weights, edges))
+    }
+
+    /// The parts to store.
+    pub fn to_parts(&self) -> RoadmapParts {
+        RoadmapParts {
+            dof: self.dof,
+            nodes: self.nodes.chunks(self.dof).map(<[Real]>::to_vec).collect(),
+            weights: self.weights.clone(),
+            edges: self.edges.clone(),
+        }
+    }
+
+    fn assemble(dof: usize, nodes: Vec<Real>, weights: Vec<Real>, edges: Vec<Edge>) -> Self {
+        let n = nodes.len() / dof.max(1);
+        let mut graph = UnGraph::with_capacity(n, edges.len());
+        for _ in 0..n {
+            graph.add_node(());
+        }
+        for e in &edges {
+            graph.add_edge(
+                NodeIndex::new(e.a as usize),
+                NodeIndex::new(e.b as usize),
+                e.cost,
+            );
+        }
+        Self {
+            dof,
+            nodes,
+            weights,
+            edges,
+            graph,
+        }
+    }
+
+    /// Number of nodes `n_Q`.
+    pub fn len(&self) -> usize {
+        self.nodes.len() / self.dof.max(1)
+    }
+
+    /// `true` without nodes.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Joints per node.
+    pub fn dof(&self) -> usize {
+        self.dof
+    }
+
+    /// The configuration of node `i`.
+    pub fn node(&self, i: usize) -> &[Real] {
+        &self.nodes[i * self.dof..(i + 1) * self.dof]
+    }
+
+    /// Every node's configuration, in index order.
+    pub fn nodes(&self) -> impl ExactSizeIterator<Item = &[Real]> + '_ {
+        self.nodes.chunks_exact(self.dof)
+    }
+
+    /// The joint weights `wᵢ`.
+    pub fn weights(&self) -> &[Real] {
+        &self.weights
+    }
+
+    /// The edges.
+    pub fn edges(&self) -> &[Edge] {
+        &self.edges
+    }
+
+    /// The joint-weighted distance `Σ wᵢ |aᵢ − bᵢ|`.
+    pub fn distance(&self, a: &[Real], b: &[Real]) -> Real {
+        weighted_distance(&self.weights, a, b)
+    }
+
+    /// The `k` nodes nearest to `q` (ties by index), nearest first.
+    pub fn nearest(&self, q: &[Real], k: usize) -> Vec<(usize, Real)> {
+        let mut all: Vec<(usize, Real)> = self
+            .nodes()
+            .enumerate()
+            .map(|(i, n)| (i, self.distance(q, n)))
+            .collect();
+        let k = k.min(all.len());
+        if k == 0 {
+            return Vec::new();
+        }
+        all.select_nth_unstable_by(k - 1, |a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+        all.truncate(k);
+        all.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+        all
+    }
+
+    /// Number of connected components of the roadmap (1 when built here).
+    pub fn components(&self) -> usize {
+        petgraph::algo::connected_components(&self.graph)
+    }
+
+    /// Plan a motion from `from` to `to` (A§3.2.1.3: A* on the joint-weighted
+    /// distance). A direct straight motion is taken when it is safe; otherwise
+    /// both ends are joined to their `link_k` nearest nodes and A* searches
+    /// the roadmap, checking each node and edge it relaxes with `checker`
+    /// (lazily, each at most once per query). `None` when no safe path exists.
+    pub fn plan(
+        &self,
+        from: &[Real],
+        to: &[Real],
+        link_k: usize,
+        checker: &mut dyn MotionChecker,
+    ) -> Option<Path> {
+        if from.len() != self.dof || to.len() != self.dof {
+            return None;
+        }
+        if !checker.pose_ok(from) || !checker.pose_ok(to) {
+            return None;
+        }
+        if checker.motion_ok(from, to) {
+            return Some(Path {
+                waypoints: vec![from.to_vec(), to.to_vec()],
+                nodes: Vec::new(),
+                cost: self.distance(from, to),
+            });
+        }
+        let n = self.len();
+        let mut graph = self.graph.clone();
+        let start = graph.add_node(());
+        let goal = graph.add_node(());
+        for (i, d) in self.nearest(from, link_k) {
+            graph.add_edge(start, NodeIndex::new(i), d);
+        }
+        for (i, d) in self.nearest(to, link_k) {
+            graph.add_edge(goal, NodeIndex::new(i), d);
+        }
+        let config = |v: NodeIndex| -> &[Real] {
+            match v.index() {
+                i if i < n => self.node(i),
+                i if i == n => from,
+                _ => to,
+            }
+        };
+        let mut node_ok: HashMap<usize, bool> = HashMap::new();
+        let mut edge_ok: HashMap<usize, bool> = HashMap::new();
+        let mut cost = |e: petgraph::graph::EdgeReference<'_, Real>| -> Real {
+            let ok = *edge_ok.entry(e.id().index()).or_insert_with(|| {
+                let (u, v) = (e.source(), e.target());
+                [u, v].iter().all(|w| {
+                    *node_ok
+                        .entry(w.index())
+                        .or_insert_with(|| checker.pose_ok(config(*w)))
+                }) && checker.motion_ok(config(u), config(v))
+            });
+            if ok { *e.weight() } else { Real::INFINITY }
+        };
+        let (total, route) = astar(
+            &graph,
+            start,
+            |v| v == goal,
+            &mut cost,
+            |v| self.distance(config(v), to),
+        )?;
+        if !total.is_finite() {
+            return None;
+        }
+        Some(Path {
+            waypoints: route.iter().map(|&v| config(v).to_vec()).collect(),
+            nodes: route.iter().map(|v| v.index()).filter(|&i| i < n).collect(),
+            cost: total,
+        })
+    }
+
+    /// The usage likelihood `L(cᵢ)` of every node (A§4.3, Fig. 4.7): shortest
+    /// paths are planned between every ordered pair of connected nodes of the
+    /// obstacle-free roadmap, and `L(cᵢ)` is the fraction of those paths that
+    /// pass through node `i` (ends included). Ties between equally short paths
+    /// go to the lower node index, so the result is deterministic.
+    pub fn usage_likelihood(&self) -> Vec<Real> {
+        let n = self.len();
+        let (counts, pairs) = (0..n)
+            .into_par_iter()
+            .fold(
+                || (vec![0u64; n], 0u64),
+                |(mut counts, mut pairs), s| {
+                    pairs += self.count_paths_from(s, &mut counts);
+                    (counts, pairs)
+                },
+            )
+            .reduce(
+                || (vec![0u64; n], 0u64),
+                |(mut a, pa), (b, pb)| {
+                    for (x, y) in a.iter_mut().zip(&b) {
+                        *x += y;
+                    }
+                    (a, pa + pb)
+                },
+            );
+        if pairs == 0 {
+            return vec![0.0; n];
+        }
+        counts.iter().map(|&c| c as Real / pairs as Real).collect()
+    }
+
+    /// Add to `counts[v]` the number of targets whose shortest path from `s`
+    /// passes `v`; return the number of targets reached (s excluded).
+    fn count_paths_from(&self, s: usize, counts: &mut [u64]) -> u64 {
+        let dist = dijkstra(&self.graph, NodeIndex::new(s), None, |e| *e.weight());
+        // The shortest-path tree: each reached node's parent is its
+        // lowest-index neighbour on a shortest path. In the weighted L1
+        // distance many paths tie (any node inside the box between two
+        // others lies on a shortest path), and their sums differ only by
+        // rounding: a relative tolerance makes the rule see them as ties.
+        let mut order: Vec<(usize, Real)> = dist.iter().map(|(v, d)| (v.index(), *d)).collect();
+        order.sort_by(|a, b| b.1.total_cmp(&a.1).then(b.0.cmp(&a.0)));
+        let mut subtree: HashMap<usize, u64> = order.iter().map(|&(v, _)| (v, 1)).collect();
+        for &(v, dv) in &order {
+            let below = subtree[&v];
+            counts[v] += below;
+            if v == s {
+                counts[v] -= 1;
+                continue;
+            }
+            let parent = self
+                .graph
+                .edges(NodeIndex::new(v))
+                .filter_map(|e| {
+                    let u = if e.source().index() == v {
+                        e.target()
+                    } else {
+                        e.source()
+                    };
+                    let du = dist.get(&u)?;
+                    (du + e.weight() <= dv + TIE * (1.0 + dv)).then_some(u.index())
+                })
+                .min();
+            if let Some(p) = parent {
+                *subtree.entry(p).or_insert(1) += below;
+            }
+        }
+        order.len() as u64 - 1
+    }
+}
+
+/// Relative tolerance under which two path lengths tie.
+const TIE: Real = 1e-9;
+
+/// `Σ wᵢ |aᵢ − bᵢ|`.
+pub fn weighted_distance(weights: &[Real], a: &[Real], b: &[Real]) -> Real {
+    weights
+        .iter()
+        .zip(a.iter().zip(b))
+        .map(|(w, (x, y))| w * (x - y).abs())
+        .sum()
+}
+
+/// Each actuated joint's sampling range: its limits, or `[−π, π]` for a
+/// revolute joint without limits.
+fn joint_ranges(robot: &Robot) -> Result<Vec<(Real, Real)>, PlanError> {
+    robot
+        .actuated()
+        .map(|j| match (j.limits, j.kind) {
+            (Some(l), _) if l.min.is_finite() && l.max.is_finite() && l.min <= l.max => {
+                Ok((l.min, l.max))
+            }
+            (None, JointKind::Revolute) => Ok((-std::f64::consts::PI, std::f64::consts::PI)),
+            _ => Err(PlanError::Robot {
+                robot: robot.name.clone(),
+                message: format!(
+                    "joint {} needs finite limits to sample the configuration space",
+                    j.name
+                ),
+            }),
+        })
+        .collect()
+}
+
+/// Smallest derived joint weight (metres per radian): a joint that moves no
+/// envelope still costs something to move.
+const MIN_WEIGHT: Real = 0.01;
+
+/// Joint weights from the robot's envelope: for each actuated joint, the
+/// farthest any point of a later link's bounding ellipsoid lies from the
+/// joint's axis over the sampled nodes (prismatic joints: 1 m per metre).
+fn derived_weights(robot: &Robot, nodes: &[Real]) -> Result<Vec<Real>, PlanError> {
+    let dof = robot.dof();
+    let joint_of: Vec<usize> = robot
+        .joints
+        .iter()
+        .enumerate()
+        .filter(|(_, j)| j.is_actuated())
+        .map(|(i, _)| i)
+        .collect();
+    let kinds = robot.joint_kinds();
+    let mut weights = vec![MIN_WEIGHT; dof];
+    let mut any_ellipsoid = false;
+    for q in nodes.chunks_exact(dof) {
+        let frames = robot.forward_kinematics(q)?;
+        let ellipsoids = robot.posed_ellipsoids(&frames);
+        any_ellipsoid |= !ellipsoids.is_empty();
+        for (a, &j) in joint_of.iter().enumerate() {
+            if kinds[a] == JointKind::Prismatic {
+                weights[a] = 1.0;
+                continue;
+            }
+            let Some((p, axis)) = robot.joint_axis_in_base(&frames, j) else {
+                continue;
+            };
+            for (link, e) in &ellipsoids {
+                if link.index() <= j {
+                    continue;
+                }
+                let c = geom::Point3::from(e.pose.translation.vector);
+                let r = (c - p).cross(&axis).norm() + e.radii.max();
+                weights[a] = weights[a].max(r);
+            }
+        }
+    }
+    if !any_ellipsoid {
+        return Err(PlanError::Robot {
+            robot: robot.name.clone(),
+            message: "no link has a bounding ellipsoid (A§3.2.1.4)".into(),
+        });
+    }
+    Ok(weights)
+}
+
+/// Edges: each node to its `k` nearest (ties by index), plus Prim's minimum
+/// spanning tree of the complete graph so the roadmap is connected. Sorted,
+/// without duplicates.
+fn connect(nodes: &[Real], weights: &[Real], k: usize) -> Vec<Edge> {
+    let dof = weights.len();
+    let n = nodes.len() / dof;
+    let node = |i: usize| &nodes[i * dof..(i + 1) * dof];
+    let mut edges: Vec<Edge> = (0..n)
+        .into_par_iter()
+        .flat_map_iter(|i| {
+            let mut d: Vec<(usize, Real)> = (0..n)
+                .filter(|&j| j != i)
+                .map(|j| (j, weighted_distance(weights, node(i), node(j))))
+                .collect();
+            let k = k.min(d.len());
+            if k > 0 {
+                d.select_nth_unstable_by(k - 1, |a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+            }
+            d.truncate(k);
+            d.into_iter().map(move |(j, cost)| Edge {
+                a: i.min(j) as u32,
+                b: i.max(j) as u32,
+                cost,
+            })
+        })
+        .collect();
+    // Prim on the complete graph, O(n²).
+    if n > 1 {
+        let mut in_tree = vec![false; n];
+        let mut best = vec![(Real::INFINITY, 0usize); n];
+        in_tree[0] = true;
+        for (j, b) in best.iter_mut().enumerate().skip(1) {
+            *b = (weighted_distance(weights, node(0), node(j)), 0);
+        }
+        for _ in 1..n {
+            let Some(v) = (0..n)
+                .filter(|&j| !in_tree[j])
+                .min_by(|&a, &b| best[a].0.total_cmp(&best[b].0).then(a.cmp(&b)))
+            else {
+                break;
+            };
+            in_tree[v] = true;
+            let (cost, u) = best[v];
+            edges.push(Edge {
+                a: u.min(v) as u32,
+                b: u.max(v) as u32,
+                cost,
+            });
+            for j in 0..n {
+                if !in_tree[j] {
+                    let d = weighted_distance(weights, node(v), node(j));
+                    if d < best[j].0 {
+                        best[j] = (d, v);
+                    }
+                }
+            }
+        }
+    }
+    edges.sort_by_key(|e| (e.a, e.b));
+    edges.dedup_by(|x, y| x.a == y.a && x.b == y.b);
+    edges
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A checker over a 2-D joint space with a forbidden square.
+    struct Square {
+        lo: [Real; 2],
+        hi: [Real; 2],
+        step: Real,
+    }
+
+    impl Square {
+        fn inside(&self, q: &[Real]) -> bool {
+            (0..2).all(|i| q[i] > self.lo[i] && q[i] < self.hi[i])
+        }
+    }
+
+    impl MotionChecker for Square {
+        fn pose_ok(&mut self, q: &[Real]) -> bool {
+            !self.inside(q)
+        }
+        fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
+            let len = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+            let steps = (len / self.step).ceil().max(1.0) as usize;
+            (0..=steps).all(|s| {
+                let t = s as Real / steps as Real;
+                let q = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+                !self.inside(&q)
+            })
+        }
+    }
+
+    fn grid_roadmap(n: usize) -> Roadmap {
+        // An n × n lattice over [−1, 1]², unit weights, 8 neighbours.
+        let mut nodes = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let s = |k: usize| -1.0 + 2.0 * k as Real / (n - 1) as Real;
+                nodes.push(vec![s(i), s(j)]);
+            }
+        }
+        let weights = vec![1.0, 1.0];
+        let flat: Vec<Real> = nodes.concat();
+        let edges = connect(&flat, &weights, 8);
+        Roadmap::from_parts(RoadmapParts {
+            dof: 2,
+            nodes,
+            weights,
+            edges,
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn a_star_goes_around_a_forbidden_square_and_is_shortest() {
+        let map = grid_roadmap(21);
+        assert_eq!(map.components(), 1);
+        let mut checker = Square {
+            lo: [-0.5, -0.5],
+            hi: [0.5, 0.5],
+            step: 0.01,
+        };
+        let from = [-0.8, 0.0];
+        let to = [0.8, 0.0];
+        let path = map.plan(&from, &to, 4, &mut checker).unwrap();
+        assert_eq!(path.waypoints.first().unwrap(), &from.to_vec());
+        assert_eq!(path.waypoints.last().unwrap(), &to.to_vec());
+        for w in path.waypoints.windows(2) {
+            assert!(checker.motion_ok(&w[0], &w[1]));
+        }
+        // L1 around the square: 0.3 to the side rows at |y| ≥ 0.5, then
+        // across and back: at least 2·0.5 + 1.6 = 2.6; the lattice (0.1
+        // spacing) achieves it exactly.
+        assert!(path.cost >= 2.6 - 1e-9, "{}", path.cost);
+        assert!(path.cost <= 2.6 + 1e-9, "{}", path.cost);
+        // A free straight line is taken directly.
+        let direct = map
+            .plan(&[-0.8, 0.8], &[0.8, 0.8], 4, &mut checker)
+            .unwrap();
+        assert_eq!(direct.waypoints.len(), 2);
+        assert!(direct.nodes.is_empty());
+        // Into the square: no path.
+        assert!(map.plan(&from, &[0.0, 0.0], 4, &mut checker).is_none());
+    }
+
+    #[test]
+    fn usage_of_a_chain_counts_paths_through_each_node() {
+        // A path graph 0–1–2–3: ordered pairs 12; node 1 lies on the paths
+        // of pairs with an end at 1 (6) and of 0↔2, 0↔3 (4): 10.
+        let nodes = vec![vec![0.0], vec![1.0], vec![2.0], vec![3.0]];
+        let edges = vec![
+            Edge {
+                a: 0,
+                b: 1,
+                cost: 1.0,
+            },
+            Edge {
+                a: 1,
+                b: 2,
+                cost: 1.0,
+            },
+            Edge {
+                a: 2,
+                b: 3,
+                cost: 1.0,
+            },
+        ];
+        let map = Roadmap::from_parts(RoadmapParts {
+            dof: 1,
+            nodes,
+            weights: vec![1.0],
+            edges,
+        })
+        .unwrap();
+        let l = map.usage_likelihood();
+        let expect = [6.0 / 12.0, 10.0 / 12.0, 10.0 / 12.0, 6.0 / 12.0];
+        for (a, b) in l.iter().zip(expect) {
+            assert!((a - b).abs() < 1e-12, "{l:?}");
+        }
+    }
+
+    #[test]
+    fn usage_matches_brute_force_on_a_random_roadmap() {
+        // Every pair's path from a second method: Floyd–Warshall with the
+        // same lowest-index tie rule, then walk the paths.
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let n = 40;
+        let nodes: Vec<Vec<Real>> = (0..n)
+            .map(|_| vec![rng.random_range(0.0..1.0), rng.random_range(0.0..1.0)])
+            .collect();
+        let weights = vec![1.0, 0.7];
+        let edges = connect(&nodes.concat(), &weights, 3);
+        let map = Roadmap::from_parts(RoadmapParts {
+            dof: 2,
+            nodes,
+            weights,
+            edges: edges.clone(),
+        })
+        .unwrap();
+        let mut d = vec![vec![Real::INFINITY; n]; n];
+        for (i, row) in d.iter_mut().enumerate() {
+            row[i] = 0.0;
+        }
+        for e in &edges {
+            d[e.a as usize][e.b as usize] = e.cost;
+            d[e.b as usize][e.a as usize] = e.cost;
+        }
+        for k in 0..n {
+            for i in 0..n {
+                for j in 0..n {
+                    if d[i][k] + d[k][j] < d[i][j] {
+                        d[i][j] = d[i][k] + d[k][j];
+                    }
+                }
+            }
+        }
+        let mut counts = vec![0.0; n];
+        let mut pairs = 0.0;
+        #[allow(clippy::needless_range_loop)]
+        for s in 0..n {
+            for t in 0..n {
+                if s == t {
+                    continue;
+                }
+                pairs += 1.0;
+                // Walk back from t: the predecessor is a neighbour u with
+                // d[s][u] + w(u, v) ≈ d[s][v] (lowest index among ties).
+                let mut v = t;
+                counts[v] += 1.0;
+                while v != s {
+                    let u = edges
+                        .iter()
+                        .filter_map(|e| {
+                            let (x, y) = (e.a as usize, e.b as usize);
+                            let u = if x == v {
+                                y
+                            } else if y == v {
+                                x
+                            } else {
+                                return None;
+                            };
+                            (d[s][u] + e.cost <= d[s][v] + 1e-9 * (1.0 + d[s][v])).then_some(u)
+                        })
+                        .min()
+                        .unwrap();
+                    counts[u] += 1.0;
+                    v = u;
+                }
+            }
+        }
+        let l = map.usage_likelihood();
+        for i in 0..n {
+            assert!(
+                (l[i] - counts[i] / pairs).abs() < 1e-12,
+                "node {i}: {} vs {}",
+                l[i] * pairs,
+                counts[i]
+            );
+        }
+    }
+
+    #[test]
+    fn from_parts_rejects_inconsistent_parts() {
+        let bad = RoadmapParts {
+            dof: 2,
+            nodes: vec![vec![0.0, 0.0], vec![1.0]],
+            weights: vec![1.0, 1.0],
+            edges: vec![],
+        };
+        assert!(Roadmap::from_parts(bad).unwrap_err().contains("node 1"));
+        let bad = RoadmapParts {
+            dof: 1,
+            nodes: vec![vec![0.0], vec![1.0]],
+            weights: vec![1.0],
+            edges: vec![Edge {
+                a: 1,
+                b: 5,
+                cost: 1.0,
+            }],
+        };
+        assert!(Roadmap::from_parts(bad).unwrap_err().contains("edge 1–5"));
+    }
+}

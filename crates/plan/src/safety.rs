@@ -1,0 +1,197 @@
+//! Safe manipulator poses (A§3.2.1.4, eq. 3.4–3.6): the smallest algebraic
+//! distance `dist(Q)` from the links' bounding ellipsoids to every voxel that
+//! is occupied **or unknown**; a pose is usable only when `dist(Q) > 1`, and a
+//! motion only when every configuration checked along it is.
+
+use crate::roadmap::{MotionChecker, weighted_distance};
+use crate::{PlanConfig, PlanError};
+use geom::{Ellipsoid, Isometry3, Real};
+use map::{OccupancyGrid, VoxelKey, VoxelState};
+use robot::Robot;
+
+/// The ellipsoid safety measure of one robot placed in the world.
+#[derive(Clone, Debug)]
+pub struct Safety {
+    robot: Robot,
+    world_from_base: Isometry3,
+    weights: Vec<Real>,
+    check_step_m: Real,
+    cap: Real,
+}
+
+impl Safety {
+    /// The measure for `robot` at `world_from_base`, checking motions every
+    /// `config.check_step_m` of the distance with joint weights `weights` (the
+    /// roadmap's).
+    pub fn new(
+        robot: Robot,
+        world_from_base: Isometry3,
+        config: &PlanConfig,
+        weights: Vec<Real>,
+    ) -> Result<Self, PlanError> {
+        config.validate(robot.dof())?;
+        if weights.len() != robot.dof() || weights.iter().any(|w| !(w.is_finite() && *w > 0.0)) {
+            return Err(PlanError::config(
+                "plan.joint_weights",
+                "one positive finite weight per joint",
+                format!("{weights:?}"),
+            ));
+        }
+        Ok(Self {
+            robot,
+            world_from_base,
+            weights,
+            check_step_m: config.check_step_m,
+            cap: config.safety_cap,
+        })
+    }
+
+    /// The robot.
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+
+    /// Where the robot's base stands in the world (the grid's frame).
+    pub fn world_from_base(&self) -> &Isometry3 {
+        &self.world_from_base
+    }
+
+    /// The largest value [`Safety::dist`] resolves.
+    pub fn cap(&self) -> Real {
+        self.cap
+    }
+
+    /// The bounding ellipsoids of links 1.. (the base link never moves and is
+    /// not checked, as in eq. 3.5's `i ∈ {1, …, 6}`) at `q`, in the world frame.
+    pub fn ellipsoids(&self, q: &[Real]) -> Result<Vec<Ellipsoid>, PlanError> {
+        let frames = self.robot.forward_kinematics(q)?;
+        Ok(self
+            .robot
+            .posed_ellipsoids(&frames)
+            .into_iter()
+            .filter(|(link, _)| link.index() > 0)
+            .map(|(_, e)| e.transformed(&self.world_from_base))
+            .collect())
+    }
+
+    /// `dist(Q)` of eq. 3.5 over the voxel centres of `grid` that are occupied
+    /// or unknown (everything outside the grid counts as unknown), capped at
+    /// [`Safety::cap`].
+    pub fn dist(&self, grid: &OccupancyGrid, q: &[Real]) -> Result<Real, PlanError> {
+        let mut best = self.cap;
+        for e in self.ellipsoids(q)? {
+            best = best.min(ellipsoid_dist(grid, &e, best));
+        }
+        Ok(best)
+    }
+
+    /// The smallest `dist(Q)` over the configurations checked along the
+    /// straight joint-space motion `a → b` (ends included, at least every
+    /// `check_step_m` of weighted distance). Stops early, returning the value
+    /// found, once a configuration is at or below `stop_at`.
+    pub fn motion_dist(
+        &self,
+        grid: &OccupancyGrid,
+        a: &[Real],
+        b: &[Real],
+        stop_at: Real,
+    ) -> Result<Real, PlanError> {
+        let mut best = Real::INFINITY;
+        for q in self.interpolate(a, b) {
+            best = best.min(self.dist(grid, &q)?);
+            if best <= stop_at {
+                break;
+            }
+        }
+        Ok(best)
+    }
+
+    /// The configurations checked along `a → b`: `n + 1` evenly spaced, `n`
+    /// the fewest steps of at most `check_step_m` weighted distance.
+    pub fn interpolate(&self, a: &[Real], b: &[Real]) -> Vec<Vec<Real>> {
+        let len = weighted_distance(&self.weights, a, b);
+        let steps = (len / self.check_step_m).ceil().max(1.0) as usize;
+        (0..=steps)
+            .map(|s| {
+                let t = s as Real / steps as Real;
+                a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect()
+            })
+            .collect()
+    }
+
+    /// A [`MotionChecker`] against `grid` (safe: `dist(Q) > 1`).
+    pub fn checker<'a>(&'a self, grid: &'a OccupancyGrid) -> SafetyChecker<'a> {
+        SafetyChecker {
+            safety: self,
+            grid,
+            checked: 0,
+        }
+    }
+}
+
+/// Smallest algebraic distance from `e` to the centre of any occupied or
+/// unknown voxel, among voxels within `bound` of it (larger values report
+/// `bound`).
+fn ellipsoid_dist(grid: &OccupancyGrid, e: &Ellipsoid, bound: Real) -> Real {
+    let v = grid.geometry().voxel_m();
+    let reach = Ellipsoid::new(e.pose, e.radii * bound.sqrt()).bounding_box();
+    let lo = VoxelKey::of_point(&reach.min, v);
+    let hi = VoxelKey::of_point(&reach.max, v);
+    let (Some(lo), Some(hi)) = (lo, hi) else {
+        return 0.0;
+    };
+    let (lo, hi) = (lo.coords(), hi.coords());
+    // s = diag(1/r) Rᵀ (p − c), stepped along x.
+    let inv = e.pose.rotation.inverse();
+    let scale = e.radii.map(|r| 1.0 / r);
+    let to_local = |p: &geom::Point3| {
+        (inv * (p - geom::Point3::from(e.pose.translation.vector))).component_mul(&scale)
+    };
+    let step_x = (inv * geom::Vector3::new(v, 0.0, 0.0)).component_mul(&scale);
+    let mut best = bound;
+    for z in lo[2]..=hi[2] {
+        for y in lo[1]..=hi[1] {
+            let first = VoxelKey::new(lo[0], y, z);
+            let mut s = to_local(&first.center(v));
+            for x in lo[0]..=hi[0] {
+                let d = s.norm_squared();
+                if d < best && grid.state(VoxelKey::new(x, y, z)) != VoxelState::Free {
+                    best = d;
+                }
+                s += step_x;
+            }
+        }
+    }
+    best
+}
+
+/// [`Safety`] against one grid, as the roadmap's motion checker.
+#[derive(Debug)]
+pub struct SafetyChecker<'a> {
+    safety: &'a Safety,
+    grid: &'a OccupancyGrid,
+    checked: usize,
+}
+
+impl SafetyChecker<'_> {
+    /// Configurations evaluated so far.
+    pub fn configurations_checked(&self) -> usize {
+        self.checked
+    }
+}
+
+impl MotionChecker for SafetyChecker<'_> {
+    fn pose_ok(&mut self, q: &[Real]) -> bool {
+        self.checked += 1;
+        self.safety.dist(self.grid, q).is_ok_and(|d| d > 1.0)
+    }
+
+    fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
+        for q in self.safety.interpolate(a, b) {
+            if !self.pose_ok(&q) {
+                return false;
+            }
+        }
+        true
+    }
+}
