@@ -119,8 +119,12 @@ impl SweepConfig {
         {
             start = start.clamp(lo, hi - alpha);
         }
+        // Clamped: `start + step·k` can pass the upper limit by rounding.
         (0..self.scan_count())
-            .map(|k| start + step * k as Real)
+            .map(|k| {
+                let t = start + step * k as Real;
+                limits.map_or(t, |(lo, hi)| t.clamp(lo, hi))
+            })
             .collect()
     }
 }
@@ -501,6 +505,13 @@ mod tests {
         let t = s.tilt_values(-110f64.to_radians(), Some(lim));
         assert!((t[0] - lim.0).abs() < 1e-12);
         assert!(t.iter().all(|v| *v >= lim.0 - 1e-12 && *v <= lim.1 + 1e-12));
+        // At the upper limit every value stays inside it exactly (a robot
+        // refuses a joint an ulp past its limit).
+        for centre in [120.0f64, 119.9, 95.0] {
+            let t = s.tilt_values(centre.to_radians(), Some(lim));
+            assert!(t.iter().all(|v| *v >= lim.0 && *v <= lim.1), "{centre}");
+            assert_eq!(*t.last().unwrap(), lim.1.min(t[0] + 60f64.to_radians()));
+        }
         assert!(SweepConfig { step_deg: 0.0, ..s }.validate().is_err());
     }
 
