@@ -156,6 +156,12 @@ pub struct OccupancyConfig {
     pub weights: [Real; 3],
     /// Occlusion importance.
     pub occlusion: OcclusionConfig,
+    /// A ray of a gridded sweep that returned nothing frees the voxels along
+    /// it up to this distance, metres (Paul's perfect-detection model: no
+    /// return means no surface within range; set it a little short of the
+    /// scanner's range so noise at the far end cannot free a surface).
+    /// `None` (the default): rays without a return change nothing.
+    pub free_misses_m: Option<Real>,
 }
 
 impl Default for OccupancyConfig {
@@ -165,6 +171,7 @@ impl Default for OccupancyConfig {
             regions: RegionsConfig::default(),
             weights: [0.6, 0.35, 0.05],
             occlusion: OcclusionConfig::default(),
+            free_misses_m: None,
         }
     }
 }
@@ -193,6 +200,15 @@ impl OccupancyConfig {
                 "occupancy.weights",
                 "three finite, non-negative weights",
                 format!("{:?}", self.weights),
+            ));
+        }
+        if let Some(r) = self.free_misses_m
+            && !(r.is_finite() && r > 0.0)
+        {
+            return Err(MapError::config(
+                "occupancy.free_misses_m",
+                "a positive length, or absent",
+                r,
             ));
         }
         let o = &self.occlusion;
@@ -336,8 +352,16 @@ impl GridGeometry {
         Some(c)
     }
 
-    /// Storage slots, padding of the last bricks included.
-    fn slot_count(&self) -> usize {
+    /// A dense index of the voxel, `< slot_count()`, for callers keeping
+    /// their own per-voxel scratch (visit stamps); `None` outside the grid.
+    #[inline]
+    pub fn slot_of(&self, key: VoxelKey) -> Option<usize> {
+        self.cell(key).map(|c| self.index(c))
+    }
+
+    /// Storage slots, padding of the last bricks included: the range of
+    /// [`GridGeometry::slot_of`].
+    pub fn slot_count(&self) -> usize {
         self.bricks.iter().product::<usize>() * BRICK_VOXELS
     }
 
@@ -771,7 +795,22 @@ impl OccupancyGrid {
             Vec::new()
         };
         let pts = sweep.points();
-        self.integrate_checked(pts.len(), |k| (pts[k].origin, pts[k].point), &jumps)
+        let misses = match self.config.free_misses_m {
+            Some(r) => miss_rays(sweep, r),
+            None => Vec::new(),
+        };
+        let n = pts.len();
+        self.integrate_checked(
+            n + misses.len(),
+            |k| {
+                if k < n {
+                    (pts[k].origin, pts[k].point, true)
+                } else {
+                    (misses[k - n].0, misses[k - n].1, false)
+                }
+            },
+            &jumps,
+        )
     }
 
     /// Integrate points measured along rays from per-point `origins` (a plain
@@ -796,15 +835,15 @@ impl OccupancyGrid {
         } else {
             Vec::new()
         };
-        Ok(self.integrate_checked(points.len(), |k| (origins[k], points[k]), &jumps))
+        Ok(self.integrate_checked(points.len(), |k| (origins[k], points[k], true), &jumps))
     }
 
-    /// Integrate `n` checked rays (`ray(k)` = (origin, point)) and flag the
-    /// occlusion segments `jumps`.
+    /// Integrate `n` checked rays (`ray(k)` = (origin, end, the end is a
+    /// return)) and flag the occlusion segments `jumps`.
     fn integrate_checked(
         &mut self,
         n: usize,
-        ray: impl Fn(usize) -> (Point3, Point3) + Sync,
+        ray: impl Fn(usize) -> (Point3, Point3, bool) + Sync,
         jumps: &[(Point3, Point3)],
     ) -> IntegrationStats {
         let cells = self.cells();
@@ -812,8 +851,8 @@ impl OccupancyGrid {
             .into_par_iter()
             .with_min_len(1024)
             .fold(Delta::default, |mut d, k| {
-                let (o, p) = ray(k);
-                cells.integrate_ray(&o, &p, true, &mut d);
+                let (o, p, hit) = ray(k);
+                cells.integrate_ray(&o, &p, hit, &mut d);
                 d
             })
             .reduce(Delta::default, Delta::add);
@@ -882,6 +921,26 @@ impl OccupancyGrid {
             })
             .sum::<Real>()
             * std::f64::consts::LN_2
+    }
+
+    /// The term a voxel adds to [`OccupancyGrid::h1_weighted`] while it is
+    /// unknown: `ln 2 · ι^[occluded] · Σ c_wk` over the regions holding it
+    /// (an A1 voxel counts in A1, A2 and A3). 0 outside the grid. What a
+    /// prediction credits for revealing the voxel (A§4.2).
+    pub fn h1_weight(&self, key: VoxelKey) -> Real {
+        let Some(inner) = self.region_of(key) else {
+            return 0.0;
+        };
+        let w: Real = Region::ALL[inner.index()..]
+            .iter()
+            .map(|r| self.config.weights[r.index()])
+            .sum();
+        let iota = if self.is_important(key) {
+            self.config.occlusion.importance
+        } else {
+            1.0
+        };
+        w * iota * std::f64::consts::LN_2
     }
 
     /// Set the probability of C-space interference `P(x_c)` of one voxel (A
@@ -1097,6 +1156,46 @@ fn decode(bits: u64) -> VoxelState {
 /// `p = P(x_c)` (A eq. 4.14): the binary entropy of the one-sided probability
 /// `q = p / 2`,
 ///
+/// The rays of a gridded sweep that returned nothing, as (origin, point
+/// `range_m` along the ray). Empty for a sweep without its grid, scanner poses
+/// or bearings (a list, or a file).
+fn miss_rays(sweep: &Sweep, range_m: Real) -> Vec<(Point3, Point3)> {
+    let (Some(shape), poses, bearings) = (
+        sweep.grid_shape(),
+        sweep.scanner_poses(),
+        sweep.bearings_rad(),
+    ) else {
+        return Vec::new();
+    };
+    let (scans, rays) = (shape.scans as usize, shape.rays_per_scan as usize);
+    if poses.len() != scans || bearings.len() != rays {
+        return Vec::new();
+    }
+    let mut returned = vec![false; scans * rays];
+    for p in sweep.points() {
+        if let Some(c) = p.cell
+            && (c.scan as usize) < scans
+            && (c.ray as usize) < rays
+        {
+            returned[c.scan as usize * rays + c.ray as usize] = true;
+        }
+    }
+    let dirs: Vec<geom::Vector3> = bearings
+        .iter()
+        .map(|b| sensor::beam_direction(*b))
+        .collect();
+    let mut out = Vec::new();
+    for (s, pose) in poses.iter().enumerate() {
+        let o = Point3::from(pose.translation.vector);
+        for (r, d) in dirs.iter().enumerate() {
+            if !returned[s * rays + r] {
+                out.push((o, o + pose.rotation * d * range_m));
+            }
+        }
+    }
+    out
+}
+
 /// `h(p) = −q ln q − (1 − q) ln(1 − q)`, `0 ln 0 = 0`,
 ///
 /// which is 0 for `p = 0` (a voxel no pose interferes with) and rises to its

@@ -40,6 +40,7 @@ fn tiny_config() -> OccupancyConfig {
             enabled: false,
             ..OcclusionConfig::default()
         },
+        free_misses_m: None,
     }
 }
 
@@ -173,7 +174,62 @@ fn room_config(voxel_m: Real, occlusion: bool) -> OccupancyConfig {
             enabled: occlusion,
             ..OcclusionConfig::default()
         },
+        free_misses_m: None,
     }
+}
+
+#[test]
+fn misses_free_their_rays_up_to_the_set_range_and_no_farther() {
+    // A slab at z = 1 over y ≥ 0 only: rays toward y < 0 return nothing.
+    let scene =
+        Scene::from_mesh("half", slab(1.0, 0.0), default_materials(), MaterialId(0)).unwrap();
+    let sweep = sweep_of(&scene, &Isometry3::identity(), false, 2);
+    let shape = sweep.grid_shape().unwrap();
+    let misses = (shape.scans * shape.rays_per_scan) as usize - sweep.len();
+    assert!(misses > 1000, "{misses}");
+    let mut plain = OccupancyGrid::new(room_config(0.05, false)).unwrap();
+    let mut freeing = OccupancyGrid::new(OccupancyConfig {
+        free_misses_m: Some(1.5),
+        ..room_config(0.05, false)
+    })
+    .unwrap();
+    let a = plain.integrate_sweep(&sweep);
+    let b = freeing.integrate_sweep(&sweep);
+    assert_eq!(b.rays, a.rays + misses);
+    freeing.check_invariants().unwrap();
+    // Returns occupy the same voxels; misses only add free ones.
+    for k in all_keys(&freeing) {
+        let (p, f) = (plain.state(k), freeing.state(k));
+        if p != VoxelState::Unknown {
+            assert_eq!(p, f, "{k}");
+        }
+    }
+    assert!(freeing.counts(Region::A3).free > plain.counts(Region::A3).free);
+    // Along a missed ray (the scanner's frame is the world's: the centre ray is
+    // +z, bearing θ goes toward −y sin θ): free to 1.5 m, unknown beyond.
+    let bearing = 0.5f64; // toward y < 0, where nothing is.
+    let dir = sensor::beam_direction(bearing);
+    let key = |t: Real| freeing.key_of(&Point3::from(dir * t)).unwrap();
+    assert_eq!(freeing.state(key(0.5)), VoxelState::Free);
+    assert_eq!(freeing.state(key(1.4)), VoxelState::Free);
+    assert_eq!(freeing.state(key(1.7)), VoxelState::Unknown);
+    assert_eq!(plain.state(key(1.4)), VoxelState::Unknown);
+    // A list without its grid cannot name its misses: nothing is freed.
+    let mut listed = OccupancyGrid::new(OccupancyConfig {
+        free_misses_m: Some(1.5),
+        ..room_config(0.05, false)
+    })
+    .unwrap();
+    listed.integrate_sweep(&sweep.without_grid());
+    assert_eq!(listed.counts(Region::A3), plain.counts(Region::A3));
+    // The range is checked.
+    assert!(
+        OccupancyGrid::new(OccupancyConfig {
+            free_misses_m: Some(-1.0),
+            ..room_config(0.05, false)
+        })
+        .is_err()
+    );
 }
 
 #[test]
@@ -272,6 +328,20 @@ fn occlusion_importance_raises_voxels_between_points_across_a_range_jump() {
     let brute = h1_weighted_brute_force(&weighted, iota);
     assert!((weighted.h1_weighted() - brute).abs() < 1e-9 * brute);
     assert!(weighted.h1_weighted() > plain.h1_weighted());
+    // The per-voxel term a prediction credits sums to the same H1.
+    let per_voxel: Real = keys
+        .iter()
+        .filter(|k| weighted.state(**k) == VoxelState::Unknown)
+        .map(|k| weighted.h1_weight(*k))
+        .sum();
+    assert!((per_voxel - weighted.h1_weighted()).abs() < 1e-9 * brute);
+    // Slots are a dense one-to-one index of the voxels.
+    let g = weighted.geometry();
+    let mut slots: Vec<usize> = keys.iter().map(|k| g.slot_of(*k).unwrap()).collect();
+    slots.sort_unstable();
+    slots.dedup();
+    assert_eq!(slots.len(), keys.len());
+    assert!(*slots.last().unwrap() < g.slot_count());
     let rise: Real = flagged
         .iter()
         .map(|k| {
