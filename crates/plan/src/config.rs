@@ -27,7 +27,7 @@ pub struct PlanConfig {
     pub joint_weights: Vec<Real>,
     /// Configurations along a motion are checked at least every
     /// `check_step_m` of joint-weighted distance (with derived weights: of
-    /// envelope travel). Half the default 0.05 m planning voxel.
+    /// envelope travel). A quarter of exploration's 0.1 m planning voxel.
     pub check_step_m: Real,
     /// `dist(Q)` (eq. 3.5) is resolved up to this value; larger distances
     /// report `safety_cap`. Voxels farther than `√cap` ellipsoid radii are not

@@ -78,9 +78,33 @@ impl Safety {
     /// or unknown (everything outside the grid counts as unknown), capped at
     /// [`Safety::cap`].
     pub fn dist(&self, grid: &OccupancyGrid, q: &[Real]) -> Result<Real, PlanError> {
-        let mut best = self.cap;
-        for e in self.ellipsoids(q)? {
-            best = best.min(ellipsoid_dist(grid, &e, best));
+        self.dist_of_links(grid, q, 1..usize::MAX, self.cap, Real::NEG_INFINITY)
+    }
+
+    /// `dist(Q)` over the ellipsoids of the links with index in `links` only
+    /// (link 0 never counts), resolved up to `bound` (at most the cap), and
+    /// returned as soon as a value at or below `stop_at` is found (a pose
+    /// already known unsafe need not be measured exactly). Used when only some
+    /// links move, as during a tilt sweep.
+    pub fn dist_of_links(
+        &self,
+        grid: &OccupancyGrid,
+        q: &[Real],
+        links: std::ops::Range<usize>,
+        bound: Real,
+        stop_at: Real,
+    ) -> Result<Real, PlanError> {
+        let frames = self.robot.forward_kinematics(q)?;
+        let mut best = bound.min(self.cap);
+        for (link, e) in self.robot.posed_ellipsoids(&frames) {
+            if link.index() == 0 || !links.contains(&link.index()) {
+                continue;
+            }
+            let e = e.transformed(&self.world_from_base);
+            best = best.min(ellipsoid_dist(grid, &e, best, stop_at));
+            if best <= stop_at {
+                break;
+            }
         }
         Ok(best)
     }
@@ -131,8 +155,8 @@ impl Safety {
 
 /// Smallest algebraic distance from `e` to the centre of any occupied or
 /// unknown voxel, among voxels within `bound` of it (larger values report
-/// `bound`).
-fn ellipsoid_dist(grid: &OccupancyGrid, e: &Ellipsoid, bound: Real) -> Real {
+/// `bound`); returns early with the first value at or below `stop_at`.
+fn ellipsoid_dist(grid: &OccupancyGrid, e: &Ellipsoid, bound: Real, stop_at: Real) -> Real {
     let v = grid.geometry().voxel_m();
     let reach = Ellipsoid::new(e.pose, e.radii * bound.sqrt()).bounding_box();
     let lo = VoxelKey::of_point(&reach.min, v);
@@ -157,6 +181,9 @@ fn ellipsoid_dist(grid: &OccupancyGrid, e: &Ellipsoid, bound: Real) -> Real {
                 let d = s.norm_squared();
                 if d < best && grid.state(VoxelKey::new(x, y, z)) != VoxelState::Free {
                     best = d;
+                    if best <= stop_at {
+                        return best;
+                    }
                 }
                 s += step_x;
             }
@@ -183,7 +210,9 @@ impl SafetyChecker<'_> {
 impl MotionChecker for SafetyChecker<'_> {
     fn pose_ok(&mut self, q: &[Real]) -> bool {
         self.checked += 1;
-        self.safety.dist(self.grid, q).is_ok_and(|d| d > 1.0)
+        self.safety
+            .dist_of_links(self.grid, q, 1..usize::MAX, self.safety.cap, 1.0)
+            .is_ok_and(|d| d > 1.0)
     }
 
     fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
