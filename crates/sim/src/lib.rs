@@ -14,8 +14,10 @@
 //! | [`surface_score`] | [`surface_score::score_surface_model`]: a surface model against the true faces, edges and corners |
 //! | [`table_fit`] | [`table_fit::fit_table`]: a table plane fitted to scan points, as world frame and initial segment |
 //! | [`scan_job`] | the `surveyor scan` job as library calls |
+//! | [`explore_run`] | [`explore_run::run_stage_one`]: AXBAM Stage One through the hardware traits, every motion audited against the map and the ground truth; [`explore_run::ExploreRun::write`] (the `surveyor explore` files) |
 //! | [`follow_run`] | [`follow_run::run_episode`]: a `follow::Follower` through the hardware traits with ground-truth safety; [`follow_run::FollowSetup`] (scenario or scene file → rig + follower), [`follow_run::FollowRun::outputs`] (the `surveyor follow` files) |
 
+pub mod explore_run;
 pub mod follow_run;
 pub mod metrics;
 pub mod range_sensors;
@@ -60,6 +62,15 @@ pub enum SimError {
     /// A sensor configuration is invalid.
     #[error(transparent)]
     Sensor(#[from] sensor::SensorError),
+    /// Planning (the C-space model, safety) failed.
+    #[error(transparent)]
+    Plan(Box<plan::PlanError>),
+    /// Exploration failed.
+    #[error(transparent)]
+    Explore(Box<explore::ExploreError>),
+    /// A map refused a value.
+    #[error(transparent)]
+    Map(Box<map::MapError>),
     /// A scan was requested from a robot without a scanner.
     #[error("the robot carries no scanner")]
     NoScanner,
@@ -71,4 +82,24 @@ pub enum SimError {
         /// Joints the robot has.
         dof: usize,
     },
+}
+
+// Boxed: the planning and exploration errors are large, and `SimError` is
+// returned on every path.
+impl From<plan::PlanError> for SimError {
+    fn from(e: plan::PlanError) -> Self {
+        Self::Plan(Box::new(e))
+    }
+}
+
+impl From<explore::ExploreError> for SimError {
+    fn from(e: explore::ExploreError) -> Self {
+        Self::Explore(Box::new(e))
+    }
+}
+
+impl From<map::MapError> for SimError {
+    fn from(e: map::MapError) -> Self {
+        Self::Map(Box::new(e))
+    }
 }

@@ -1,5 +1,6 @@
 //! Argument definitions and the one library call behind each command.
 
+mod explore;
 mod follow;
 mod maps;
 mod model;
@@ -57,6 +58,10 @@ enum Command {
     /// Pudney's surface following (P ch. 3) in a simulated world: the model, the
     /// steps, the path and a run summary scored against the ground truth.
     Follow(Box<follow::FollowArgs>),
+    /// AXBAM exploration (Paul ch. 3, 4, 6): information-driven viewpoints over
+    /// the voxel map and the arm's configuration space, moving only through
+    /// known free space; the viewpoints, cloud, mesh and a run summary.
+    Explore(explore::ExploreArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -209,6 +214,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Segment(a) => maps::segment(&a),
         Command::Model(a) => model::model(&a),
         Command::Follow(a) => follow::follow(&a),
+        Command::Explore(a) => explore::explore(&a),
     }
 }
 

@@ -1,0 +1,107 @@
+//! `surveyor explore`: AXBAM exploration (Paul ch. 3, 4, 6) in a simulated
+//! world ([`sim::explore_run`]), with its outputs in a folder.
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use sim::Scenario;
+use sim::explore_run::{ExploreOptions, run_stage_one};
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Outputs in --out: viewpoints.csv (one row per viewpoint: k, stage, joints, f1-f4, H1, weighted \
+H1, H2, H3, the weighted H1 predicted and obtained, candidates, Pareto front, unreachable \
+choices, voxels predicted and revealed, joint travel, waypoints, decision_ms, plan_ms, \
+sweep_ms, integrate_ms), cloud.ply (every measured point with its ray origin), mesh.ply (the \
+TSDF mesh) and run.json (viewpoints, termination, collisions, unsafe_configurations with \
+their dist(Q), min_clearance_m, coverage of A1, A2, A3 and per material, decision_ms, wall_s).
+
+Stage One only for now (--stages one): Stage Two (material identification) is not built yet.")]
+pub struct ExploreArgs {
+    /// Built-in scenario (bridge1, bridge2, bridge3) or scenario file.
+    #[arg(long, default_value = "bridge1")]
+    scenario: String,
+    /// Seed of the scanner noise.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Most Stage One viewpoints (the start pose's sweep included).
+    #[arg(long)]
+    max_viewpoints: Option<usize>,
+    /// Stages to run: `one` (Stage Two is not built yet).
+    #[arg(long, default_value = "one")]
+    stages: String,
+    /// Where to cache the C-space model [default: a file in the system's
+    /// temporary folder named after the robot]; it is rebuilt when its inputs
+    /// differ.
+    #[arg(long)]
+    cspace_cache: Option<PathBuf>,
+    /// Write zeros in the time columns so outputs are byte-identical run to run.
+    #[arg(long)]
+    no_timings: bool,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+pub fn explore(args: &ExploreArgs) -> Result<()> {
+    if args.stages != "one" {
+        bail!(
+            "--stages {}: only `one` (Stage One) is built so far; Stage Two is issue 10's next step",
+            args.stages
+        );
+    }
+    let loaded = Scenario::load(&args.scenario)?;
+    let robot_name = loaded
+        .scenario
+        .robot
+        .preset
+        .clone()
+        .unwrap_or_else(|| "urdf".into());
+    let cache = args
+        .cspace_cache
+        .clone()
+        .unwrap_or_else(|| std::env::temp_dir().join(format!("surveyor-cspace-{robot_name}.json")));
+    let options = ExploreOptions {
+        seed: args.seed,
+        max_viewpoints: args.max_viewpoints,
+        cspace_cache: Some(cache),
+        timings: !args.no_timings,
+        ..ExploreOptions::default()
+    };
+    let t = std::time::Instant::now();
+    let run = run_stage_one(&loaded, &options, &mut |r| {
+        eprintln!(
+            "stage 1, viewpoint {:>2}: H1 {:>9.1} (weighted {:>8.1}), H2 {:>7.3}, revealed {:>6}, {} candidates, decision {:>6.0} ms",
+            r.k, r.h1, r.h1_weighted, r.h2, r.revealed, r.candidates, r.decision_ms
+        );
+    })?;
+    run.write(&args.out)
+        .with_context(|| format!("writing {}", args.out.display()))?;
+    let json = run.run_json();
+    println!(
+        "{}: stage one ended ({}) after {} viewpoints; {} collisions, {} unsafe configurations, min clearance {:.3} m; C-space model {}",
+        loaded.scenario.name,
+        json["termination"].as_str().unwrap_or(""),
+        run.viewpoints.len(),
+        run.collisions,
+        run.unsafe_configurations.len(),
+        run.min_clearance_m,
+        run.cspace
+    );
+    if let Some(c) = &run.coverage {
+        println!(
+            "coverage of the true surfaces: A1 {:.1} %, A2 {:.1} %, A3 {:.1} %",
+            100.0 * c[0].fraction(),
+            100.0 * c[1].fraction(),
+            100.0 * c[2].fraction()
+        );
+    }
+    println!(
+        "{} points, mesh of {} triangles; {:.1} s; outputs in {}",
+        run.cloud.len(),
+        run.mesh.triangles.len(),
+        t.elapsed().as_secs_f64(),
+        args.out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,139 @@
+//! Stage One's parameters (A Table 6.1 where the thesis gives them).
+
+use crate::ExploreError;
+use geom::Real;
+use plan::PlanConfig;
+use sensor::SweepConfig;
+use serde::{Deserialize, Serialize};
+
+/// How a candidate's sweep is predicted (A§4.2, Fig. 4.3): a subset of the
+/// sweep's rays is cast through the planning grid.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PredictionConfig {
+    /// Angle between predicted rays in a scan, degrees (the scanner's own
+    /// step is 0.36°; 2° puts about one ray per 0.05 m voxel at 1.4 m).
+    pub ray_step_deg: Real,
+    /// Tilt between predicted scans, degrees (the sweep's own step is 0.4°).
+    pub tilt_step_deg: Real,
+}
+
+impl Default for PredictionConfig {
+    fn default() -> Self {
+        Self {
+            ray_step_deg: 2.0,
+            tilt_step_deg: 2.0,
+        }
+    }
+}
+
+/// Parameters of Stage One (A§3.2).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ExploreConfig {
+    /// The C-space model and motion checks (n_Q = 1571, Table 6.1).
+    pub plan: PlanConfig,
+    /// Voxel size of the planning grid (occupancy, H1, H2, dist(Q)), metres.
+    /// Paul's grid held n_v = 41 070 voxels (Table 6.1); 0.1 m over the
+    /// bridge scenes' A3 gives 74 088 (at 0.05 m the ellipsoids' margin over
+    /// the voxel centres is too thin to move: see the README).
+    pub planning_voxel_m: Real,
+    /// The tilt sweep taken at every viewpoint (α = 60°, Table 6.1).
+    pub sweep: SweepConfig,
+    /// Ray subsampling of the information prediction.
+    pub prediction: PredictionConfig,
+    /// Stage One stops when both `ΔH1` and `ΔH2` of the last viewpoint fall
+    /// below this fraction of their initial values (A§3.2.4: 1 %).
+    pub stop_fraction: Real,
+    /// Stage One ends after this many viewpoints at the latest (the first,
+    /// from the start pose, included).
+    pub max_viewpoints: usize,
+    /// Candidates sampled around the current pose at each decision, besides
+    /// the roadmap's `n_Q` nodes (see [`ExploreConfig::local_reach_m`]).
+    pub local_candidates: usize,
+    /// Local candidates move each joint by up to `local_reach_m / wᵢ` (`wᵢ`
+    /// the joint weight, metres of envelope travel per radian), so none moves
+    /// any point of the arm's envelope much more than this (to first order).
+    pub local_reach_m: Real,
+    /// Nodes each end of a motion is joined to when planning through the
+    /// roadmap.
+    pub link_k: usize,
+    /// Chosen candidates tried before a decision gives up (a candidate with
+    /// no safe path is dropped and the choice made again without it).
+    pub max_plan_attempts: usize,
+}
+
+impl Default for ExploreConfig {
+    fn default() -> Self {
+        Self {
+            plan: PlanConfig::default(),
+            planning_voxel_m: 0.1,
+            sweep: SweepConfig::default(),
+            prediction: PredictionConfig::default(),
+            stop_fraction: 0.01,
+            max_viewpoints: 20,
+            local_candidates: 200,
+            local_reach_m: 0.3,
+            link_k: 10,
+            max_plan_attempts: 20,
+        }
+    }
+}
+
+impl ExploreConfig {
+    /// Check every field.
+    pub fn validate(&self) -> Result<(), ExploreError> {
+        let bad = |field: &'static str, expected: &'static str, got: String| ExploreError::Config {
+            field,
+            expected,
+            got,
+        };
+        if !(self.planning_voxel_m.is_finite() && self.planning_voxel_m > 0.0) {
+            return Err(bad(
+                "explore.planning_voxel_m",
+                "a positive length",
+                self.planning_voxel_m.to_string(),
+            ));
+        }
+        self.sweep.validate()?;
+        for (field, v) in [
+            (
+                "explore.prediction.ray_step_deg",
+                self.prediction.ray_step_deg,
+            ),
+            (
+                "explore.prediction.tilt_step_deg",
+                self.prediction.tilt_step_deg,
+            ),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(field, "a positive angle", v.to_string()));
+            }
+        }
+        if !(self.stop_fraction.is_finite() && (0.0..1.0).contains(&self.stop_fraction)) {
+            return Err(bad(
+                "explore.stop_fraction",
+                "a fraction in [0, 1)",
+                self.stop_fraction.to_string(),
+            ));
+        }
+        if !(self.local_reach_m.is_finite() && self.local_reach_m >= 0.0) {
+            return Err(bad(
+                "explore.local_reach_m",
+                "a non-negative length",
+                self.local_reach_m.to_string(),
+            ));
+        }
+        if self.max_viewpoints == 0 {
+            return Err(bad("explore.max_viewpoints", "at least 1", "0".into()));
+        }
+        if self.link_k == 0 || self.max_plan_attempts == 0 {
+            return Err(bad(
+                "explore.link_k / explore.max_plan_attempts",
+                "at least 1",
+                "0".into(),
+            ));
+        }
+        Ok(())
+    }
+}

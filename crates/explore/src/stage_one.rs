@@ -1,0 +1,527 @@
+//! Stage One: geometric and C-space exploration (A§3.2, §4.2–4.3).
+//!
+//! [`StageOne`] holds the planning grid and the C-space model. Each decision
+//! scores every sampled node as a contending viewpoint: its tilt sweep must be
+//! safe (`dist(Q) > 1` at every checked configuration, f4 the smallest); the
+//! sweep's rays are cast through the grid, stopping at occupied voxels, and
+//! the unknown voxels they pass are credited with their geometric (eq. 4.11)
+//! and C-space (eq. 4.14) information: f1 and f2 are what would remain; f3 is
+//! the joint travel (eq. 3.3). The Pareto front, lowest rank sum and f1
+//! tie-break choose (eq. 3.8), and A* through the roadmap must find a safe
+//! path there, else the next choice is tried.
+
+use crate::pareto::{self, Sense};
+use crate::{ExploreConfig, ExploreError};
+use geom::{Isometry3, Point3, Real, UnitVector3};
+use map::{IntegrationStats, OccupancyConfig, OccupancyGrid, VoxelKey};
+use plan::{CspaceModel, Path, Safety, interfering_voxels};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use robot::Robot;
+use sensor::Sweep;
+use std::time::Instant;
+
+/// The objectives of eq. 3.7, in order: f1, f2, f3 minimised, f4 maximised.
+const SENSES: [Sense; 4] = [
+    Sense::Minimise,
+    Sense::Minimise,
+    Sense::Minimise,
+    Sense::Maximise,
+];
+
+/// Joint travel (Σ|Δqᵢ|, radians) under which a candidate is the current pose.
+const SAME_POSE_RAD: Real = 1e-9;
+
+/// One contending viewpoint's scores.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Candidate {
+    /// Roadmap node index, or `None` for a candidate sampled around the
+    /// current pose.
+    pub node: Option<usize>,
+    /// The pose.
+    pub q: Vec<Real>,
+    /// `[f1, f2, f3, f4]`: weighted geometric information predicted to remain,
+    /// C-space information predicted to remain, joint travel (rad), `dist(Q)`
+    /// (smallest over the sweep).
+    pub f: [Real; 4],
+    /// Unknown voxels the sweep is predicted to reveal.
+    pub revealed: usize,
+}
+
+/// What a decision chose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Choice {
+    /// The candidate.
+    pub candidate: Candidate,
+    /// Its rank sum on the Pareto front.
+    pub rank_sum: usize,
+    /// The safe path from the current pose to it.
+    pub path: Path,
+}
+
+/// One Stage One decision.
+#[derive(Clone, Debug)]
+pub struct Decision {
+    /// Every candidate whose sweep is safe, in node order.
+    pub candidates: Vec<Candidate>,
+    /// Size of the Pareto front of the first choice.
+    pub front_size: usize,
+    /// The choice, or `None` when no safe candidate can be reached.
+    pub choice: Option<Choice>,
+    /// Candidates chosen but dropped for want of a safe path.
+    pub unreachable: usize,
+    /// Wall time scoring the candidates, ms.
+    pub score_ms: Real,
+    /// Wall time of the Pareto choice and path planning, ms.
+    pub plan_ms: Real,
+}
+
+/// Why Stage One stops.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Termination {
+    /// A§3.2.4: both changes of the last viewpoint fell below the fraction of
+    /// the initial information.
+    Converged {
+        /// `ΔH1` of the last viewpoint.
+        dh1: Real,
+        /// `ΔH2` of the last viewpoint.
+        dh2: Real,
+    },
+    /// The viewpoint budget is spent.
+    Budget,
+    /// No candidate is both safe and reachable.
+    NoSafeCandidate,
+}
+
+impl Termination {
+    /// A short machine-readable name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Converged { .. } => "information_converged",
+            Self::Budget => "viewpoint_budget",
+            Self::NoSafeCandidate => "no_safe_candidate",
+        }
+    }
+}
+
+/// Stage One's state: the planning grid, the C-space model and the history of
+/// information remaining.
+#[derive(Clone, Debug)]
+pub struct StageOne {
+    config: ExploreConfig,
+    model: CspaceModel,
+    grid: OccupancyGrid,
+    /// Scanner-frame directions of the predicted rays.
+    dirs: Vec<UnitVector3>,
+    max_range_m: Real,
+    /// Index (into `q`) of the tilting joint, and the first link it moves.
+    tilt_joint: usize,
+    tilt_first_link: usize,
+    /// `(H1 weighted, H2)` before any sweep, then after each.
+    history: Vec<(Real, Real)>,
+}
+
+impl StageOne {
+    /// Stage One for the model's robot with the scanner's `bearings_rad` and
+    /// `max_range_m`. The planning grid takes `occupancy`'s regions, weights
+    /// and occlusion settings at `config.planning_voxel_m`; the model's
+    /// `P(ʲx_c)` is applied to it; the space the arm's envelope takes during the
+    /// start pose's sweep is marked free (the only space assumed free before
+    /// the first scan, A§3.2.1.4, §6.1); `H1₀` and `H2₀` are recorded.
+    pub fn new(
+        model: CspaceModel,
+        occupancy: &OccupancyConfig,
+        bearings_rad: &[Real],
+        max_range_m: Real,
+        config: ExploreConfig,
+        start: &[Real],
+    ) -> Result<Self, ExploreError> {
+        config.validate()?;
+        let robot = model.safety().robot();
+        if robot.scanner.is_none() {
+            return Err(ExploreError::Robot {
+                robot: robot.name.clone(),
+                message: "no scanner is mounted".into(),
+            });
+        }
+        let dof = robot.dof();
+        robot.check_joints(start)?;
+        let tilt_joint = config
+            .sweep
+            .joint
+            .checked_sub(1)
+            .filter(|j| *j < dof)
+            .ok_or_else(|| ExploreError::Config {
+                field: "explore.sweep.joint",
+                expected: "a joint of the robot (1-based)",
+                got: format!("{} for a robot with {dof} joints", config.sweep.joint),
+            })?;
+        let tilt_first_link = first_link_moved_by(robot, tilt_joint);
+        if (model.voxel_m() - config.planning_voxel_m).abs() > 1e-12 {
+            return Err(ExploreError::Config {
+                field: "explore.planning_voxel_m",
+                expected: "the C-space model's voxel size",
+                got: format!("{} (model: {})", config.planning_voxel_m, model.voxel_m()),
+            });
+        }
+        let mut grid = OccupancyGrid::new(OccupancyConfig {
+            voxel_m: config.planning_voxel_m,
+            ..*occupancy
+        })?;
+        model.apply_to(&mut grid)?;
+        let step = config.prediction.ray_step_deg.to_radians();
+        let dirs = subsample(bearings_rad, step)
+            .into_iter()
+            .map(|b| UnitVector3::new_normalize(sensor::beam_direction(b)))
+            .collect();
+        let mut stage = Self {
+            config,
+            model,
+            grid,
+            dirs,
+            max_range_m,
+            tilt_joint,
+            tilt_first_link,
+            history: Vec::new(),
+        };
+        let envelope = stage.sweep_envelope(start)?;
+        for key in envelope {
+            if stage.grid.geometry().contains(key) {
+                stage.grid.mark_free(key)?;
+            }
+        }
+        stage
+            .history
+            .push((stage.grid.h1_weighted(), stage.grid.h2()));
+        Ok(stage)
+    }
+
+    /// The planning grid.
+    pub fn grid(&self) -> &OccupancyGrid {
+        &self.grid
+    }
+
+    /// The C-space model.
+    pub fn model(&self) -> &CspaceModel {
+        &self.model
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &ExploreConfig {
+        &self.config
+    }
+
+    /// `(H1 weighted, H2)` before any sweep (`H1₀`, `H2₀`).
+    pub fn initial_information(&self) -> (Real, Real) {
+        self.history[0]
+    }
+
+    /// `(H1 weighted, H2)` now.
+    pub fn information(&self) -> (Real, Real) {
+        *self.history.last().unwrap_or(&(0.0, 0.0))
+    }
+
+    /// Sweeps integrated so far.
+    pub fn sweeps(&self) -> usize {
+        self.history.len() - 1
+    }
+
+    /// Integrate a measured sweep into the planning grid.
+    pub fn integrate(&mut self, sweep: &Sweep) -> IntegrationStats {
+        let stats = self.grid.integrate_sweep(sweep);
+        self.history.push((self.grid.h1_weighted(), self.grid.h2()));
+        stats
+    }
+
+    /// Why Stage One should stop now, if it should: A§3.2.4 after at least
+    /// two sweeps, or the budget.
+    pub fn termination(&self) -> Option<Termination> {
+        let n = self.history.len();
+        if n >= 3 {
+            let (h10, h20) = self.history[0];
+            let (a1, a2) = self.history[n - 2];
+            let (b1, b2) = self.history[n - 1];
+            let (dh1, dh2) = (a1 - b1, a2 - b2);
+            let f = self.config.stop_fraction;
+            if dh1 < f * h10 && dh2 < f * h20 {
+                return Some(Termination::Converged { dh1, dh2 });
+            }
+        }
+        (self.sweeps() >= self.config.max_viewpoints).then_some(Termination::Budget)
+    }
+
+    /// The tilt values of the sweep from `q` (the sweep joint's range; other
+    /// joints held).
+    pub fn sweep_range(&self, q: &[Real]) -> (Vec<Real>, Vec<Real>) {
+        let j = self.tilt_joint;
+        let limits = self.robot().limits()[j].map(|l| (l.min, l.max));
+        let tilts = self.config.sweep.tilt_values(q[j], limits);
+        let mut lo = q.to_vec();
+        let mut hi = q.to_vec();
+        lo[j] = tilts.first().copied().unwrap_or(q[j]);
+        hi[j] = tilts.last().copied().unwrap_or(q[j]);
+        (lo, hi)
+    }
+
+    fn robot(&self) -> &Robot {
+        self.model.safety().robot()
+    }
+
+    fn safety(&self) -> &Safety {
+        self.model.safety()
+    }
+
+    /// Voxels inside the arm's ellipsoids at `q` and along its sweep.
+    fn sweep_envelope(&self, q: &[Real]) -> Result<Vec<VoxelKey>, ExploreError> {
+        let (lo, hi) = self.sweep_range(q);
+        let v = self.grid.geometry().voxel_m();
+        let mut keys = interfering_voxels(self.safety(), q, v)?;
+        for c in self.safety().interpolate(&lo, &hi) {
+            keys.extend(interfering_voxels(self.safety(), &c, v)?);
+        }
+        keys.sort_unstable();
+        keys.dedup();
+        Ok(keys)
+    }
+
+    /// `dist(Q)` of the whole sweep from `q`: the links the tilt does not move
+    /// at `q`, the others at every checked tilt. `None` when some checked
+    /// configuration is at or below 1.
+    pub fn sweep_dist(&self, q: &[Real]) -> Result<Option<Real>, ExploreError> {
+        let safety = self.safety();
+        let fixed =
+            safety.dist_of_links(&self.grid, q, 0..self.tilt_first_link, safety.cap(), 1.0)?;
+        if fixed <= 1.0 {
+            return Ok(None);
+        }
+        let (lo, hi) = self.sweep_range(q);
+        let mut best = fixed;
+        for c in safety.interpolate(&lo, &hi) {
+            best = best.min(safety.dist_of_links(
+                &self.grid,
+                &c,
+                self.tilt_first_link..usize::MAX,
+                best,
+                1.0,
+            )?);
+            if best <= 1.0 {
+                return Ok(None);
+            }
+        }
+        Ok(Some(best))
+    }
+
+    /// The information `(geometric weighted, C-space)` the sweep from `q`
+    /// is predicted to reveal, and the number of unknown voxels: the sweep's
+    /// predicted rays cast through the grid up to the scanner's range,
+    /// stopping at occupied voxels (A§4.2, Fig. 4.3), each unknown voxel
+    /// counted once. `stamp` is scratch of `slot_count()` entries; `mark` must
+    /// differ from every value in it.
+    fn predict(
+        &self,
+        q: &[Real],
+        stamp: &mut [u32],
+        mark: u32,
+    ) -> Result<(Real, Real, usize), ExploreError> {
+        let (lo, hi) = self.sweep_range(q);
+        let j = self.tilt_joint;
+        let span = hi[j] - lo[j];
+        let steps = (span / self.config.prediction.tilt_step_deg.to_radians())
+            .ceil()
+            .max(0.0) as usize;
+        let world_from_base = *self.safety().world_from_base();
+        let geometry = self.grid.geometry();
+        let (mut g1, mut g2, mut n) = (0.0, 0.0, 0usize);
+        let mut c = lo.clone();
+        for s in 0..=steps {
+            c[j] = if steps == 0 {
+                lo[j]
+            } else {
+                lo[j] + span * s as Real / steps as Real
+            };
+            let Some(pose) = self.robot().scanner_pose(&c)? else {
+                continue;
+            };
+            let pose: Isometry3 = world_from_base * pose;
+            let origin = Point3::from(pose.translation.vector);
+            for d in &self.dirs {
+                let dir = UnitVector3::new_unchecked(pose.rotation * d.into_inner());
+                self.grid
+                    .cast_through_unknown(&origin, &dir, self.max_range_m, |key| {
+                        if let Some(slot) = geometry.slot_of(key)
+                            && stamp[slot] != mark
+                        {
+                            stamp[slot] = mark;
+                            g1 += self.grid.h1_weight(key);
+                            g2 += self.grid.cspace_information(key);
+                            n += 1;
+                        }
+                    });
+            }
+        }
+        Ok((g1, g2, n))
+    }
+
+    /// The contending viewpoints of a decision from `q`: the roadmap's nodes,
+    /// then `local_candidates` poses sampled around `q`. Each local pose moves
+    /// `m` joints (`m` uniform in 1..=dof, the joints drawn at random), each
+    /// uniformly by up to `local_reach_m / wᵢ`, clamped to its limits; seeded
+    /// by the plan seed and the number of sweeps so far.
+    pub fn contenders(&self, q: &[Real]) -> Vec<(Option<usize>, Vec<Real>)> {
+        let map = self.model.roadmap();
+        let mut out: Vec<(Option<usize>, Vec<Real>)> = map
+            .nodes()
+            .enumerate()
+            .map(|(i, n)| (Some(i), n.to_vec()))
+            .collect();
+        let seed = self.config.plan.seed
+            ^ 0x9e37_79b9_7f4a_7c15_u64.wrapping_mul(self.sweeps() as u64 + 1);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let limits = self.robot().limits();
+        let dof = q.len();
+        for _ in 0..self.config.local_candidates {
+            let mut c = q.to_vec();
+            let m = rng.random_range(1..=dof);
+            let mut joints: Vec<usize> = (0..dof).collect();
+            for k in 0..m {
+                let pick = rng.random_range(k..dof);
+                joints.swap(k, pick);
+                let j = joints[k];
+                let r = self.config.local_reach_m / map.weights()[j];
+                if r > 0.0 {
+                    c[j] += rng.random_range(-r..r);
+                }
+                if let Some(l) = limits[j] {
+                    c[j] = c[j].clamp(l.min, l.max);
+                }
+            }
+            out.push((None, c));
+        }
+        out
+    }
+
+    /// Score every contending viewpoint ([`StageOne::contenders`]) from the
+    /// current pose `q`; those whose sweep is unsafe are left out.
+    pub fn score(&self, q: &[Real]) -> Result<Vec<Candidate>, ExploreError> {
+        self.robot().check_joints(q)?;
+        let (h1, h2) = self.information();
+        let slots = self.grid.geometry().slot_count();
+        let contenders = self.contenders(q);
+        let scored: Vec<Option<Candidate>> = contenders
+            .into_par_iter()
+            .enumerate()
+            .map_init(
+                || vec![0u32; slots],
+                |stamp, (i, (node, c))| -> Result<Option<Candidate>, ExploreError> {
+                    // The current pose itself is no new viewpoint.
+                    let f3: Real = c.iter().zip(q).map(|(a, b)| (a - b).abs()).sum();
+                    if f3 <= SAME_POSE_RAD {
+                        return Ok(None);
+                    }
+                    let Some(f4) = self.sweep_dist(&c)? else {
+                        return Ok(None);
+                    };
+                    let (g1, g2, revealed) = self.predict(&c, stamp, i as u32 + 1)?;
+                    Ok(Some(Candidate {
+                        node,
+                        q: c,
+                        f: [h1 - g1, h2 - g2, f3, f4],
+                        revealed,
+                    }))
+                },
+            )
+            .collect::<Result<_, _>>()?;
+        Ok(scored.into_iter().flatten().collect())
+    }
+
+    /// One Stage One decision from the current pose `q` (A§3.2): score, choose
+    /// on the Pareto front, plan a safe path; a choice without a safe path is
+    /// dropped and the choice made again, up to `max_plan_attempts`.
+    pub fn decide(&self, q: &[Real]) -> Result<Decision, ExploreError> {
+        let t0 = Instant::now();
+        let candidates = self.score(q)?;
+        let score_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let t1 = Instant::now();
+        let mut pool: Vec<usize> = (0..candidates.len()).collect();
+        let mut front_size = 0;
+        let mut unreachable = 0;
+        let mut choice = None;
+        for attempt in 0..self.config.max_plan_attempts {
+            let f: Vec<Vec<Real>> = pool.iter().map(|&i| candidates[i].f.to_vec()).collect();
+            if attempt == 0 {
+                front_size = pareto::pareto_front(&f, &SENSES).len();
+            }
+            let Some((k, rank_sum)) = pareto::choose(&f, &SENSES) else {
+                break;
+            };
+            let c = &candidates[pool[k]];
+            let mut checker = self.safety().checker(&self.grid);
+            if let Some(path) = self
+                .model
+                .roadmap()
+                .plan(q, &c.q, self.config.link_k, &mut checker)
+            {
+                choice = Some(Choice {
+                    candidate: c.clone(),
+                    rank_sum,
+                    path,
+                });
+                break;
+            }
+            unreachable += 1;
+            pool.remove(k);
+        }
+        Ok(Decision {
+            candidates,
+            front_size,
+            choice,
+            unreachable,
+            score_ms,
+            plan_ms: t1.elapsed().as_secs_f64() * 1e3,
+        })
+    }
+}
+
+/// Bearings every `step` radians (the first, then each at least `step` past
+/// the last kept, and the last).
+fn subsample(bearings: &[Real], step: Real) -> Vec<Real> {
+    let mut out: Vec<Real> = Vec::new();
+    for &b in bearings {
+        if out.last().is_none_or(|l| b - l >= step - 1e-12) {
+            out.push(b);
+        }
+    }
+    if let (Some(&last), Some(&kept)) = (bearings.last(), out.last())
+        && last != kept
+    {
+        out.push(last);
+    }
+    out
+}
+
+/// The first link moved by actuated joint `a` (links before it stay put
+/// when only `a` and later joints move).
+fn first_link_moved_by(robot: &Robot, a: usize) -> usize {
+    robot
+        .joints
+        .iter()
+        .enumerate()
+        .filter(|(_, j)| j.is_actuated())
+        .nth(a)
+        .map_or(usize::MAX, |(i, _)| i + 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::subsample;
+
+    #[test]
+    fn subsample_keeps_ends_and_spacing() {
+        let b: Vec<f64> = (0..=10).map(|i| f64::from(i) * 0.1).collect();
+        let s = subsample(&b, 0.35);
+        assert_eq!(s.len(), 4);
+        assert!((s[1] - 0.4).abs() < 1e-12 && (s[2] - 0.8).abs() < 1e-12);
+        assert_eq!(*s.last().unwrap(), 1.0);
+    }
+}

@@ -1,0 +1,547 @@
+//! AXBAM Stage One in a simulated world (A§3.2, Fig. 6.3 left): sweep from
+//! the start pose, then decide, move, sweep and integrate until the 1 % rule
+//! (A§3.2.4) or the budget, through the hardware traits ([`Arm`],
+//! [`LineScanner`](crate::LineScanner)) so a real arm and scanner take the simulation's place.
+//!
+//! Every executed motion (paths and sweeps) is checked twice: against the
+//! map of that moment at configurations no farther apart than half the
+//! planner's step (`dist(Q) ≤ 1` counts as an unsafe configuration), and
+//! against the ground-truth scene with the robot's collision shapes.
+
+use crate::metrics::{CoverageReport, coverage};
+use crate::rig::Arm;
+use crate::safety::{min_clearance, motion_contacts, smallest_link_radius};
+use crate::scenario::LoadedScenario;
+use crate::{SimError, SimRig, tilt_sweep};
+use explore::{ExploreConfig, StageOne, Termination};
+use geom::{Aabb, Isometry3, Point3, Real};
+use map::{TsdfConfig, TsdfMap};
+use plan::{CacheOutcome, CspaceModel, PlanConfig, Safety};
+use robot::Robot;
+use scene::{Scene, TriMesh};
+use sensor::{Scanner, SweepPoint};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// How to run.
+#[derive(Clone, Debug, Default)]
+pub struct ExploreOptions {
+    /// Seed of the scanner noise.
+    pub seed: u64,
+    /// Override of the Stage One viewpoint budget.
+    pub max_viewpoints: Option<usize>,
+    /// Where the C-space model is cached (`None`: built every run).
+    pub cspace_cache: Option<PathBuf>,
+    /// Stage One parameters.
+    pub config: ExploreConfig,
+    /// TSDF of the output mesh.
+    pub tsdf: TsdfConfig,
+    /// Record wall-clock times (off: the time columns are 0, so outputs are
+    /// the same byte for byte for the same inputs).
+    pub timings: bool,
+}
+
+/// One viewpoint of the run.
+#[derive(Clone, Debug, Serialize)]
+pub struct ViewpointRecord {
+    /// 0 for the start pose's sweep.
+    pub k: usize,
+    /// 1 (Stage One).
+    pub stage: u8,
+    /// Joints at the viewpoint.
+    pub joints: Vec<Real>,
+    /// `[f1, f2, f3, f4]` of the chosen candidate (`None` at the start).
+    pub f: Option<[Real; 4]>,
+    /// Unweighted H1 (eq. 4.10) after the sweep.
+    pub h1: Real,
+    /// Weighted H1 (eq. 4.11) after the sweep.
+    pub h1_weighted: Real,
+    /// H2 (eq. 4.14) after the sweep.
+    pub h2: Real,
+    /// Weighted H1 the decision predicted would remain (f1).
+    pub predicted_h1_weighted: Option<Real>,
+    /// Safe candidates scored, Pareto front size, candidates dropped as
+    /// unreachable.
+    pub candidates: usize,
+    /// Size of the Pareto front.
+    pub front: usize,
+    /// Chosen candidates without a safe path.
+    pub unreachable: usize,
+    /// Unknown voxels the sweep was predicted to reveal.
+    pub predicted_revealed: usize,
+    /// Voxels the sweep actually made known.
+    pub revealed: u64,
+    /// Σ|Δq| of the motion to the viewpoint, radians.
+    pub joint_travel: Real,
+    /// Waypoints of the motion (2 for a direct one).
+    pub waypoints: usize,
+    /// Wall times, ms (0 when timings are off).
+    pub decision_ms: Real,
+    /// Choice and path planning, ms.
+    pub plan_ms: Real,
+    /// Sweep (simulated scanning), ms.
+    pub sweep_ms: Real,
+    /// Integration into the planning grid and the TSDF, ms.
+    pub integrate_ms: Real,
+}
+
+/// A configuration found unsafe along an executed motion.
+#[derive(Clone, Debug, Serialize)]
+pub struct UnsafeConfiguration {
+    /// Viewpoint whose motion or sweep it was on.
+    pub viewpoint: usize,
+    /// The joints.
+    pub joints: Vec<Real>,
+    /// Its `dist(Q)` against the map of that moment.
+    pub dist: Real,
+}
+
+/// The whole run.
+#[derive(Clone, Debug)]
+pub struct ExploreRun {
+    /// Scenario name.
+    pub scenario: String,
+    /// Per viewpoint.
+    pub viewpoints: Vec<ViewpointRecord>,
+    /// Why Stage One stopped.
+    pub termination: Termination,
+    /// Ground-truth contacts along executed motions.
+    pub collisions: usize,
+    /// Configurations with `dist(Q) ≤ 1` along executed motions.
+    pub unsafe_configurations: Vec<UnsafeConfiguration>,
+    /// Smallest ground-truth clearance of the links at the viewpoints and
+    /// along motions' checked configurations, metres (search radius 0.5 m).
+    pub min_clearance_m: Real,
+    /// `(H1 weighted, H2)` before the first sweep.
+    pub initial_information: (Real, Real),
+    /// How the C-space model was obtained.
+    pub cspace: String,
+    /// Every measured point.
+    pub cloud: Vec<SweepPoint>,
+    /// The TSDF mesh.
+    pub mesh: TriMesh,
+    /// Coverage of the true surfaces in A1, A2, A3 (scenes with a ground truth).
+    pub coverage: Option<[CoverageReport; 3]>,
+    /// Wall time of the whole run, seconds (0 when timings are off).
+    pub wall_s: Real,
+}
+
+/// Misses free space this much short of the scanner's range, metres (three
+/// σ of the URG-04LX's 1 % noise at 4 m, rounded up).
+const MISS_MARGIN_M: Real = 0.15;
+
+/// Clearance search radius, metres.
+const CLEARANCE_SEARCH_M: Real = 0.5;
+
+/// Run Stage One of AXBAM on a scenario. `progress` sees each viewpoint's
+/// record as it completes.
+pub fn run_stage_one(
+    loaded: &LoadedScenario,
+    options: &ExploreOptions,
+    progress: &mut dyn FnMut(&ViewpointRecord),
+) -> Result<ExploreRun, SimError> {
+    let t_run = Instant::now();
+    let s = &loaded.scenario;
+    let robot = loaded.build_robot()?;
+    let world = Arc::new(loaded.build_world()?);
+    let world_from_base = s.world_from_base();
+    let spec = s.scanner.clone().unwrap_or_default();
+    let mut config = options.config.clone();
+    config.sweep = spec.sweep;
+    if let Some(n) = options.max_viewpoints {
+        config.max_viewpoints = n;
+    }
+    let regions = s.regions.ok_or_else(|| SimError::Scenario {
+        source_name: s.name.clone(),
+        message: "exploration needs regions of interest ([regions] a1, a2, a3)".into(),
+    })?;
+    // Rays without a return free space up to a little short of the range
+    // (map's perfect-detection reading), and predictions cast as far.
+    let reach = (spec.config.max_range_m - MISS_MARGIN_M).max(spec.config.min_range_m);
+    let occupancy = map::OccupancyConfig {
+        regions,
+        free_misses_m: Some(reach),
+        ..map::OccupancyConfig::default()
+    };
+    let start = s.robot.start_joints.clone();
+    robot.check_within_limits(&start)?;
+    let (model, outcome) = match &options.cspace_cache {
+        Some(path) => CspaceModel::load_or_build(
+            path,
+            &robot,
+            &world_from_base,
+            config.planning_voxel_m,
+            &config.plan,
+        )?,
+        None => (
+            CspaceModel::build(
+                &robot,
+                &world_from_base,
+                config.planning_voxel_m,
+                &config.plan,
+            )?,
+            CacheOutcome::Built("no cache file".into()),
+        ),
+    };
+    let cspace = match outcome {
+        CacheOutcome::Loaded => "loaded from cache".to_owned(),
+        CacheOutcome::Built(why) => format!("built ({why})"),
+    };
+    let scanner = Scanner::new(spec.config)?;
+    let bearings = scanner.bearings_rad().to_vec();
+    let mut stage = StageOne::new(model, &occupancy, &bearings, reach, config.clone(), &start)?;
+    let mut rig = SimRig::new(
+        robot.clone(),
+        Arc::clone(&world),
+        world_from_base,
+        &start,
+        Some(scanner),
+        options.seed,
+    )?;
+    let mut tsdf = TsdfMap::new(options.tsdf)?;
+    let scene = world.as_scene();
+    let check_step = 0.5 * config.plan.check_step_m;
+    let fine = Safety::new(
+        robot.clone(),
+        world_from_base,
+        &PlanConfig {
+            check_step_m: check_step,
+            ..config.plan.clone()
+        },
+        stage.model().roadmap().weights().to_vec(),
+    )?;
+    let contact_step = smallest_link_radius(&robot).map_or(0.01, |r| 0.5 * r);
+    let mut audit = Audit {
+        robot: &robot,
+        world_from_base,
+        scene,
+        fine: &fine,
+        contact_step,
+        collisions: 0,
+        unsafe_configurations: Vec::new(),
+        min_clearance_m: CLEARANCE_SEARCH_M,
+    };
+    let timed = |t: Instant| {
+        if options.timings {
+            t.elapsed().as_secs_f64() * 1e3
+        } else {
+            0.0
+        }
+    };
+
+    let mut viewpoints = Vec::new();
+    let mut cloud: Vec<SweepPoint> = Vec::new();
+    let mut q = start.clone();
+    let mut pending: Option<(explore::Choice, usize, usize, usize, Real, Real)> = None;
+    let termination = loop {
+        let k = viewpoints.len();
+        // The sweep at the current pose, audited against the map it is taken in.
+        let (lo, hi) = stage.sweep_range(&q);
+        audit.motion(stage.grid(), k, &q, &lo)?;
+        audit.motion(stage.grid(), k, &lo, &hi)?;
+        audit.motion(stage.grid(), k, &hi, &q)?;
+        let t = Instant::now();
+        let sweep = tilt_sweep(
+            &mut rig,
+            &robot,
+            &world_from_base,
+            &config.sweep,
+            &mut |_, _| {},
+        )?;
+        let sweep_ms = timed(t);
+        let t = Instant::now();
+        let stats = stage.integrate(&sweep);
+        tsdf.integrate_sweep(&sweep);
+        let integrate_ms = timed(t);
+        cloud.extend_from_slice(sweep.points());
+        let (h1w, h2) = stage.information();
+        let mut record = ViewpointRecord {
+            k,
+            stage: 1,
+            joints: q.clone(),
+            f: None,
+            h1: stage.grid().h1_unweighted(),
+            h1_weighted: h1w,
+            h2,
+            predicted_h1_weighted: None,
+            candidates: 0,
+            front: 0,
+            unreachable: 0,
+            predicted_revealed: 0,
+            revealed: stats.newly_known,
+            joint_travel: 0.0,
+            waypoints: 0,
+            decision_ms: 0.0,
+            plan_ms: 0.0,
+            sweep_ms,
+            integrate_ms,
+        };
+        if let Some((choice, candidates, front, unreachable, decision_ms, plan_ms)) = pending.take()
+        {
+            record.f = Some(choice.candidate.f);
+            record.predicted_h1_weighted = Some(choice.candidate.f[0]);
+            record.predicted_revealed = choice.candidate.revealed;
+            record.candidates = candidates;
+            record.front = front;
+            record.unreachable = unreachable;
+            record.joint_travel = choice.path.joint_travel();
+            record.waypoints = choice.path.waypoints.len();
+            record.decision_ms = decision_ms;
+            record.plan_ms = plan_ms;
+        }
+        progress(&record);
+        viewpoints.push(record);
+        if let Some(t) = stage.termination() {
+            break t;
+        }
+        let t = Instant::now();
+        let decision = stage.decide(&q)?;
+        let decision_ms = timed(t);
+        let plan_ms = if options.timings {
+            decision.plan_ms
+        } else {
+            0.0
+        };
+        let Some(choice) = decision.choice else {
+            break Termination::NoSafeCandidate;
+        };
+        // Move along the path, auditing each motion against the map as it is.
+        for w in choice.path.waypoints.windows(2) {
+            audit.motion(stage.grid(), k + 1, &w[0], &w[1])?;
+            rig.move_to(&w[1])?;
+        }
+        q = rig.joints();
+        pending = Some((
+            choice,
+            decision.candidates.len(),
+            decision.front_size,
+            decision.unreachable,
+            decision_ms,
+            plan_ms,
+        ));
+    };
+
+    let coverage = match scene {
+        Some(scene) => Some(region_coverage(scene, &cloud, loaded, &regions)?),
+        None => None,
+    };
+    Ok(ExploreRun {
+        scenario: s.name.clone(),
+        viewpoints,
+        termination,
+        collisions: audit.collisions,
+        unsafe_configurations: audit.unsafe_configurations,
+        min_clearance_m: audit.min_clearance_m,
+        initial_information: stage.initial_information(),
+        cspace,
+        cloud,
+        mesh: tsdf.extract_mesh(),
+        coverage,
+        wall_s: if options.timings {
+            t_run.elapsed().as_secs_f64()
+        } else {
+            0.0
+        },
+    })
+}
+
+/// Coverage of the true surfaces inside A1, A2 and A3 by the measured points.
+fn region_coverage(
+    scene: &Scene,
+    cloud: &[SweepPoint],
+    loaded: &LoadedScenario,
+    regions: &map::RegionsConfig,
+) -> Result<[CoverageReport; 3], SimError> {
+    let points: Vec<Point3> = cloud.iter().map(|p| p.point).collect();
+    let one = |b: Aabb| {
+        let mut m = loaded.scenario.metrics;
+        m.sampling.region = Some(b);
+        coverage(scene, &points, &m)
+    };
+    Ok([
+        one(regions.a1.aabb())?,
+        one(regions.a2.aabb())?,
+        one(regions.a3.aabb())?,
+    ])
+}
+
+/// The safety audit of executed motions.
+struct Audit<'a> {
+    robot: &'a Robot,
+    world_from_base: Isometry3,
+    scene: Option<&'a Scene>,
+    fine: &'a Safety,
+    contact_step: Real,
+    collisions: usize,
+    unsafe_configurations: Vec<UnsafeConfiguration>,
+    min_clearance_m: Real,
+}
+
+impl Audit<'_> {
+    fn motion(
+        &mut self,
+        grid: &map::OccupancyGrid,
+        viewpoint: usize,
+        a: &[Real],
+        b: &[Real],
+    ) -> Result<(), SimError> {
+        for c in self.fine.interpolate(a, b) {
+            let d = self.fine.dist(grid, &c)?;
+            if d <= 1.0 {
+                self.unsafe_configurations.push(UnsafeConfiguration {
+                    viewpoint,
+                    joints: c.clone(),
+                    dist: d,
+                });
+            }
+            if let Some(scene) = self.scene {
+                let frames = self.robot.forward_kinematics(&c)?;
+                self.min_clearance_m = self.min_clearance_m.min(min_clearance(
+                    self.robot,
+                    &frames,
+                    &self.world_from_base,
+                    scene,
+                    self.min_clearance_m,
+                ));
+            }
+        }
+        if let Some(scene) = self.scene {
+            let check = motion_contacts(
+                self.robot,
+                a,
+                b,
+                &self.world_from_base,
+                scene,
+                self.contact_step,
+            )?;
+            if !check.is_clear() {
+                self.collisions += 1;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl ExploreRun {
+    /// `viewpoints.csv`: one row per viewpoint.
+    pub fn viewpoints_csv(&self) -> String {
+        let dof = self.viewpoints.first().map_or(0, |r| r.joints.len());
+        let mut out = String::from("k,stage");
+        for j in 1..=dof {
+            let _ = write!(out, ",q{j}");
+        }
+        out.push_str(
+            ",f1,f2,f3,f4,h1,h1_weighted,h2,h3,predicted_h1_weighted,actual_h1_weighted,\
+             candidates,front,unreachable,predicted_revealed,revealed,joint_travel,waypoints,\
+             decision_ms,plan_ms,sweep_ms,integrate_ms\n",
+        );
+        let opt = |v: Option<Real>| v.map_or(String::new(), |x| format!("{x}"));
+        for r in &self.viewpoints {
+            let _ = write!(out, "{},{}", r.k, r.stage);
+            for v in &r.joints {
+                let _ = write!(out, ",{v}");
+            }
+            let f = r.f.map_or([None; 4], |f| f.map(Some));
+            for v in f {
+                let _ = write!(out, ",{}", opt(v));
+            }
+            let _ = writeln!(
+                out,
+                ",{},{},{},,{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3}",
+                r.h1,
+                r.h1_weighted,
+                r.h2,
+                opt(r.predicted_h1_weighted),
+                r.h1_weighted,
+                r.candidates,
+                r.front,
+                r.unreachable,
+                r.predicted_revealed,
+                r.revealed,
+                r.joint_travel,
+                r.waypoints,
+                r.decision_ms,
+                r.plan_ms,
+                r.sweep_ms,
+                r.integrate_ms
+            );
+        }
+        out
+    }
+
+    /// `run.json`'s summary.
+    pub fn run_json(&self) -> serde_json::Value {
+        let decisions: Vec<Real> = self
+            .viewpoints
+            .iter()
+            .filter(|r| r.f.is_some())
+            .map(|r| r.decision_ms)
+            .collect();
+        let mut sorted = decisions.clone();
+        sorted.sort_by(Real::total_cmp);
+        let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+        let max = sorted.last().copied().unwrap_or(0.0);
+        let coverage = self.coverage.as_ref().map(|[a1, a2, a3]| {
+            serde_json::json!({
+                "A1": a1.fraction(),
+                "A2": a2.fraction(),
+                "A3": a3.fraction(),
+                "A1_per_material": a1.per_material.iter().map(|m| {
+                    (m.material.clone(), if m.samples == 0 { 0.0 } else { m.covered as Real / m.samples as Real })
+                }).collect::<std::collections::BTreeMap<_, _>>(),
+                "reports": [a1, a2, a3],
+            })
+        });
+        serde_json::json!({
+            "scenario": self.scenario,
+            "viewpoints": {"stage_one": self.viewpoints.len(), "stage_two": 0},
+            "termination": self.termination.name(),
+            "collisions": self.collisions,
+            "unsafe_configurations": self.unsafe_configurations.len(),
+            "unsafe_configuration_list": self.unsafe_configurations,
+            "min_clearance_m": self.min_clearance_m,
+            "initial_information": {"H1_weighted": self.initial_information.0, "H2": self.initial_information.1},
+            "cspace_model": self.cspace,
+            "points": self.cloud.len(),
+            "mesh_triangles": self.mesh.triangles.len(),
+            "coverage": coverage,
+            "material_accuracy": serde_json::Value::Null,
+            "decision_ms": {"median": median, "max": max},
+            "wall_s": self.wall_s,
+        })
+    }
+
+    /// Write `viewpoints.csv`, `cloud.ply`, `mesh.ply` and `run.json` into
+    /// `dir` (created if needed).
+    pub fn write(&self, dir: &Path) -> Result<(), SimError> {
+        let io = |path: &Path, e: &dyn std::fmt::Display| SimError::InvalidArgument {
+            what: path.display().to_string(),
+            message: format!("cannot write: {e}"),
+        };
+        std::fs::create_dir_all(dir).map_err(|e| io(dir, &e))?;
+        let csv = dir.join("viewpoints.csv");
+        std::fs::write(&csv, self.viewpoints_csv()).map_err(|e| io(&csv, &e))?;
+        let cols: [Vec<f32>; 6] = [
+            self.cloud.iter().map(|p| p.point.x as f32).collect(),
+            self.cloud.iter().map(|p| p.point.y as f32).collect(),
+            self.cloud.iter().map(|p| p.point.z as f32).collect(),
+            self.cloud.iter().map(|p| p.origin.x as f32).collect(),
+            self.cloud.iter().map(|p| p.origin.y as f32).collect(),
+            self.cloud.iter().map(|p| p.origin.z as f32).collect(),
+        ];
+        let refs: Vec<&[f32]> = cols.iter().map(Vec::as_slice).collect();
+        scene::io::write_ply_vertices_file(
+            &dir.join("cloud.ply"),
+            &["x", "y", "z", "origin_x", "origin_y", "origin_z"],
+            &refs,
+        )?;
+        scene::io::write_mesh_ply(&dir.join("mesh.ply"), &self.mesh)?;
+        let json = dir.join("run.json");
+        let text =
+            serde_json::to_string_pretty(&self.run_json()).map_err(|e| io(&json, &e))? + "\n";
+        std::fs::write(&json, text).map_err(|e| io(&json, &e))
+    }
+}
