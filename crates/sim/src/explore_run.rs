@@ -8,13 +8,13 @@
 //! planner's step (`dist(Q) ≤ 1` counts as an unsafe configuration), and
 //! against the ground-truth scene with the robot's collision shapes.
 
-use crate::metrics::{CoverageReport, coverage};
+use crate::metrics::{CoverageReport, CoverageTracker};
 use crate::rig::Arm;
 use crate::safety::{min_clearance, motion_contacts, smallest_link_radius};
 use crate::scenario::LoadedScenario;
 use crate::{SimError, SimRig, tilt_sweep};
 use explore::{ExploreConfig, StageOne, Termination};
-use geom::{Aabb, Isometry3, Point3, Real};
+use geom::{Isometry3, Real};
 use map::{TsdfConfig, TsdfMap};
 use plan::{CacheOutcome, CspaceModel, PlanConfig, Safety};
 use robot::Robot;
@@ -74,6 +74,9 @@ pub struct ViewpointRecord {
     pub predicted_revealed: usize,
     /// Voxels the sweep actually made known.
     pub revealed: u64,
+    /// Share of the true surfaces in A1 covered by the points so far (scenes
+    /// with a ground truth).
+    pub coverage_a1: Option<Real>,
     /// Σ|Δq| of the motion to the viewpoint, radians.
     pub joint_travel: Real,
     /// Waypoints of the motion (2 for a direct one).
@@ -232,6 +235,18 @@ pub fn run_stage_one(
         }
     };
 
+    let mut trackers = match scene {
+        Some(scene) => {
+            let mut out = Vec::with_capacity(3);
+            for b in [regions.a1, regions.a2, regions.a3] {
+                let mut m = s.metrics;
+                m.sampling.region = Some(b.aabb());
+                out.push(CoverageTracker::new(scene, &m)?);
+            }
+            out
+        }
+        None => Vec::new(),
+    };
     let mut viewpoints = Vec::new();
     let mut cloud: Vec<SweepPoint> = Vec::new();
     let mut q = start.clone();
@@ -257,6 +272,10 @@ pub fn run_stage_one(
         tsdf.integrate_sweep(&sweep);
         let integrate_ms = timed(t);
         cloud.extend_from_slice(sweep.points());
+        let positions = sweep.positions();
+        for t in &mut trackers {
+            t.add_points(&positions);
+        }
         let (h1w, h2) = stage.information();
         let mut record = ViewpointRecord {
             k,
@@ -272,6 +291,7 @@ pub fn run_stage_one(
             unreachable: 0,
             predicted_revealed: 0,
             revealed: stats.newly_known,
+            coverage_a1: trackers.first().map(CoverageTracker::fraction),
             joint_travel: 0.0,
             waypoints: 0,
             decision_ms: 0.0,
@@ -324,9 +344,9 @@ pub fn run_stage_one(
         ));
     };
 
-    let coverage = match scene {
-        Some(scene) => Some(region_coverage(scene, &cloud, loaded, &regions)?),
-        None => None,
+    let coverage = match trackers.as_slice() {
+        [a1, a2, a3] => Some([a1.report(), a2.report(), a3.report()]),
+        _ => None,
     };
     Ok(ExploreRun {
         scenario: s.name.clone(),
@@ -346,26 +366,6 @@ pub fn run_stage_one(
             0.0
         },
     })
-}
-
-/// Coverage of the true surfaces inside A1, A2 and A3 by the measured points.
-fn region_coverage(
-    scene: &Scene,
-    cloud: &[SweepPoint],
-    loaded: &LoadedScenario,
-    regions: &map::RegionsConfig,
-) -> Result<[CoverageReport; 3], SimError> {
-    let points: Vec<Point3> = cloud.iter().map(|p| p.point).collect();
-    let one = |b: Aabb| {
-        let mut m = loaded.scenario.metrics;
-        m.sampling.region = Some(b);
-        coverage(scene, &points, &m)
-    };
-    Ok([
-        one(regions.a1.aabb())?,
-        one(regions.a2.aabb())?,
-        one(regions.a3.aabb())?,
-    ])
 }
 
 /// The safety audit of executed motions.
@@ -435,7 +435,7 @@ impl ExploreRun {
         }
         out.push_str(
             ",f1,f2,f3,f4,h1,h1_weighted,h2,h3,predicted_h1_weighted,actual_h1_weighted,\
-             candidates,front,unreachable,predicted_revealed,revealed,joint_travel,waypoints,\
+             candidates,front,unreachable,predicted_revealed,revealed,coverage_a1,joint_travel,waypoints,\
              decision_ms,plan_ms,sweep_ms,integrate_ms\n",
         );
         let opt = |v: Option<Real>| v.map_or(String::new(), |x| format!("{x}"));
@@ -450,7 +450,7 @@ impl ExploreRun {
             }
             let _ = writeln!(
                 out,
-                ",{},{},{},,{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3}",
+                ",{},{},{},,{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3}",
                 r.h1,
                 r.h1_weighted,
                 r.h2,
@@ -461,6 +461,7 @@ impl ExploreRun {
                 r.unreachable,
                 r.predicted_revealed,
                 r.revealed,
+                opt(r.coverage_a1),
                 r.joint_travel,
                 r.waypoints,
                 r.decision_ms,

@@ -171,6 +171,116 @@ pub fn coverage_in_chunks(
     })
 }
 
+/// Coverage kept up to date as points arrive: the true-surface samples of
+/// [`coverage`] (same sampler, same samples) indexed once, each batch of
+/// points marking the samples within the threshold. After any batches the
+/// report equals [`coverage`] of all points so far.
+#[derive(Debug)]
+pub struct CoverageTracker {
+    tree: Option<ImmutableKdTree<Real, 3>>,
+    material: Vec<u16>,
+    covered: Vec<bool>,
+    r2: Real,
+    covered_within_m: Real,
+    region: Option<Aabb>,
+    samples_per_m2: Real,
+    density_capped: bool,
+    names: Vec<String>,
+}
+
+impl CoverageTracker {
+    /// Draw the samples of `scene` under `cfg` (all kept in memory: mind
+    /// `cfg.sampling.max_samples`).
+    pub fn new(scene: &Scene, cfg: &MetricsConfig) -> Result<Self, SimError> {
+        cfg.validate()?;
+        let sampler =
+            SurfaceSampler::new(scene, &cfg.sampling).map_err(|e| SimError::Scenario {
+                source_name: "metrics".into(),
+                message: e.to_string(),
+            })?;
+        let samples_per_m2 = sampler.samples_per_m2();
+        let density_capped = sampler.is_capped();
+        let mut points: Vec<[Real; 3]> = Vec::new();
+        let mut material = Vec::new();
+        for chunk in sampler {
+            for s in chunk {
+                points.push([s.point.x, s.point.y, s.point.z]);
+                material.push(s.material.0);
+            }
+        }
+        let covered = vec![false; points.len()];
+        Ok(Self {
+            tree: (!points.is_empty()).then(|| ImmutableKdTree::new_from_slice(&points)),
+            material,
+            covered,
+            r2: cfg.covered_within_m * cfg.covered_within_m,
+            covered_within_m: cfg.covered_within_m,
+            region: cfg.sampling.region,
+            samples_per_m2,
+            density_capped,
+            names: scene.materials().iter().map(|m| m.name.clone()).collect(),
+        })
+    }
+
+    /// Mark the samples within the threshold of any of `points`.
+    pub fn add_points(&mut self, points: &[Point3]) {
+        let Some(tree) = &self.tree else { return };
+        let r2 = self.r2;
+        let hits: Vec<u64> = points
+            .par_iter()
+            .flat_map_iter(|p| {
+                tree.within_unsorted::<SquaredEuclidean>(&[p.x, p.y, p.z], r2)
+                    .into_iter()
+                    .map(|n| n.item)
+            })
+            .collect();
+        for i in hits {
+            if let Some(c) = self.covered.get_mut(i as usize) {
+                *c = true;
+            }
+        }
+    }
+
+    /// Covered fraction so far.
+    pub fn fraction(&self) -> Real {
+        if self.covered.is_empty() {
+            0.0
+        } else {
+            self.covered.iter().filter(|c| **c).count() as Real / self.covered.len() as Real
+        }
+    }
+
+    /// The report, as [`coverage`] gives it.
+    pub fn report(&self) -> CoverageReport {
+        let mut per = vec![(0usize, 0usize); self.names.len()];
+        for (m, c) in self.material.iter().zip(&self.covered) {
+            if let Some(e) = per.get_mut(usize::from(*m)) {
+                e.0 += 1;
+                e.1 += usize::from(*c);
+            }
+        }
+        CoverageReport {
+            samples: per.iter().map(|e| e.0).sum(),
+            covered: per.iter().map(|e| e.1).sum(),
+            covered_within_m: self.covered_within_m,
+            region: self.region,
+            samples_per_m2: self.samples_per_m2,
+            density_capped: self.density_capped,
+            per_material: self
+                .names
+                .iter()
+                .zip(per)
+                .filter(|(_, (n, _))| *n > 0)
+                .map(|(name, (n, c))| MaterialCoverage {
+                    material: name.clone(),
+                    samples: n,
+                    covered: c,
+                })
+                .collect(),
+        }
+    }
+}
+
 /// Accuracy of `points` against the true surface: each point's distance to the
 /// nearest triangle (points farther than `search_m` count as `search_m`).
 /// No points gives [`AccuracyReport::distances`] `None`.

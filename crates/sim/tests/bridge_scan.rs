@@ -193,3 +193,30 @@ fn vm6083_contacts_against_the_bridge() {
         assert!(names.iter().any(|n| wall.contains(n)), "{names:?}");
     }
 }
+
+#[test]
+fn coverage_tracker_matches_coverage_of_all_points_after_each_batch() {
+    use sim::metrics::{CoverageTracker, coverage};
+    let loaded = bridge1();
+    let mut metrics = loaded.scenario.metrics;
+    metrics.sampling.samples_per_m2 = 2000.0;
+    metrics.sampling.region = Some(loaded.scenario.regions.unwrap().a1.aabb());
+    let scene_world = loaded.build_world().unwrap();
+    let scene = scene_world.as_scene().unwrap();
+    let mut tracker = CoverageTracker::new(scene, &metrics).unwrap();
+    assert_eq!(tracker.fraction(), 0.0);
+    let mut all: Vec<Point3> = Vec::new();
+    for q1 in [0.0f64, 60.0] {
+        let joints: Vec<Real> = [q1, -55.0, 165.0, 0.0, -110.0, 0.0]
+            .iter()
+            .map(|d| d.to_radians())
+            .collect();
+        let setup = ScanSetup::from_scenario(&loaded, Some(joints), Some(20.0), 1).unwrap();
+        let points = setup.run(&mut |_, _| {}).unwrap().sweep.positions();
+        tracker.add_points(&points);
+        all.extend(&points);
+        let direct = coverage(scene, &all, &metrics).unwrap();
+        assert_eq!(tracker.report(), direct);
+        assert!(direct.covered > 0);
+    }
+}

@@ -71,8 +71,16 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     let t = std::time::Instant::now();
     let run = run_stage_one(&loaded, &options, &mut |r| {
         eprintln!(
-            "stage 1, viewpoint {:>2}: H1 {:>9.1} (weighted {:>8.1}), H2 {:>7.3}, revealed {:>6}, {} candidates, decision {:>6.0} ms",
-            r.k, r.h1, r.h1_weighted, r.h2, r.revealed, r.candidates, r.decision_ms
+            "stage 1, viewpoint {:>2}: H1 {:>9.1} (weighted {:>8.1}), H2 {:>7.3}, revealed {:>6}, A1 covered {}, {} candidates, decision {:>6.0} ms",
+            r.k,
+            r.h1,
+            r.h1_weighted,
+            r.h2,
+            r.revealed,
+            r.coverage_a1
+                .map_or("-".into(), |c| format!("{:.1} %", 100.0 * c)),
+            r.candidates,
+            r.decision_ms
         );
     })?;
     run.write(&args.out)
