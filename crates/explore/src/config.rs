@@ -38,8 +38,13 @@ pub struct ExploreConfig {
     /// bridge scenes' A3 gives 74 088 (at 0.05 m the ellipsoids' margin over
     /// the voxel centres is too thin to move: see the README).
     pub planning_voxel_m: Real,
-    /// The tilt sweep taken at every viewpoint (α = 60°, Table 6.1).
+    /// The tilt sweep taken at every viewpoint (α = 60°, Table 6.1). Not read
+    /// from an `[explore]` table: a scenario's runner sets it from the
+    /// scanner's `[scanner.sweep]`, the one place a sweep is configured.
+    #[serde(skip)]
     pub sweep: SweepConfig,
+    /// Region weights `{c_w1, c_w2, c_w3}` of eq. 4.11 (Table 6.1).
+    pub weights: [Real; 3],
     /// Ray subsampling of the information prediction.
     pub prediction: PredictionConfig,
     /// Stage One stops when both `ΔH1` and `ΔH2` of the last viewpoint fall
@@ -69,6 +74,7 @@ impl Default for ExploreConfig {
             plan: PlanConfig::default(),
             planning_voxel_m: 0.1,
             sweep: SweepConfig::default(),
+            weights: [0.6, 0.35, 0.05],
             prediction: PredictionConfig::default(),
             stop_fraction: 0.01,
             max_viewpoints: 20,
@@ -96,6 +102,21 @@ impl ExploreConfig {
             ));
         }
         self.sweep.validate()?;
+        if self.weights.iter().any(|w| !(w.is_finite() && *w >= 0.0)) {
+            return Err(bad(
+                "explore.weights",
+                "three finite, non-negative weights",
+                format!("{:?}", self.weights),
+            ));
+        }
+        self.plan.validate(0).or_else(|e| match e {
+            // The joint count is checked against the robot later.
+            plan::PlanError::Config {
+                field: "plan.joint_weights",
+                ..
+            } => Ok(()),
+            e => Err(ExploreError::Plan(e)),
+        })?;
         for (field, v) in [
             (
                 "explore.prediction.ray_step_deg",

@@ -124,8 +124,8 @@ pub struct StageOne {
 
 impl StageOne {
     /// Stage One for the model's robot with the scanner's `bearings_rad` and
-    /// `max_range_m`. The planning grid takes `occupancy`'s regions, weights
-    /// and occlusion settings at `config.planning_voxel_m`; the model's
+    /// `max_range_m`. The planning grid takes `occupancy`'s regions, occlusion
+    /// and miss settings, with `config`'s voxel size and region weights; the model's
     /// `P(ʲx_c)` is applied to it; the space the arm's envelope takes during the
     /// start pose's sweep is marked free (the only space assumed free before
     /// the first scan, A§3.2.1.4, §6.1); `H1₀` and `H2₀` are recorded.
@@ -167,6 +167,7 @@ impl StageOne {
         }
         let mut grid = OccupancyGrid::new(OccupancyConfig {
             voxel_m: config.planning_voxel_m,
+            weights: config.weights,
             ..*occupancy
         })?;
         model.apply_to(&mut grid)?;

@@ -35,8 +35,9 @@ pub struct ExploreOptions {
     pub max_viewpoints: Option<usize>,
     /// Where the C-space model is cached (`None`: built every run).
     pub cspace_cache: Option<PathBuf>,
-    /// Stage One parameters.
-    pub config: ExploreConfig,
+    /// Stage One parameters instead of the scenario's `[explore]` table
+    /// (`None`: the scenario's, or the defaults).
+    pub config: Option<ExploreConfig>,
     /// TSDF of the output mesh.
     pub tsdf: TsdfConfig,
     /// Record wall-clock times (off: the time columns are 0, so outputs are
@@ -128,6 +129,10 @@ pub struct ExploreRun {
     pub mesh: TriMesh,
     /// Coverage of the true surfaces in A1, A2, A3 (scenes with a ground truth).
     pub coverage: Option<[CoverageReport; 3]>,
+    /// Per region A1, A2, A3: the samples observable from some collision-free
+    /// roadmap pose's scanner position, and of those the covered ones (see
+    /// [`CoverageTracker::set_observable_from`]).
+    pub observable: Vec<(usize, usize)>,
     /// Wall time of the whole run, seconds (0 when timings are off).
     pub wall_s: Real,
 }
@@ -152,7 +157,11 @@ pub fn run_stage_one(
     let world = Arc::new(loaded.build_world()?);
     let world_from_base = s.world_from_base();
     let spec = s.scanner.clone().unwrap_or_default();
-    let mut config = options.config.clone();
+    let mut config = options
+        .config
+        .clone()
+        .or_else(|| s.explore.clone())
+        .unwrap_or_default();
     config.sweep = spec.sweep;
     if let Some(n) = options.max_viewpoints {
         config.max_viewpoints = n;
@@ -237,11 +246,20 @@ pub fn run_stage_one(
 
     let mut trackers = match scene {
         Some(scene) => {
+            let eyes = observation_points(
+                &robot,
+                &world_from_base,
+                scene,
+                stage.model().roadmap(),
+                &start,
+            )?;
             let mut out = Vec::with_capacity(3);
             for b in [regions.a1, regions.a2, regions.a3] {
                 let mut m = s.metrics;
                 m.sampling.region = Some(b.aabb());
-                out.push(CoverageTracker::new(scene, &m)?);
+                let mut t = CoverageTracker::new(scene, &m)?;
+                t.set_observable_from(scene, &eyes, reach, OBSERVABLE_CELL_M);
+                out.push(t);
             }
             out
         }
@@ -348,6 +366,10 @@ pub fn run_stage_one(
         [a1, a2, a3] => Some([a1.report(), a2.report(), a3.report()]),
         _ => None,
     };
+    let observable = trackers
+        .iter()
+        .filter_map(CoverageTracker::observable_counts)
+        .collect::<Vec<_>>();
     Ok(ExploreRun {
         scenario: s.name.clone(),
         viewpoints,
@@ -360,12 +382,40 @@ pub fn run_stage_one(
         cloud,
         mesh: tsdf.extract_mesh(),
         coverage,
+        observable,
         wall_s: if options.timings {
             t_run.elapsed().as_secs_f64()
         } else {
             0.0
         },
     })
+}
+
+/// Cell size of the observability test, metres.
+const OBSERVABLE_CELL_M: Real = 0.05;
+
+/// Where a scanner could look from: the scanner position at the start and at
+/// every roadmap node where no link touches the true scene.
+fn observation_points(
+    robot: &Robot,
+    world_from_base: &Isometry3,
+    scene: &Scene,
+    roadmap: &plan::Roadmap,
+    start: &[Real],
+) -> Result<Vec<geom::Point3>, SimError> {
+    let mut out = Vec::new();
+    for q in std::iter::once(start).chain(roadmap.nodes()) {
+        let frames = robot.forward_kinematics(q)?;
+        if !crate::safety::robot_contacts(robot, &frames, world_from_base, scene).is_empty() {
+            continue;
+        }
+        if let Some(pose) = robot.scanner_pose(q)? {
+            out.push(geom::Point3::from(
+                (world_from_base * pose).translation.vector,
+            ));
+        }
+    }
+    Ok(out)
 }
 
 /// The safety audit of executed motions.
@@ -485,11 +535,26 @@ impl ExploreRun {
         sorted.sort_by(Real::total_cmp);
         let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
         let max = sorted.last().copied().unwrap_or(0.0);
+        let share = |k: usize| {
+            self.observable.get(k).map(|(n, c)| {
+                if *n == 0 {
+                    0.0
+                } else {
+                    *c as Real / *n as Real
+                }
+            })
+        };
         let coverage = self.coverage.as_ref().map(|[a1, a2, a3]| {
             serde_json::json!({
                 "A1": a1.fraction(),
                 "A2": a2.fraction(),
                 "A3": a3.fraction(),
+                "observable": {
+                    "A1": share(0),
+                    "A2": share(1),
+                    "A3": share(2),
+                    "A1_observable_share": self.observable.first().map(|(n, _)| *n as Real / a1.samples.max(1) as Real),
+                },
                 "A1_per_material": a1.per_material.iter().map(|m| {
                     (m.material.clone(), if m.samples == 0 { 0.0 } else { m.covered as Real / m.samples as Real })
                 }).collect::<std::collections::BTreeMap<_, _>>(),

@@ -6,7 +6,7 @@ use crate::scenario::MetricsConfig;
 use geom::{Aabb, Point3, Real};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
-use scene::{DEFAULT_SAMPLE_CHUNK, Scene, SurfaceSampler};
+use scene::{DEFAULT_SAMPLE_CHUNK, RayCast, Scene, SurfaceSampler};
 use serde::Serialize;
 use std::num::NonZero;
 
@@ -178,6 +178,9 @@ pub fn coverage_in_chunks(
 #[derive(Debug)]
 pub struct CoverageTracker {
     tree: Option<ImmutableKdTree<Real, 3>>,
+    points: Vec<[Real; 3]>,
+    normals: Vec<[Real; 3]>,
+    observable: Option<Vec<bool>>,
     material: Vec<u16>,
     covered: Vec<bool>,
     r2: Real,
@@ -201,16 +204,21 @@ impl CoverageTracker {
         let samples_per_m2 = sampler.samples_per_m2();
         let density_capped = sampler.is_capped();
         let mut points: Vec<[Real; 3]> = Vec::new();
+        let mut normals: Vec<[Real; 3]> = Vec::new();
         let mut material = Vec::new();
         for chunk in sampler {
             for s in chunk {
                 points.push([s.point.x, s.point.y, s.point.z]);
+                normals.push([s.normal.x, s.normal.y, s.normal.z]);
                 material.push(s.material.0);
             }
         }
         let covered = vec![false; points.len()];
         Ok(Self {
             tree: (!points.is_empty()).then(|| ImmutableKdTree::new_from_slice(&points)),
+            points,
+            normals,
+            observable: None,
             material,
             covered,
             r2: cfg.covered_within_m * cfg.covered_within_m,
@@ -248,6 +256,67 @@ impl CoverageTracker {
         } else {
             self.covered.iter().filter(|c| **c).count() as Real / self.covered.len() as Real
         }
+    }
+
+    /// Mark which samples are observable at all: a sample is observable when
+    /// one of `viewpoints` lies within `max_range_m` in front of its face
+    /// (at more than 1° from grazing) with nothing of `scene` between them.
+    /// An upper bound on what any sensing from those points can cover (the
+    /// scanner's field and the arm's paths are ignored). Samples are taken
+    /// per cell of `cell_m`: the first sample of each cell stands for it.
+    pub fn set_observable_from(
+        &mut self,
+        scene: &Scene,
+        viewpoints: &[Point3],
+        max_range_m: Real,
+        cell_m: Real,
+    ) {
+        let mut cells: std::collections::HashMap<[i64; 3], usize> =
+            std::collections::HashMap::new();
+        let mut rep = Vec::with_capacity(self.points.len());
+        for p in &self.points {
+            let key = p.map(|v| (v / cell_m).floor() as i64);
+            let next = cells.len();
+            rep.push(*cells.entry(key).or_insert(next));
+        }
+        let mut reps = vec![usize::MAX; cells.len()];
+        for (i, r) in rep.iter().enumerate() {
+            if reps[*r] == usize::MAX {
+                reps[*r] = i;
+            }
+        }
+        let grazing = 1f64.to_radians().sin();
+        let seen: Vec<bool> = reps
+            .par_iter()
+            .map(|&i| {
+                let p = Point3::from(self.points[i]);
+                let n = geom::Vector3::from(self.normals[i]);
+                let start = p + n * 1e-4;
+                viewpoints.iter().any(|v| {
+                    let d = v - start;
+                    let len = d.norm();
+                    if !(len > 1e-9 && len <= max_range_m) || n.dot(&d) <= grazing * len {
+                        return false;
+                    }
+                    let ray = geom::Ray::new(start, geom::UnitVector3::new_unchecked(d / len));
+                    scene.cast_ray(&ray, len).is_none()
+                })
+            })
+            .collect();
+        self.observable = Some(rep.iter().map(|r| seen[*r]).collect());
+    }
+
+    /// `(observable samples, of which covered)`, once
+    /// [`CoverageTracker::set_observable_from`] has run.
+    pub fn observable_counts(&self) -> Option<(usize, usize)> {
+        let mask = self.observable.as_ref()?;
+        let n = mask.iter().filter(|m| **m).count();
+        let c = mask
+            .iter()
+            .zip(&self.covered)
+            .filter(|(m, c)| **m && **c)
+            .count();
+        Some((n, c))
     }
 
     /// The report, as [`coverage`] gives it.

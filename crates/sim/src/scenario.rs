@@ -41,6 +41,10 @@ pub struct Scenario {
     /// How results are scored against the ground truth.
     #[serde(default)]
     pub metrics: MetricsConfig,
+    /// AXBAM exploration parameters (A Table 6.1 by default): the `[explore]`
+    /// table, with `[explore.plan]` (n_Q, ...) and `[explore.prediction]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub explore: Option<explore::ExploreConfig>,
     /// The ground truth.
     pub scene: SceneSpec,
 }
@@ -210,6 +214,9 @@ pub fn builtin_scenario(name: &str) -> Option<Scenario> {
         },
         ..MetricsConfig::default()
     };
+    // The exploration scenes carry Table 6.1's parameters, so `scenario show`
+    // prints every one of them.
+    let explore = regions.map(|_| explore::ExploreConfig::default());
     Some(Scenario {
         name: name.to_owned(),
         description: description.to_owned(),
@@ -219,6 +226,7 @@ pub fn builtin_scenario(name: &str) -> Option<Scenario> {
         regions,
         initial_segments: initial,
         metrics,
+        explore,
         scene,
     })
 }
@@ -308,6 +316,9 @@ impl Scenario {
             .and_then(|c| c.pose.as_ref())
         {
             pose(p, "scene.point_cloud.pose")?;
+        }
+        if let Some(e) = &self.explore {
+            e.validate().map_err(|e| fail(e.to_string()))?;
         }
         self.metrics.validate().map_err(|e| match e {
             SimError::Scenario { message, .. } => fail(message),

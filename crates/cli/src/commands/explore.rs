@@ -103,6 +103,13 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
             100.0 * c[1].fraction(),
             100.0 * c[2].fraction()
         );
+        if let Some((n, covered)) = run.observable.first() {
+            println!(
+                "A1 surfaces observable from some collision-free roadmap pose: {:.1} % of them; {:.1} % of those covered",
+                100.0 * *n as f64 / c[0].samples.max(1) as f64,
+                100.0 * *covered as f64 / (*n).max(1) as f64
+            );
+        }
     }
     println!(
         "{} points, mesh of {} triangles; {:.1} s; outputs in {}",
