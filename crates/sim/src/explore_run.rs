@@ -20,7 +20,7 @@ use plan::{CacheOutcome, CspaceModel, PlanConfig, Safety};
 use robot::Robot;
 use scene::{Scene, TriMesh};
 use sensor::{Scanner, SweepPoint};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -43,10 +43,69 @@ pub struct ExploreOptions {
     /// Record wall-clock times (off: the time columns are 0, so outputs are
     /// the same byte for byte for the same inputs).
     pub timings: bool,
+    /// Write a checkpoint here after every viewpoint.
+    pub checkpoint: Option<PathBuf>,
+    /// Continue the run recorded in `checkpoint` (which must exist).
+    pub resume: bool,
+}
+
+/// What a checkpoint holds: enough to rebuild the run's state by replaying
+/// its viewpoints' sweeps (the simulation is seeded per viewpoint, so the
+/// same sweeps come back) and to continue as if never stopped.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct Checkpoint {
+    format: u32,
+    scenario: String,
+    seed: u64,
+    config: ExploreConfig,
+    sweep: sensor::SweepConfig,
+    viewpoints: Vec<ViewpointRecord>,
+    collisions: usize,
+    unsafe_configurations: Vec<UnsafeConfiguration>,
+    min_clearance_m: Real,
+}
+
+/// Version of the checkpoint format.
+const CHECKPOINT_FORMAT: u32 = 1;
+
+impl Checkpoint {
+    fn write(&self, path: &Path) -> Result<(), SimError> {
+        let err = |e: &dyn std::fmt::Display| SimError::InvalidArgument {
+            what: path.display().to_string(),
+            message: format!("cannot write the checkpoint: {e}"),
+        };
+        let text = serde_json::to_string(self).map_err(|e| err(&e))?;
+        let tmp = path.with_extension("tmp");
+        std::fs::write(&tmp, text).map_err(|e| err(&e))?;
+        std::fs::rename(&tmp, path).map_err(|e| err(&e))
+    }
+
+    fn read(path: &Path) -> Result<Self, SimError> {
+        let err = |message: String| SimError::InvalidArgument {
+            what: path.display().to_string(),
+            message,
+        };
+        let text = std::fs::read(path)
+            .map_err(|e| err(format!("cannot read the checkpoint to resume from: {e}")))?;
+        let c: Self = serde_json::from_slice(&text)
+            .map_err(|e| err(format!("not a checkpoint of `surveyor explore`: {e}")))?;
+        if c.format != CHECKPOINT_FORMAT {
+            return Err(err(format!(
+                "checkpoint format {} (this version reads {CHECKPOINT_FORMAT})",
+                c.format
+            )));
+        }
+        Ok(c)
+    }
+}
+
+/// The noise seed of viewpoint `k`'s sweep.
+fn viewpoint_seed(seed: u64, k: usize) -> u64 {
+    seed ^ 0xa076_1d64_78bd_642f_u64.wrapping_mul(k as u64 + 1)
 }
 
 /// One viewpoint of the run.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ViewpointRecord {
     /// 0 for the start pose's sweep.
     pub k: usize,
@@ -93,7 +152,7 @@ pub struct ViewpointRecord {
 }
 
 /// A configuration found unsafe along an executed motion.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct UnsafeConfiguration {
     /// Viewpoint whose motion or sweep it was on.
     pub viewpoint: usize,
@@ -166,6 +225,35 @@ pub fn run_stage_one(
     if let Some(n) = options.max_viewpoints {
         config.max_viewpoints = n;
     }
+    let mut replay = std::collections::VecDeque::<ViewpointRecord>::default();
+    let mut restored = None;
+    if options.resume {
+        let path = options
+            .checkpoint
+            .as_ref()
+            .ok_or_else(|| SimError::InvalidArgument {
+                what: "resume".into(),
+                message: "no checkpoint file given".into(),
+            })?;
+        let c = Checkpoint::read(path)?;
+        let mut mine = config.clone();
+        mine.sweep = c.config.sweep;
+        if c.scenario != s.name
+            || c.seed != options.seed
+            || c.config != mine
+            || c.sweep != config.sweep
+        {
+            return Err(SimError::InvalidArgument {
+                what: path.display().to_string(),
+                message: format!(
+                    "the checkpoint is of another run (scenario {}, seed {}, or other parameters); resume with the same scenario, --seed and parameters",
+                    c.scenario, c.seed
+                ),
+            });
+        }
+        replay = c.viewpoints.iter().cloned().collect();
+        restored = Some(c);
+    }
     let regions = s.regions.ok_or_else(|| SimError::Scenario {
         source_name: s.name.clone(),
         message: "exploration needs regions of interest ([regions] a1, a2, a3)".into(),
@@ -236,6 +324,11 @@ pub fn run_stage_one(
         unsafe_configurations: Vec::new(),
         min_clearance_m: CLEARANCE_SEARCH_M,
     };
+    if let Some(c) = restored {
+        audit.collisions = c.collisions;
+        audit.unsafe_configurations = c.unsafe_configurations;
+        audit.min_clearance_m = c.min_clearance_m;
+    }
     let timed = |t: Instant| {
         if options.timings {
             t.elapsed().as_secs_f64() * 1e3
@@ -271,11 +364,22 @@ pub fn run_stage_one(
     let mut pending: Option<(explore::Choice, usize, usize, usize, Real, Real)> = None;
     let termination = loop {
         let k = viewpoints.len();
-        // The sweep at the current pose, audited against the map it is taken in.
-        let (lo, hi) = stage.sweep_range(&q);
-        audit.motion(stage.grid(), k, &q, &lo)?;
-        audit.motion(stage.grid(), k, &lo, &hi)?;
-        audit.motion(stage.grid(), k, &hi, &q)?;
+        // Replayed viewpoints: the arm is put where it stood and its sweep
+        // taken again (same seed, same points); its record and audit come
+        // from the checkpoint.
+        let replayed = replay.pop_front();
+        if let Some(r) = &replayed {
+            rig.move_to(&r.joints)?;
+            q.clone_from(&r.joints);
+        } else {
+            // The sweep at the current pose, audited against the map it is
+            // taken in.
+            let (lo, hi) = stage.sweep_range(&q);
+            audit.motion(stage.grid(), k, &q, &lo)?;
+            audit.motion(stage.grid(), k, &lo, &hi)?;
+            audit.motion(stage.grid(), k, &hi, &q)?;
+        }
+        rig.reseed(viewpoint_seed(options.seed, k));
         let t = Instant::now();
         let sweep = tilt_sweep(
             &mut rig,
@@ -294,44 +398,67 @@ pub fn run_stage_one(
         for t in &mut trackers {
             t.add_points(&positions);
         }
-        let (h1w, h2) = stage.information();
-        let mut record = ViewpointRecord {
-            k,
-            stage: 1,
-            joints: q.clone(),
-            f: None,
-            h1: stage.grid().h1_unweighted(),
-            h1_weighted: h1w,
-            h2,
-            predicted_h1_weighted: None,
-            candidates: 0,
-            front: 0,
-            unreachable: 0,
-            predicted_revealed: 0,
-            revealed: stats.newly_known,
-            coverage_a1: trackers.first().map(CoverageTracker::fraction),
-            joint_travel: 0.0,
-            waypoints: 0,
-            decision_ms: 0.0,
-            plan_ms: 0.0,
-            sweep_ms,
-            integrate_ms,
+        let record = if let Some(r) = replayed {
+            r
+        } else {
+            let (h1w, h2) = stage.information();
+            let mut record = ViewpointRecord {
+                k,
+                stage: 1,
+                joints: q.clone(),
+                f: None,
+                h1: stage.grid().h1_unweighted(),
+                h1_weighted: h1w,
+                h2,
+                predicted_h1_weighted: None,
+                candidates: 0,
+                front: 0,
+                unreachable: 0,
+                predicted_revealed: 0,
+                revealed: stats.newly_known,
+                coverage_a1: trackers.first().map(CoverageTracker::fraction),
+                joint_travel: 0.0,
+                waypoints: 0,
+                decision_ms: 0.0,
+                plan_ms: 0.0,
+                sweep_ms,
+                integrate_ms,
+            };
+            if let Some((choice, candidates, front, unreachable, decision_ms, plan_ms)) =
+                pending.take()
+            {
+                record.f = Some(choice.candidate.f);
+                record.predicted_h1_weighted = Some(choice.candidate.f[0]);
+                record.predicted_revealed = choice.candidate.revealed;
+                record.candidates = candidates;
+                record.front = front;
+                record.unreachable = unreachable;
+                record.joint_travel = choice.path.joint_travel();
+                record.waypoints = choice.path.waypoints.len();
+                record.decision_ms = decision_ms;
+                record.plan_ms = plan_ms;
+            }
+            record
         };
-        if let Some((choice, candidates, front, unreachable, decision_ms, plan_ms)) = pending.take()
-        {
-            record.f = Some(choice.candidate.f);
-            record.predicted_h1_weighted = Some(choice.candidate.f[0]);
-            record.predicted_revealed = choice.candidate.revealed;
-            record.candidates = candidates;
-            record.front = front;
-            record.unreachable = unreachable;
-            record.joint_travel = choice.path.joint_travel();
-            record.waypoints = choice.path.waypoints.len();
-            record.decision_ms = decision_ms;
-            record.plan_ms = plan_ms;
-        }
         progress(&record);
         viewpoints.push(record);
+        if !replay.is_empty() {
+            continue;
+        }
+        if let Some(path) = &options.checkpoint {
+            Checkpoint {
+                format: CHECKPOINT_FORMAT,
+                scenario: s.name.clone(),
+                seed: options.seed,
+                config: config.clone(),
+                sweep: config.sweep,
+                viewpoints: viewpoints.clone(),
+                collisions: audit.collisions,
+                unsafe_configurations: audit.unsafe_configurations.clone(),
+                min_clearance_m: audit.min_clearance_m,
+            }
+            .write(path)?;
+        }
         if let Some(t) = stage.termination() {
             break t;
         }
@@ -570,7 +697,6 @@ impl ExploreRun {
             "unsafe_configuration_list": self.unsafe_configurations,
             "min_clearance_m": self.min_clearance_m,
             "initial_information": {"H1_weighted": self.initial_information.0, "H2": self.initial_information.1},
-            "cspace_model": self.cspace,
             "points": self.cloud.len(),
             "mesh_triangles": self.mesh.triangles.len(),
             "coverage": coverage,

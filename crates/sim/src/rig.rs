@@ -84,6 +84,12 @@ impl SimRig {
         })
     }
 
+    /// Restart the sensor noise from `seed` (a runner that reseeds at fixed
+    /// points, e.g. every viewpoint, can replay from any of them).
+    pub fn reseed(&mut self, seed: u64) {
+        self.rng = ChaCha8Rng::seed_from_u64(seed);
+    }
+
     /// Set the standard deviation of the Gaussian noise added to every
     /// range-finder reading ([`RangeSensors::read_all`]), metres; 0 (the
     /// default) gives exact readings. The noise is drawn from the rig's seeded

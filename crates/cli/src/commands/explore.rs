@@ -14,7 +14,10 @@ H1, H2, H3, the weighted H1 predicted and obtained, candidates, Pareto front, un
 choices, voxels predicted and revealed, joint travel, waypoints, decision_ms, plan_ms, \
 sweep_ms, integrate_ms), cloud.ply (every measured point with its ray origin), mesh.ply (the \
 TSDF mesh) and run.json (viewpoints, termination, collisions, unsafe_configurations with \
-their dist(Q), min_clearance_m, coverage of A1, A2, A3 and per material, decision_ms, wall_s).
+their dist(Q), min_clearance_m, coverage of A1, A2, A3 and per material, decision_ms, wall_s), \
+and checkpoint.json, rewritten after every viewpoint: after an interruption (Ctrl-C, kill, \
+power), the same command with --resume continues the run, and with --no-timings its outputs \
+are byte-identical to an uninterrupted run's.
 
 Stage One only for now (--stages one): Stage Two (material identification) is not built yet.")]
 pub struct ExploreArgs {
@@ -38,6 +41,11 @@ pub struct ExploreArgs {
     /// Write zeros in the time columns so outputs are byte-identical run to run.
     #[arg(long)]
     no_timings: bool,
+    /// Continue the interrupted run whose checkpoint is in --out (same
+    /// scenario, seed and parameters): the viewpoints recorded there are
+    /// replayed and the run goes on as if never stopped.
+    #[arg(long)]
+    resume: bool,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -66,8 +74,12 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         max_viewpoints: args.max_viewpoints,
         cspace_cache: Some(cache),
         timings: !args.no_timings,
+        checkpoint: Some(args.out.join("checkpoint.json")),
+        resume: args.resume,
         ..ExploreOptions::default()
     };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
     let t = std::time::Instant::now();
     let run = run_stage_one(&loaded, &options, &mut |r| {
         eprintln!(
