@@ -192,8 +192,32 @@ pub struct ExploreRun {
     /// roadmap pose's scanner position, and of those the covered ones (see
     /// [`CoverageTracker::set_observable_from`]).
     pub observable: Vec<(usize, usize)>,
+    /// The map products of Stage One (A§5.2–5.3): the mesh's Scale-Like
+    /// Discs and their segments.
+    pub discs: DiscMap,
     /// Wall time of the whole run, seconds (0 when timings are off).
     pub wall_s: Real,
+}
+
+/// Scale-Like Discs of the TSDF mesh (A§5.2, Table 6.1: μ = 0.04 m, n_min =
+/// 8), each with the viewpoint that saw it (the viewpoint of the nearest
+/// measured point) and its segment (A§5.3, with the pose graph τq over those
+/// viewpoints' joints).
+#[derive(Clone, Debug, Default)]
+pub struct DiscMap {
+    /// The discs.
+    pub discs: Vec<map::Disc>,
+    /// Per disc: the viewpoint (index into `viewpoints`) that saw it.
+    pub viewpoint: Vec<usize>,
+    /// Per disc: its segment (index into `segments`).
+    pub segment: Vec<usize>,
+    /// The segments: disc indices, ascending.
+    pub segments: Vec<Vec<map::DiscId>>,
+    /// Per disc: the material of the nearest true surface within 0.05 m
+    /// (index into the scene's table; scenes with a ground truth).
+    pub true_material: Vec<Option<usize>>,
+    /// The scene's material names.
+    pub material_names: Vec<String>,
 }
 
 /// Misses free space this much short of the scanner's range, metres (three
@@ -360,6 +384,7 @@ pub fn run_stage_one(
     };
     let mut viewpoints = Vec::new();
     let mut cloud: Vec<SweepPoint> = Vec::new();
+    let mut cloud_viewpoint: Vec<usize> = Vec::new();
     let mut q = start.clone();
     let mut pending: Option<(explore::Choice, usize, usize, usize, Real, Real)> = None;
     let termination = loop {
@@ -394,6 +419,7 @@ pub fn run_stage_one(
         tsdf.integrate_sweep(&sweep);
         let integrate_ms = timed(t);
         cloud.extend_from_slice(sweep.points());
+        cloud_viewpoint.resize(cloud.len(), k);
         let positions = sweep.positions();
         for t in &mut trackers {
             t.add_points(&positions);
@@ -493,6 +519,15 @@ pub fn run_stage_one(
         [a1, a2, a3] => Some([a1.report(), a2.report(), a3.report()]),
         _ => None,
     };
+    let mesh = tsdf.extract_mesh();
+    let discs = disc_map(
+        &mesh,
+        &cloud,
+        &cloud_viewpoint,
+        &viewpoints,
+        scene,
+        options.seed,
+    )?;
     let observable = trackers
         .iter()
         .filter_map(CoverageTracker::observable_counts)
@@ -507,7 +542,8 @@ pub fn run_stage_one(
         initial_information: stage.initial_information(),
         cspace,
         cloud,
-        mesh: tsdf.extract_mesh(),
+        mesh,
+        discs,
         coverage,
         observable,
         wall_s: if options.timings {
@@ -515,6 +551,87 @@ pub fn run_stage_one(
         } else {
             0.0
         },
+    })
+}
+
+/// Discs of `mesh`, each tied to the viewpoint of the nearest point of
+/// `cloud`, and segmented with those viewpoints' joints as the pose graph.
+fn disc_map(
+    mesh: &TriMesh,
+    cloud: &[SweepPoint],
+    cloud_viewpoint: &[usize],
+    viewpoints: &[ViewpointRecord],
+    scene: Option<&Scene>,
+    seed: u64,
+) -> Result<DiscMap, SimError> {
+    use kiddo::{ImmutableKdTree, SquaredEuclidean};
+    if mesh.vertices.is_empty() || cloud.is_empty() {
+        return Ok(DiscMap::default());
+    }
+    let normals = mesh.vertex_normals();
+    let sld = map::generate_discs(
+        &mesh.vertices,
+        map::Orientation::ReferenceNormals(&normals),
+        &map::SldConfig::default(),
+        seed,
+    )?;
+    let pts: Vec<[Real; 3]> = cloud
+        .iter()
+        .map(|p| [p.point.x, p.point.y, p.point.z])
+        .collect();
+    let tree: ImmutableKdTree<Real, 3> = ImmutableKdTree::new_from_slice(&pts);
+    let viewpoint: Vec<usize> = sld
+        .discs
+        .iter()
+        .map(|d| {
+            let n =
+                tree.approx_nearest_one::<SquaredEuclidean>(&[d.centre.x, d.centre.y, d.centre.z]);
+            cloud_viewpoint[n.item as usize]
+        })
+        .collect();
+    let poses: Vec<map::segment::JointPose> = viewpoint
+        .iter()
+        .map(|&k| {
+            let mut pose = [0.0; 6];
+            for (slot, v) in pose.iter_mut().zip(&viewpoints[k].joints) {
+                *slot = *v;
+            }
+            pose
+        })
+        .collect();
+    let dof6 = viewpoints.first().is_some_and(|r| r.joints.len() == 6);
+    let segments = map::segment_discs(
+        &sld.discs,
+        dof6.then_some(poses.as_slice()),
+        &map::SegmentConfig::default(),
+    )?;
+    let mut segment = vec![0; sld.discs.len()];
+    for (s, members) in segments.iter().enumerate() {
+        for d in members {
+            segment[d.0] = s;
+        }
+    }
+    let (true_material, material_names) = match scene {
+        Some(scene) => (
+            sld.discs
+                .iter()
+                .map(|d| {
+                    scene
+                        .closest_point(&d.centre, 0.05)
+                        .map(|(_, face, _)| usize::from(scene.triangle_material(face).0))
+                })
+                .collect(),
+            scene.materials().iter().map(|m| m.name.clone()).collect(),
+        ),
+        None => (vec![None; sld.discs.len()], Vec::new()),
+    };
+    Ok(DiscMap {
+        discs: sld.discs,
+        viewpoint,
+        segment,
+        segments,
+        true_material,
+        material_names,
     })
 }
 
@@ -699,6 +816,9 @@ impl ExploreRun {
             "initial_information": {"H1_weighted": self.initial_information.0, "H2": self.initial_information.1},
             "points": self.cloud.len(),
             "mesh_triangles": self.mesh.triangles.len(),
+            "discs": self.discs.discs.len(),
+            "segments": self.discs.segments.len(),
+            "materials": self.discs.material_names,
             "coverage": coverage,
             "material_accuracy": serde_json::Value::Null,
             "decision_ms": {"median": median, "max": max},
@@ -731,6 +851,27 @@ impl ExploreRun {
             &refs,
         )?;
         scene::io::write_mesh_ply(&dir.join("mesh.ply"), &self.mesh)?;
+        let d = &self.discs;
+        let column = |name: &str, values: Vec<Real>| map::sld_io::ExtraColumn {
+            name: name.to_owned(),
+            values,
+        };
+        let extra = [
+            column("segment", d.segment.iter().map(|v| *v as Real).collect()),
+            column(
+                "viewpoint",
+                d.viewpoint.iter().map(|v| *v as Real).collect(),
+            ),
+            column(
+                "true_material",
+                d.true_material
+                    .iter()
+                    .map(|m| m.map_or(-1.0, |v| v as Real))
+                    .collect(),
+            ),
+        ];
+        map::sld_io::save_discs_csv(&dir.join("discs.csv"), &d.discs, &extra)?;
+        map::segment_io::save_segments_json(&dir.join("segments.json"), &d.segments)?;
         let json = dir.join("run.json");
         let text =
             serde_json::to_string_pretty(&self.run_json()).map_err(|e| io(&json, &e))? + "\n";

@@ -174,6 +174,40 @@ fn stage_one_moves_only_through_known_free_space_and_reduces_information() {
         assert_eq!(r.predicted_h1_weighted, Some(f[0]));
         assert!(f[3] > 1.0, "a chosen viewpoint with dist(Q) {}", f[3]);
     }
+    // The map products: discs on the true surfaces, each in one segment and
+    // tied to a viewpoint that was visited.
+    let d = &a.discs;
+    assert!(d.discs.len() > 1000, "{}", d.discs.len());
+    let on_truth = d.true_material.iter().filter(|m| m.is_some()).count();
+    assert!(
+        on_truth * 100 >= d.discs.len() * 95,
+        "{on_truth} of {}",
+        d.discs.len()
+    );
+    assert!(d.viewpoint.iter().all(|k| *k < a.viewpoints.len()));
+    let mut seen = vec![0usize; d.discs.len()];
+    for (s, members) in d.segments.iter().enumerate() {
+        for m in members {
+            seen[m.0] += 1;
+            assert_eq!(d.segment[m.0], s);
+        }
+    }
+    assert!(seen.iter().all(|n| *n == 1));
+    let dir = std::env::temp_dir().join(format!("surveyor-explore-test-{}", std::process::id()));
+    a.write(&dir).unwrap();
+    for name in [
+        "viewpoints.csv",
+        "cloud.ply",
+        "mesh.ply",
+        "discs.csv",
+        "segments.json",
+        "run.json",
+    ] {
+        assert!(dir.join(name).exists(), "{name}");
+    }
+    let discs = map::sld_io::load_discs_csv(&dir.join("discs.csv")).unwrap();
+    assert_eq!(discs.len(), d.discs.len());
+    std::fs::remove_dir_all(&dir).unwrap();
     // The same seed gives the same outputs (timings off).
     let b = run(3);
     assert_eq!(a.viewpoints_csv(), b.viewpoints_csv());
