@@ -81,7 +81,7 @@ impl Default for ExploreConfig {
             local_candidates: 200,
             local_reach_m: 0.3,
             link_k: 10,
-            max_plan_attempts: 20,
+            max_plan_attempts: 100,
         }
     }
 }
