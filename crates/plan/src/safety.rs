@@ -61,15 +61,17 @@ impl Safety {
         self.cap
     }
 
-    /// The bounding ellipsoids of links 1.. (the base link never moves and is
-    /// not checked, as in eq. 3.5's `i ∈ {1, …, 6}`) at `q`, in the world frame.
+    /// The bounding ellipsoids of the moving links (the base and the links
+    /// fixed to it never move and are not checked, as in eq. 3.5's
+    /// `i ∈ {1, …, 6}`; see `Robot::mounted_links`) at `q`, in the world frame.
     pub fn ellipsoids(&self, q: &[Real]) -> Result<Vec<Ellipsoid>, PlanError> {
         let frames = self.robot.forward_kinematics(q)?;
+        let mounted = self.robot.mounted_links();
         Ok(self
             .robot
             .posed_ellipsoids(&frames)
             .into_iter()
-            .filter(|(link, _)| link.index() > 0)
+            .filter(|(link, _)| link.index() >= mounted)
             .map(|(_, e)| e.transformed(&self.world_from_base))
             .collect())
     }
@@ -95,9 +97,10 @@ impl Safety {
         stop_at: Real,
     ) -> Result<Real, PlanError> {
         let frames = self.robot.forward_kinematics(q)?;
+        let mounted = self.robot.mounted_links();
         let mut best = bound.min(self.cap);
         for (link, e) in self.robot.posed_ellipsoids(&frames) {
-            if link.index() == 0 || !links.contains(&link.index()) {
+            if link.index() < mounted || !links.contains(&link.index()) {
                 continue;
             }
             let e = e.transformed(&self.world_from_base);

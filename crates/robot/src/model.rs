@@ -357,6 +357,22 @@ pub struct Robot {
 }
 
 impl Robot {
+    /// Number of links that never move: the base link and the links joined
+    /// to it by fixed joints before the first actuated joint (a URDF's `world`
+    /// and `base_link`). They are mounted on the scene, so contact and safety
+    /// checks leave them out.
+    ///
+    /// ```
+    /// assert_eq!(robot::builtin("denso-vm6083")?.mounted_links(), 1);
+    /// # Ok::<(), robot::RobotError>(())
+    /// ```
+    pub fn mounted_links(&self) -> usize {
+        self.joints
+            .iter()
+            .position(Joint::is_actuated)
+            .map_or(self.links.len(), |j| j + 1)
+    }
+
     /// Number of actuated joints (length of `q`).
     #[inline]
     pub fn dof(&self) -> usize {

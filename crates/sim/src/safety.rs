@@ -21,19 +21,21 @@ pub struct Contact {
 }
 
 /// Every link in contact with the scene at the given link frames
-/// (`base_from_link`, from forward kinematics), one contact per link. The base
-/// link (link 0) is skipped: it is mounted on the scene.
+/// (`base_from_link`, from forward kinematics), one contact per link. The
+/// links that never move ([`Robot::mounted_links`]: the base, and a URDF's
+/// links fixed to it) are skipped: they are mounted on the scene.
 pub fn robot_contacts(
     robot: &Robot,
     base_from_link: &[Isometry3],
     world_from_base: &Isometry3,
     scene: &Scene,
 ) -> Vec<Contact> {
+    let mounted = robot.mounted_links();
     let mut found: Vec<Contact> = Vec::new();
     for shape in robot.posed_collision_shapes(base_from_link) {
         let (link, face) = match shape {
             PosedShape::Capsule { link, capsule } => {
-                if link == LinkId(0) || found.iter().any(|c| c.link == link) {
+                if link.index() < mounted || found.iter().any(|c| c.link == link) {
                     continue;
                 }
                 let c = capsule.transformed(world_from_base);
@@ -44,7 +46,7 @@ pub fn robot_contacts(
                 mesh,
                 base_from_link,
             } => {
-                if link == LinkId(0) || found.iter().any(|c| c.link == link) {
+                if link.index() < mounted || found.iter().any(|c| c.link == link) {
                     continue;
                 }
                 let world_from_link = world_from_base * base_from_link;
@@ -73,7 +75,8 @@ pub fn robot_contacts(
     found
 }
 
-/// Smallest distance between the robot's capsules (links ≥ 1) and the scene,
+/// Smallest distance between the robot's capsules (the moving links, see
+/// [`Robot::mounted_links`]) and the scene,
 /// looking no farther than `search_m` (returns `search_m` when nothing is closer).
 pub fn min_clearance(
     robot: &Robot,
@@ -82,10 +85,11 @@ pub fn min_clearance(
     scene: &Scene,
     search_m: Real,
 ) -> Real {
+    let mounted = robot.mounted_links();
     let mut best = search_m;
     for shape in robot.posed_collision_shapes(base_from_link) {
         if let PosedShape::Capsule { link, capsule } = shape {
-            if link == LinkId(0) {
+            if link.index() < mounted {
                 continue;
             }
             let c = capsule.transformed(world_from_base);
@@ -136,13 +140,13 @@ impl MotionCheck {
 }
 
 /// The smallest capsule radius of the links that are checked for contacts
-/// (links ≥ 1); `None` when no such link has a capsule. Half of it is a good
-/// `max_step_m` for [`motion_contacts`].
+/// (the moving ones); `None` when no such link has a capsule. Half of it is a
+/// good `max_step_m` for [`motion_contacts`].
 pub fn smallest_link_radius(robot: &Robot) -> Option<Real> {
     robot
         .links
         .iter()
-        .skip(1)
+        .skip(robot.mounted_links())
         .flat_map(|l| &l.collision)
         .filter_map(|s| match s {
             CollisionShape::Capsule(c) => Some(c.radius),

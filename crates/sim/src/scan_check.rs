@@ -18,7 +18,7 @@ use geom::polygon2;
 use geom::{Capsule, Isometry3, PlaneFrame, Point2, Point3, Real, polygon3::newell_normal, unit};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
-use robot::{LinkId, PosedShape, Robot};
+use robot::{PosedShape, Robot};
 use serde::{Deserialize, Serialize};
 use surface::{SegmentId, SurfaceModel};
 
@@ -134,7 +134,7 @@ pub fn scan_clearance(
         .posed_collision_shapes(base_from_link)
         .into_iter()
         .filter_map(|s| match s {
-            PosedShape::Capsule { link, capsule } if link != LinkId(0) => {
+            PosedShape::Capsule { link, capsule } if link.index() >= robot.mounted_links() => {
                 Some(scan.capsule_distance(&capsule.transformed(world_from_base)))
             }
             _ => None,

@@ -213,3 +213,30 @@ fn stage_one_moves_only_through_known_free_space_and_reduces_information() {
     assert_eq!(a.viewpoints_csv(), b.viewpoints_csv());
     assert_eq!(a.run_json(), b.run_json());
 }
+
+#[test]
+#[ignore = "seconds in release; run by .ci/run"]
+fn a_urdf_ur5_explores_a_bridge_sized_to_its_reach_safely() {
+    // Issue 10 acceptance 6: data/scenarios/ur5_bridge.toml.
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/scenarios/ur5_bridge.toml"
+    );
+    let loaded = Scenario::load(path).unwrap();
+    let options = ExploreOptions {
+        max_viewpoints: Some(30),
+        ..ExploreOptions::default()
+    };
+    let run = run_stage_one(&loaded, &options, &mut |_| {}).unwrap();
+    println!(
+        "UR5: {} viewpoints, {}; A1 coverage {:.1} %",
+        run.viewpoints.len(),
+        run.termination.name(),
+        100.0 * run.coverage.as_ref().unwrap()[0].fraction()
+    );
+    assert_eq!(run.termination.name(), "information_converged");
+    assert!(run.viewpoints.len() >= 4);
+    assert_eq!(run.collisions, 0);
+    assert!(run.unsafe_configurations.is_empty());
+    assert!(run.coverage.as_ref().unwrap()[0].fraction() > 0.3);
+}
