@@ -227,6 +227,111 @@ const MISS_MARGIN_M: Real = 0.15;
 /// Clearance search radius, metres.
 const CLEARANCE_SEARCH_M: Real = 0.5;
 
+/// Everything a Stage One run starts from: the scenario's robot, world,
+/// sweep and parameters, the C-space model (built or loaded), the planning
+/// state at the start pose and a simulated rig there.
+#[derive(Debug)]
+pub struct StageOneSetup {
+    /// The robot (scanner mounted).
+    pub robot: Robot,
+    /// The ground truth.
+    pub world: Arc<scene::World>,
+    /// Where the robot's base stands.
+    pub world_from_base: Isometry3,
+    /// Stage One's parameters (scenario or options, sweep from the scanner).
+    pub config: ExploreConfig,
+    /// The regions of interest.
+    pub regions: map::RegionsConfig,
+    /// How far misses free space and predictions cast, metres.
+    pub reach_m: Real,
+    /// The start pose.
+    pub start: Vec<Real>,
+    /// The planning state before the first sweep.
+    pub stage: StageOne,
+    /// The simulated arm and scanner at the start pose.
+    pub rig: SimRig,
+    /// How the C-space model was obtained.
+    pub cspace: String,
+}
+
+impl StageOneSetup {
+    /// The setup of `loaded` under `options` (seed, budget, parameters, cache).
+    pub fn new(loaded: &LoadedScenario, options: &ExploreOptions) -> Result<Self, SimError> {
+        let s = &loaded.scenario;
+        let robot = loaded.build_robot()?;
+        let world = Arc::new(loaded.build_world()?);
+        let world_from_base = s.world_from_base();
+        let spec = s.scanner.clone().unwrap_or_default();
+        let mut config = options
+            .config
+            .clone()
+            .or_else(|| s.explore.clone())
+            .unwrap_or_default();
+        config.sweep = spec.sweep;
+        if let Some(n) = options.max_viewpoints {
+            config.max_viewpoints = n;
+        }
+        let regions = s.regions.ok_or_else(|| SimError::Scenario {
+            source_name: s.name.clone(),
+            message: "exploration needs regions of interest ([regions] a1, a2, a3)".into(),
+        })?;
+        // Rays without a return free space up to a little short of the range
+        // (map's perfect-detection reading), and predictions cast as far.
+        let reach_m = (spec.config.max_range_m - MISS_MARGIN_M).max(spec.config.min_range_m);
+        let occupancy = map::OccupancyConfig {
+            regions,
+            free_misses_m: Some(reach_m),
+            ..map::OccupancyConfig::default()
+        };
+        let start = s.robot.start_joints.clone();
+        robot.check_within_limits(&start)?;
+        let voxel = config.planning_voxel_m;
+        let (model, outcome) = match &options.cspace_cache {
+            Some(path) => {
+                CspaceModel::load_or_build(path, &robot, &world_from_base, voxel, &config.plan)?
+            }
+            None => (
+                CspaceModel::build(&robot, &world_from_base, voxel, &config.plan)?,
+                CacheOutcome::Built("no cache file".into()),
+            ),
+        };
+        let cspace = match outcome {
+            CacheOutcome::Loaded => "loaded from cache".to_owned(),
+            CacheOutcome::Built(why) => format!("built ({why})"),
+        };
+        let scanner = Scanner::new(spec.config)?;
+        let bearings = scanner.bearings_rad().to_vec();
+        let stage = StageOne::new(
+            model,
+            &occupancy,
+            &bearings,
+            reach_m,
+            config.clone(),
+            &start,
+        )?;
+        let rig = SimRig::new(
+            robot.clone(),
+            Arc::clone(&world),
+            world_from_base,
+            &start,
+            Some(scanner),
+            options.seed,
+        )?;
+        Ok(Self {
+            robot,
+            world,
+            world_from_base,
+            config,
+            regions,
+            reach_m,
+            start,
+            stage,
+            rig,
+            cspace,
+        })
+    }
+}
+
 /// Run Stage One of AXBAM on a scenario. `progress` sees each viewpoint's
 /// record as it completes.
 pub fn run_stage_one(
@@ -236,19 +341,18 @@ pub fn run_stage_one(
 ) -> Result<ExploreRun, SimError> {
     let t_run = Instant::now();
     let s = &loaded.scenario;
-    let robot = loaded.build_robot()?;
-    let world = Arc::new(loaded.build_world()?);
-    let world_from_base = s.world_from_base();
-    let spec = s.scanner.clone().unwrap_or_default();
-    let mut config = options
-        .config
-        .clone()
-        .or_else(|| s.explore.clone())
-        .unwrap_or_default();
-    config.sweep = spec.sweep;
-    if let Some(n) = options.max_viewpoints {
-        config.max_viewpoints = n;
-    }
+    let StageOneSetup {
+        robot,
+        world,
+        world_from_base,
+        config,
+        regions,
+        reach_m: reach,
+        start,
+        mut stage,
+        mut rig,
+        cspace,
+    } = StageOneSetup::new(loaded, options)?;
     let mut replay = std::collections::VecDeque::<ViewpointRecord>::default();
     let mut restored = None;
     if options.resume {
@@ -278,53 +382,6 @@ pub fn run_stage_one(
         replay = c.viewpoints.iter().cloned().collect();
         restored = Some(c);
     }
-    let regions = s.regions.ok_or_else(|| SimError::Scenario {
-        source_name: s.name.clone(),
-        message: "exploration needs regions of interest ([regions] a1, a2, a3)".into(),
-    })?;
-    // Rays without a return free space up to a little short of the range
-    // (map's perfect-detection reading), and predictions cast as far.
-    let reach = (spec.config.max_range_m - MISS_MARGIN_M).max(spec.config.min_range_m);
-    let occupancy = map::OccupancyConfig {
-        regions,
-        free_misses_m: Some(reach),
-        ..map::OccupancyConfig::default()
-    };
-    let start = s.robot.start_joints.clone();
-    robot.check_within_limits(&start)?;
-    let (model, outcome) = match &options.cspace_cache {
-        Some(path) => CspaceModel::load_or_build(
-            path,
-            &robot,
-            &world_from_base,
-            config.planning_voxel_m,
-            &config.plan,
-        )?,
-        None => (
-            CspaceModel::build(
-                &robot,
-                &world_from_base,
-                config.planning_voxel_m,
-                &config.plan,
-            )?,
-            CacheOutcome::Built("no cache file".into()),
-        ),
-    };
-    let cspace = match outcome {
-        CacheOutcome::Loaded => "loaded from cache".to_owned(),
-        CacheOutcome::Built(why) => format!("built ({why})"),
-    };
-    let scanner = Scanner::new(spec.config)?;
-    let bearings = scanner.bearings_rad().to_vec();
-    let mut stage = StageOne::new(model, &occupancy, &bearings, reach, config.clone(), &start)?;
-    let mut rig = SimRig::new(
-        robot.clone(),
-        Arc::clone(&world),
-        world_from_base,
-        &start,
-        Some(scanner),
-        options.seed,
-    )?;
     let mut tsdf = TsdfMap::new(options.tsdf)?;
     let scene = world.as_scene();
     let check_step = 0.5 * config.plan.check_step_m;

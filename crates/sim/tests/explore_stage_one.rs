@@ -8,9 +8,7 @@
 //! `cargo test --release -p sim --test explore_stage_one -- --ignored --nocapture`.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may panic
 
-use explore::{ExploreConfig, StageOne};
-use plan::CspaceModel;
-use sim::explore_run::{ExploreOptions, run_stage_one};
+use sim::explore_run::{ExploreOptions, StageOneSetup, run_stage_one};
 use sim::{Arm, Scenario, SimRig, tilt_sweep};
 use std::sync::Arc;
 
@@ -59,41 +57,19 @@ fn predicted_gain_ranks_candidates_like_the_gain_their_sweeps_bring() {
     // simulated in the true scene and integrated into a copy of the map:
     // the weighted H1 it really removes is the second method.
     let loaded = Scenario::load("bridge1").unwrap();
-    let s = &loaded.scenario;
-    let robot = loaded.build_robot().unwrap();
-    let world = Arc::new(loaded.build_world().unwrap());
-    let wfb = s.world_from_base();
-    let spec = s.scanner.clone().unwrap();
-    let config = ExploreConfig::default();
-    let model = CspaceModel::build(&robot, &wfb, config.planning_voxel_m, &config.plan).unwrap();
-    let reach = spec.config.max_range_m - 0.15;
-    let occupancy = map::OccupancyConfig {
-        regions: s.regions.unwrap(),
-        free_misses_m: Some(reach),
-        ..map::OccupancyConfig::default()
-    };
-    let scanner = sensor::Scanner::new(spec.config).unwrap();
-    let start = s.robot.start_joints.clone();
-    let mut stage = StageOne::new(
-        model,
-        &occupancy,
-        scanner.bearings_rad(),
-        reach,
+    let setup = StageOneSetup::new(&loaded, &ExploreOptions::default()).unwrap();
+    let StageOneSetup {
+        robot,
+        world,
+        world_from_base: wfb,
         config,
-        &start,
-    )
-    .unwrap();
-    let mut rig = SimRig::new(
-        robot.clone(),
-        Arc::clone(&world),
-        wfb,
-        &start,
-        Some(scanner.clone()),
-        0,
-    )
-    .unwrap();
+        mut stage,
+        mut rig,
+        ..
+    } = setup;
+    let scanner = sensor::Scanner::new(loaded.scenario.scanner.clone().unwrap().config).unwrap();
     for decision in 0..3 {
-        let sweep = tilt_sweep(&mut rig, &robot, &wfb, &spec.sweep, &mut |_, _| {}).unwrap();
+        let sweep = tilt_sweep(&mut rig, &robot, &wfb, &config.sweep, &mut |_, _| {}).unwrap();
         stage.integrate(&sweep);
         let q = rig.joints();
         let d = stage.decide(&q).unwrap();
@@ -111,7 +87,7 @@ fn predicted_gain_ranks_candidates_like_the_gain_their_sweeps_bring() {
                 1,
             )
             .unwrap();
-            let sw = tilt_sweep(&mut other, &robot, &wfb, &spec.sweep, &mut |_, _| {}).unwrap();
+            let sw = tilt_sweep(&mut other, &robot, &wfb, &config.sweep, &mut |_, _| {}).unwrap();
             trial.integrate(&sw);
             predicted.push(h1 - c.f[0]);
             obtained.push(h1 - trial.information().0);
