@@ -102,6 +102,15 @@ fn bad_explore_input_is_a_clear_error() {
     assert!(e.contains("checkpoint") && e.contains("cannot read"), "{e}");
     let e = fails(&["explore", "--scenario", "bridge9", "--out", o]);
     assert!(e.contains("bridge9") && e.contains("built-ins"), "{e}");
+    // Another robot: a URDF needs its scanner link; a start pose that puts
+    // the robot into the scene is refused.
+    let e = fails(&["explore", "--robot", "x.urdf", "--out", o]);
+    assert!(e.contains("--scanner-link"), "{e}");
+    let e = fails(&["explore", "--robot", "arm4", "--out", o]);
+    assert!(
+        e.contains("start pose") && e.contains("into the scene"),
+        "{e}"
+    );
     // A checkpoint of another run is refused, not continued.
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("checkpoint.json"), "{\"format\": 1}").unwrap();

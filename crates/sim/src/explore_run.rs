@@ -285,6 +285,24 @@ impl StageOneSetup {
         };
         let start = s.robot.start_joints.clone();
         robot.check_within_limits(&start)?;
+        // Exploration assumes only that the start pose is safe (A§6.1); one
+        // that touches the scene is a mistake in the scenario.
+        if let Some(scene) = world.as_scene() {
+            let frames = robot.forward_kinematics(&start)?;
+            if let Some(c) =
+                crate::safety::robot_contacts(&robot, &frames, &world_from_base, scene).first()
+            {
+                return Err(SimError::Scenario {
+                    source_name: s.name.clone(),
+                    message: format!(
+                        "robot.start_joints: the start pose puts link {} ({}) into the scene (object {}); exploration starts from a safe pose",
+                        c.link.index(),
+                        robot.links[c.link.index()].name,
+                        scene.object(c.object).map_or("?", |o| o.name.as_str())
+                    ),
+                });
+            }
+        }
         let voxel = config.planning_voxel_m;
         let (model, outcome) = match &options.cspace_cache {
             Some(path) => {

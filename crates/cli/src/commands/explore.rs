@@ -24,6 +24,15 @@ pub struct ExploreArgs {
     /// Built-in scenario (bridge1, bridge2, bridge3) or scenario file.
     #[arg(long, default_value = "bridge1")]
     scenario: String,
+    /// Another robot than the scenario's: a built-in name or a URDF file
+    /// (FILE.urdf, with --scanner-link). The scenario's start joints must fit
+    /// it (a scenario file gives them in [robot] start_joints).
+    #[arg(long)]
+    robot: Option<String>,
+    /// With a URDF --robot: the link carrying the scanner (its frame's z axis
+    /// is the centre ray); the scenario's [scanner] mount applies on it.
+    #[arg(long, requires = "robot")]
+    scanner_link: Option<String>,
     /// Seed of the scanner noise.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -58,7 +67,34 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
             args.stages
         );
     }
-    let loaded = Scenario::load(&args.scenario)?;
+    let mut loaded = Scenario::load(&args.scenario)?;
+    if let Some(robot) = &args.robot {
+        let spec = &mut loaded.scenario.robot;
+        if robot.to_ascii_lowercase().ends_with(".urdf") {
+            let link = args.scanner_link.clone().context(
+                "--robot FILE.urdf needs --scanner-link LINK (the link carrying the scanner)",
+            )?;
+            let path = std::fs::canonicalize(robot)
+                .with_context(|| format!("--robot {robot}: cannot read the URDF file"))?;
+            spec.preset = None;
+            spec.urdf = Some(path);
+            spec.tip = Some(link);
+        } else {
+            if args.scanner_link.is_some() {
+                bail!("--scanner-link applies to URDF robots; `{robot}` is a built-in robot");
+            }
+            spec.preset = Some(robot.clone());
+            spec.urdf = None;
+            spec.tip = None;
+        }
+        let dof = loaded.build_robot()?.dof();
+        if dof != loaded.scenario.robot.start_joints.len() {
+            bail!(
+                "--robot {robot} has {dof} joints but the scenario's start pose has {}: give the start pose in a scenario file ([robot] start_joints)",
+                loaded.scenario.robot.start_joints.len()
+            );
+        }
+    }
     let robot_name = loaded
         .scenario
         .robot
