@@ -169,6 +169,40 @@ fn stage_one_moves_only_through_known_free_space_and_reduces_information() {
         }
     }
     assert!(seen.iter().all(|n| *n == 1));
+    // Stage One's material identification: the LRC's most probable material
+    // against the true one, over the discs it could observe.
+    let observed = d.observations.iter().filter(|o| **o > 0).count();
+    let accuracy = d.material_accuracy().unwrap();
+    // Better than always naming the commonest true material of those discs.
+    let mut counts = vec![0usize; d.material_names.len()];
+    for (t, o) in d.true_material.iter().zip(&d.observations) {
+        if let (Some(t), true) = (t, *o > 0) {
+            counts[*t] += 1;
+        }
+    }
+    let majority = *counts.iter().max().unwrap() as f64 / counts.iter().sum::<usize>() as f64;
+    println!(
+        "LRC observed {observed} discs; MAP material right on {:.1} % (commonest material {:.1} %)",
+        100.0 * accuracy,
+        100.0 * majority
+    );
+    // Stage One's views are not chosen for the LRC (Stage Two's job): the
+    // accuracy is reported, not bounded (18 viewpoints of seed 0: 74.8 %
+    // against 46 %; these 8: about the commonest material's share).
+    assert!(observed >= 50, "{observed}");
+    // Posteriors are distributions; an observed disc is surer than the
+    // uniform prior (a disc's voxels may also be a neighbour's, so an
+    // unobserved disc can have moved too).
+    for p in &d.posterior {
+        assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+    }
+    let sure = d
+        .posterior
+        .iter()
+        .zip(&d.observations)
+        .filter(|(p, o)| **o > 0 && p.iter().any(|v| *v > 0.5))
+        .count();
+    assert!(sure * 2 >= observed, "{sure} of {observed}");
     let dir = std::env::temp_dir().join(format!("surveyor-explore-test-{}", std::process::id()));
     a.write(&dir).unwrap();
     for name in [
