@@ -7,6 +7,9 @@
 //! * `select_every_start` — LM from all five best-ranked starts.
 //! * `lm_from_nearby` — one LM run alone from a valid pose with the base
 //!   turned by 2° (the view misses the centre by ~2.5 cm).
+//! * `lm_off_unknown` — one LM run alone from a valid pose made unsafe by an
+//!   unexplored voxel just inside a forearm or wrist ellipsoid: `g₄` is
+//!   active and the differences measure `dist(Q)` again.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -16,6 +19,10 @@ use plan::{PlanConfig, PoseConfig, PoseSelector, Safety, Target};
 use std::hint::black_box;
 
 fn walled_grid() -> OccupancyGrid {
+    walled_grid_with_unknown(None)
+}
+
+fn walled_grid_with_unknown(unknown: Option<VoxelKey>) -> OccupancyGrid {
     let mut g = OccupancyGrid::new(OccupancyConfig {
         voxel_m: 0.1,
         regions: RegionsConfig::around([0.0, 0.0, 0.475], [1.1, 1.6, 2.1]),
@@ -28,8 +35,10 @@ fn walled_grid() -> OccupancyGrid {
     for z in 0..nz as i32 {
         for y in 0..ny as i32 {
             for x in 0..nx as i32 {
-                g.mark_free(VoxelKey::new(k0[0] + x, k0[1] + y, k0[2] + z))
-                    .unwrap();
+                let key = VoxelKey::new(k0[0] + x, k0[1] + y, k0[2] + z);
+                if Some(key) != unknown {
+                    g.mark_free(key).unwrap();
+                }
             }
         }
     }
@@ -91,6 +100,42 @@ fn bench(c: &mut Criterion) {
         iterations(&lm),
     );
 
+    // A voxel just inside a forearm or wrist ellipsoid (links 3..) of a valid
+    // pose, left unexplored.
+    let other = Target::new(Point3::new(0.7, -0.2, 0.7), -Vector3::x()).unwrap();
+    let q = default
+        .select(&grid, &other, &start)
+        .unwrap()
+        .joints()
+        .to_vec();
+    let ellipsoids = safety.ellipsoids(&q).unwrap();
+    let geometry = *grid.geometry();
+    let [nx, ny, nz] = geometry.dims();
+    let k0 = geometry.key_min().coords();
+    let mut near = None;
+    for z in 0..nz as i32 {
+        for y in 0..ny as i32 {
+            for x in 0..nx as i32 {
+                let key = VoxelKey::new(k0[0] + x, k0[1] + y, k0[2] + z);
+                let c = key.center(0.1);
+                let d = ellipsoids[2..]
+                    .iter()
+                    .map(|e| e.algebraic_distance(&c))
+                    .fold(Real::INFINITY, Real::min);
+                if (0.6..0.95).contains(&d)
+                    && grid.state(key) == map::VoxelState::Free
+                    && near.is_none_or(|(_, best)| d > best)
+                {
+                    near = Some((key, d));
+                }
+            }
+        }
+    }
+    let unknown_grid = walled_grid_with_unknown(near.map(|(k, _)| k));
+    let off = one.select(&unknown_grid, &other, &q).unwrap();
+    assert!(off.valid());
+    eprintln!("LM iterations: lm_off_unknown {:?}", iterations(&off));
+
     let mut group = c.benchmark_group("pose");
     group.bench_function("select", |b| {
         b.iter(|| {
@@ -109,6 +154,12 @@ fn bench(c: &mut Criterion) {
     group.bench_function("lm_from_nearby", |b| {
         b.iter(|| {
             one.select(black_box(&grid), black_box(&target), &nearby)
+                .unwrap()
+        });
+    });
+    group.bench_function("lm_off_unknown", |b| {
+        b.iter(|| {
+            one.select(black_box(&unknown_grid), black_box(&other), &q)
                 .unwrap()
         });
     });
