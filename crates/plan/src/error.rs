@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 use thiserror::Error;
 
-/// What can go wrong when building, loading or using the C-space model.
+/// What can go wrong when building, loading or using the C-space model, or
+/// selecting a Stage Two pose.
 #[derive(Debug, Error)]
 pub enum PlanError {
     /// A configuration value is out of range: the field, what was expected and
@@ -32,6 +33,17 @@ pub enum PlanError {
     /// The map refused a value.
     #[error(transparent)]
     Map(#[from] map::MapError),
+    /// A Stage Two pose-selection target (a disc's centre and normal) that
+    /// cannot be aimed at: the field, what was expected and what was given.
+    #[error("pose target: {field} must be {expected}, got {got}")]
+    Target {
+        /// `centre` or `normal`.
+        field: &'static str,
+        /// What the field accepts.
+        expected: &'static str,
+        /// The value given.
+        got: String,
+    },
     /// The cache file could not be read or written.
     #[error("C-space cache {path}: {message}")]
     Cache {

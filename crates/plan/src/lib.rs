@@ -8,6 +8,9 @@
 //!   a pose is usable only when `dist(Q) > 1`.
 //! - [`CspaceModel`]: roadmap + `L(cᵢ)` + voxel interference `P(ʲx_c)` (eq.
 //!   4.13), built once and cached to a file.
+//! - [`PoseSelector`]: Stage Two (A§3.3): a pose from which the scanner's
+//!   centre ray meets a disc [`Target`] within the LRC's constraints, by
+//!   Levenberg–Marquardt on the sigmoid costs `g₁…g₆` (eq. 3.14–3.20).
 //!
 //! ```
 //! use geom::Isometry3;
@@ -37,6 +40,7 @@ mod config;
 mod error;
 pub mod interference;
 mod model;
+pub mod pose;
 pub mod roadmap;
 pub mod safety;
 
@@ -44,5 +48,9 @@ pub use config::PlanConfig;
 pub use error::PlanError;
 pub use interference::{Interference, interfering_voxels};
 pub use model::{CacheOutcome, CspaceModel};
+pub use pose::{
+    Constraints, PlaneHit, PoseConfig, PoseEvaluation, PoseRun, PoseSelector, PoseSolution,
+    PoseTermination, Target, ViewGeometry, view_geometry,
+};
 pub use roadmap::{Edge, MotionChecker, Path, Roadmap, RoadmapParts, weighted_distance};
 pub use safety::{Safety, SafetyChecker};
