@@ -26,11 +26,11 @@ pub struct ExploreArgs {
     scenario: String,
     /// Another robot than the scenario's: a built-in name or a URDF file
     /// (FILE.urdf, with --scanner-link). The scenario's start joints must fit
-    /// it (a scenario file gives them in [robot] start_joints).
+    /// it (a scenario file gives them in `[robot] start_joints`).
     #[arg(long)]
     robot: Option<String>,
     /// With a URDF --robot: the link carrying the scanner (its frame's z axis
-    /// is the centre ray); the scenario's [scanner] mount applies on it.
+    /// is the centre ray); the scenario's `[scanner]` mount applies on it.
     #[arg(long, requires = "robot")]
     scanner_link: Option<String>,
     /// Seed of the scanner noise.
