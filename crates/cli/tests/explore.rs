@@ -76,7 +76,14 @@ fn kill_9_then_resume_gives_the_uninterrupted_outputs() {
     let mut resume = args(&cut);
     resume.insert(1, "--resume".into());
     ok(&resume.iter().map(String::as_str).collect::<Vec<_>>());
-    for name in ["viewpoints.csv", "run.json", "cloud.ply", "mesh.ply"] {
+    for name in [
+        "viewpoints.csv",
+        "run.json",
+        "cloud.ply",
+        "mesh.ply",
+        "discs.csv",
+        "segments.json",
+    ] {
         let (x, y) = (
             std::fs::read(whole.join(name)).unwrap(),
             std::fs::read(cut.join(name)).unwrap(),
