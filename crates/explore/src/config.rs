@@ -66,6 +66,18 @@ pub struct ExploreConfig {
     /// Chosen candidates tried before a decision gives up (a candidate with
     /// no safe path is dropped and the choice made again without it).
     pub max_plan_attempts: usize,
+    /// Stage Two's pose selection (A§3.3, Table 6.1: φ_max 42°, d ∈ [0.25,
+    /// 0.8] m, ρ_min 15 mm, LM {50, 1e−4}).
+    pub pose: plan::PoseConfig,
+    /// Stage Two ends after this many viewpoints at the latest.
+    pub stage_two_max_viewpoints: usize,
+    /// A disc is worth targeting while its `H3` is above this fraction of
+    /// its uniform-prior value (`ln n_t` per voxel).
+    pub significant_h3: Real,
+    /// Discs tried (in order of `H3`) per Stage Two viewpoint before Stage
+    /// Two ends: a disc whose pose is invalid, whose sweep is unsafe or which
+    /// no safe path reaches is passed over for good.
+    pub stage_two_target_attempts: usize,
 }
 
 impl Default for ExploreConfig {
@@ -82,6 +94,10 @@ impl Default for ExploreConfig {
             local_reach_m: 0.3,
             link_k: 10,
             max_plan_attempts: 100,
+            pose: plan::PoseConfig::default(),
+            stage_two_max_viewpoints: 20,
+            significant_h3: 0.5,
+            stage_two_target_attempts: 60,
         }
     }
 }

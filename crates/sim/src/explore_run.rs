@@ -47,6 +47,8 @@ pub struct ExploreOptions {
     pub checkpoint: Option<PathBuf>,
     /// Continue the run recorded in `checkpoint` (which must exist).
     pub resume: bool,
+    /// Run Stage Two after Stage One.
+    pub stage_two: bool,
 }
 
 /// What a checkpoint holds: enough to rebuild the run's state by replaying
@@ -115,6 +117,10 @@ pub struct ViewpointRecord {
     pub joints: Vec<Real>,
     /// `[f1, f2, f3, f4]` of the chosen candidate (`None` at the start).
     pub f: Option<[Real; 4]>,
+    /// Stage Two: the disc aimed at (index into the disc map).
+    pub target_disc: Option<usize>,
+    /// Stage Two: `H3` over every disc voxel after the sweep (eq. 4.17).
+    pub h3: Option<Real>,
     /// Unweighted H1 (eq. 4.10) after the sweep.
     pub h1: Real,
     /// Weighted H1 (eq. 4.11) after the sweep.
@@ -171,6 +177,8 @@ pub struct ExploreRun {
     pub viewpoints: Vec<ViewpointRecord>,
     /// Why Stage One stopped.
     pub termination: Termination,
+    /// Why Stage Two stopped (`None` when it did not run).
+    pub stage_two_termination: Option<String>,
     /// Ground-truth contacts along executed motions.
     pub collisions: usize,
     /// Configurations with `dist(Q) ≤ 1` along executed motions.
@@ -257,62 +265,77 @@ impl DiscMap {
     }
 }
 
-/// Stage One's material identification (A§3.3: "some surfaces also had their
-/// material-types identified by means of the LRC"): every disc is targeted in
-/// every sweep whose scanner passed within the LRC's range of it; the returns
-/// within the training patch radius of its centre form an observation, and
-/// each one the LRC accepts (range, incidence, enough points) updates the
-/// belief of the disc's voxels (eq. 4.15). The LRC is trained on the scene's
-/// materials with the simulator's scanner model.
-fn identify_materials(
-    d: &mut DiscMap,
-    sweeps: &[sensor::Sweep],
-    scene: &Scene,
-    scanner: &sensor::ScannerConfig,
-    seed: u64,
-) -> Result<(), SimError> {
-    use kiddo::ImmutableKdTree;
-    use rayon::prelude::*;
-    use sensor::classifier::{Lrc, LrcConfig, TrainingConfig};
-    let n = d.discs.len();
-    d.posterior = Vec::new();
-    d.h3 = Vec::new();
-    d.observations = vec![0; n];
-    let materials = scene.materials();
-    if materials.is_empty() || n == 0 {
-        return Ok(());
-    }
-    let config = LrcConfig::default();
-    let training = TrainingConfig {
-        observations_per_material: LRC_TRAINING_OBSERVATIONS,
-        ..TrainingConfig::default()
-    };
-    let lrc = Lrc::train(config, &training, materials, scanner, seed).map_err(|e| {
-        SimError::InvalidArgument {
-            what: "material classifier".into(),
-            message: e.to_string(),
+/// Material identification with the LRC (A§3.3, App. B): every disc is
+/// targeted in every sweep whose scanner passed within the LRC's range of it;
+/// the returns within the training patch radius of its centre form an
+/// observation, and each one the LRC accepts (range, incidence, enough
+/// points) updates the belief of the disc's voxels (eq. 4.15). The LRC is
+/// trained on the scene's materials with the simulator's scanner model. Stage
+/// One's sweeps identify some materials this way ("some surfaces also had
+/// their material-types identified", A§3.3); Stage Two aims at the discs
+/// with the most information left.
+struct Materials {
+    lrc: sensor::Lrc,
+    belief: map::MaterialBelief,
+    patch_m: Real,
+    reach_m: Real,
+}
+
+impl Materials {
+    /// `None` for a scene without materials or a map without discs.
+    fn new(
+        d: &mut DiscMap,
+        scene: &Scene,
+        scanner: &sensor::ScannerConfig,
+        seed: u64,
+    ) -> Result<Option<Self>, SimError> {
+        use sensor::classifier::{LrcConfig, TrainingConfig};
+        d.observations = vec![0; d.discs.len()];
+        let materials = scene.materials();
+        if materials.is_empty() || d.discs.is_empty() {
+            return Ok(None);
         }
-    })?;
-    let mut belief = map::MaterialBelief::new(map::MaterialConfig {
-        n_materials: materials.len(),
-        ..map::MaterialConfig::default()
-    })?;
-    for disc in &d.discs {
-        belief.insert_disc(disc);
+        let config = LrcConfig::default();
+        let training = TrainingConfig {
+            observations_per_material: LRC_TRAINING_OBSERVATIONS,
+            ..TrainingConfig::default()
+        };
+        let lrc = sensor::Lrc::train(config, &training, materials, scanner, seed).map_err(|e| {
+            SimError::InvalidArgument {
+                what: "material classifier".into(),
+                message: e.to_string(),
+            }
+        })?;
+        let mut belief = map::MaterialBelief::new(map::MaterialConfig {
+            n_materials: materials.len(),
+            ..map::MaterialConfig::default()
+        })?;
+        for disc in &d.discs {
+            belief.insert_disc(disc);
+        }
+        let patch_m = training.patch_radius_m;
+        Ok(Some(Self {
+            lrc,
+            belief,
+            patch_m,
+            reach_m: config.max_range_m + patch_m,
+        }))
     }
-    let patch = training.patch_radius_m;
-    let reach = config.max_range_m + patch;
-    for sweep in sweeps {
+
+    /// Classify every disc in reach of `sweep` and update the beliefs.
+    fn observe(&mut self, d: &mut DiscMap, sweep: &sensor::Sweep) -> Result<(), SimError> {
+        use rayon::prelude::*;
         let pts = sweep.points();
         if pts.is_empty() {
-            continue;
+            return Ok(());
         }
         let coords: Vec<[Real; 3]> = pts
             .iter()
             .map(|p| [p.point.x, p.point.y, p.point.z])
             .collect();
-        let tree: ImmutableKdTree<Real, 3> = ImmutableKdTree::new_from_slice(&coords);
+        let tree: kiddo::ImmutableKdTree<Real, 3> = kiddo::ImmutableKdTree::new_from_slice(&coords);
         let origin = pts[pts.len() / 2].origin;
+        let (lrc, patch, reach) = (&self.lrc, self.patch_m, self.reach_m);
         let results: Vec<(usize, Vec<Real>)> = d
             .discs
             .par_iter()
@@ -324,19 +347,38 @@ fn identify_materials(
             })
             .collect();
         for (i, posterior) in results {
-            for key in belief.disc_voxels(&d.discs[i]) {
-                belief.update(key, &posterior)?;
+            for key in self.belief.disc_voxels(&d.discs[i]) {
+                self.belief.update(key, &posterior)?;
             }
             d.observations[i] += 1;
         }
+        Ok(())
     }
-    d.posterior = d
-        .discs
-        .iter()
-        .map(|disc| belief.disc_probabilities(disc).unwrap_or_default())
-        .collect();
-    d.h3 = d.discs.iter().map(|disc| belief.h3_disc(disc)).collect();
-    Ok(())
+
+    /// The material information remaining on disc `i` (eq. 4.16 over its
+    /// voxels).
+    fn h3(&self, d: &DiscMap, i: usize) -> Real {
+        self.belief.h3_disc(&d.discs[i])
+    }
+
+    /// `H3` over every disc voxel (eq. 4.17).
+    fn h3_total(&self) -> Real {
+        self.belief.h3_total()
+    }
+
+    /// Write the posteriors and `H3` into the disc map.
+    fn finish(&self, d: &mut DiscMap) {
+        d.posterior = d
+            .discs
+            .iter()
+            .map(|disc| self.belief.disc_probabilities(disc).unwrap_or_default())
+            .collect();
+        d.h3 = d
+            .discs
+            .iter()
+            .map(|disc| self.belief.h3_disc(disc))
+            .collect();
+    }
 }
 
 /// The returns of `points` (indexed by `tree`) within `radius_m` of
@@ -670,6 +712,8 @@ pub fn run_stage_one(
                 h1: stage.grid().h1_unweighted(),
                 h1_weighted: h1w,
                 h2,
+                h3: None,
+                target_disc: None,
                 predicted_h1_weighted: None,
                 candidates: 0,
                 front: 0,
@@ -749,10 +793,6 @@ pub fn run_stage_one(
         ));
     };
 
-    let coverage = match trackers.as_slice() {
-        [a1, a2, a3] => Some([a1.report(), a2.report(), a3.report()]),
-        _ => None,
-    };
     let mesh = tsdf.extract_mesh();
     let mut discs = disc_map(
         &mesh,
@@ -762,10 +802,138 @@ pub fn run_stage_one(
         scene,
         options.seed,
     )?;
-    if let Some(scene) = scene {
-        let scanner_config = s.scanner.clone().unwrap_or_default().config;
-        identify_materials(&mut discs, &sweeps, scene, &scanner_config, options.seed)?;
+    let mut materials = match scene {
+        Some(scene) => {
+            let scanner_config = s.scanner.clone().unwrap_or_default().config;
+            Materials::new(&mut discs, scene, &scanner_config, options.seed)?
+        }
+        None => None,
+    };
+    if let Some(m) = &mut materials {
+        for sweep in &sweeps {
+            m.observe(&mut discs, sweep)?;
+        }
     }
+    // Stage Two (A§3.3): aim the scanner at the disc with the most material
+    // information left that a valid, reachable pose can target; sweep,
+    // classify, update; until none can be targeted or the budget is spent.
+    let mut stage_two_end = None;
+    if let (true, Some(m)) = (options.stage_two, materials.as_mut()) {
+        let safety = stage.model().safety().clone();
+        let selector = plan::PoseSelector::new(&safety, config.pose.clone())?;
+        let mut tried = vec![false; discs.discs.len()];
+        let a2 = regions.a2;
+        let uniform = (discs.material_names.len() as Real).ln();
+        let end = loop {
+            if viewpoints.iter().filter(|r| r.stage == 2).count() >= config.stage_two_max_viewpoints
+            {
+                break "viewpoint_budget";
+            }
+            let mut ranked: Vec<(usize, Real)> = (0..discs.discs.len())
+                .filter(|&i| !tried[i] && a2.contains(&discs.discs[i].centre))
+                .map(|i| (i, m.h3(&discs, i)))
+                .filter(|(i, h)| {
+                    let voxels = m.belief.disc_voxels(&discs.discs[*i]).len() as Real;
+                    *h > config.significant_h3 * uniform * voxels
+                })
+                .collect();
+            ranked.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            let k = viewpoints.len();
+            let t = Instant::now();
+            let mut found = None;
+            for &(i, _) in ranked.iter().take(config.stage_two_target_attempts) {
+                tried[i] = true;
+                let target = plan::Target::from_disc(&discs.discs[i]);
+                let solution = selector.select(stage.grid(), &target, &q)?;
+                if !solution.valid() {
+                    continue;
+                }
+                let goal = solution.joints().to_vec();
+                if stage.sweep_dist(&goal)?.is_none() {
+                    continue;
+                }
+                let mut checker = stage.model().safety().checker(stage.grid());
+                if let Some(path) =
+                    stage
+                        .model()
+                        .roadmap()
+                        .plan(&q, &goal, config.link_k, &mut checker)
+                {
+                    found = Some((i, path));
+                    break;
+                }
+            }
+            let decision_ms = timed(t);
+            let Some((target, path)) = found else {
+                break "no_targetable_disc";
+            };
+            for w in path.waypoints.windows(2) {
+                audit.motion(stage.grid(), k, &w[0], &w[1])?;
+                rig.move_to(&w[1])?;
+            }
+            q = rig.joints();
+            let (lo, hi) = stage.sweep_range(&q);
+            audit.motion(stage.grid(), k, &q, &lo)?;
+            audit.motion(stage.grid(), k, &lo, &hi)?;
+            audit.motion(stage.grid(), k, &hi, &q)?;
+            rig.reseed(viewpoint_seed(options.seed, k));
+            let t = Instant::now();
+            let sweep = tilt_sweep(
+                &mut rig,
+                &robot,
+                &world_from_base,
+                &config.sweep,
+                &mut |_, _| {},
+            )?;
+            let sweep_ms = timed(t);
+            let t = Instant::now();
+            let stats = stage.integrate(&sweep);
+            tsdf.integrate_sweep(&sweep);
+            m.observe(&mut discs, &sweep)?;
+            let integrate_ms = timed(t);
+            cloud.extend_from_slice(sweep.points());
+            let positions = sweep.positions();
+            for t in &mut trackers {
+                t.add_points(&positions);
+            }
+            let (h1w, h2) = stage.information();
+            let record = ViewpointRecord {
+                k,
+                stage: 2,
+                joints: q.clone(),
+                f: None,
+                h1: stage.grid().h1_unweighted(),
+                h1_weighted: h1w,
+                h2,
+                h3: Some(m.h3_total()),
+                target_disc: Some(target),
+                predicted_h1_weighted: None,
+                candidates: ranked.len(),
+                front: 0,
+                unreachable: 0,
+                predicted_revealed: 0,
+                revealed: stats.newly_known,
+                coverage_a1: trackers.first().map(CoverageTracker::fraction),
+                joint_travel: path.joint_travel(),
+                waypoints: path.waypoints.len(),
+                decision_ms,
+                plan_ms: 0.0,
+                sweep_ms,
+                integrate_ms,
+            };
+            progress(&record);
+            viewpoints.push(record);
+        };
+        stage_two_end = Some(end.to_owned());
+    }
+    if let Some(m) = &materials {
+        m.finish(&mut discs);
+    }
+    let mesh = tsdf.extract_mesh();
+    let coverage = match trackers.as_slice() {
+        [a1, a2, a3] => Some([a1.report(), a2.report(), a3.report()]),
+        _ => None,
+    };
     let observable = trackers
         .iter()
         .filter_map(CoverageTracker::observable_counts)
@@ -774,6 +942,7 @@ pub fn run_stage_one(
         scenario: s.name.clone(),
         viewpoints,
         termination,
+        stage_two_termination: stage_two_end,
         collisions: audit.collisions,
         unsafe_configurations: audit.unsafe_configurations,
         min_clearance_m: audit.min_clearance_m,
@@ -969,7 +1138,7 @@ impl ExploreRun {
         out.push_str(
             ",f1,f2,f3,f4,h1,h1_weighted,h2,h3,predicted_h1_weighted,actual_h1_weighted,\
              candidates,front,unreachable,predicted_revealed,revealed,coverage_a1,joint_travel,waypoints,\
-             decision_ms,plan_ms,sweep_ms,integrate_ms\n",
+             decision_ms,plan_ms,sweep_ms,integrate_ms,target_disc\n",
         );
         let opt = |v: Option<Real>| v.map_or(String::new(), |x| format!("{x}"));
         for r in &self.viewpoints {
@@ -983,10 +1152,11 @@ impl ExploreRun {
             }
             let _ = writeln!(
                 out,
-                ",{},{},{},,{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3}",
+                ",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{}",
                 r.h1,
                 r.h1_weighted,
                 r.h2,
+                opt(r.h3),
                 opt(r.predicted_h1_weighted),
                 r.h1_weighted,
                 r.candidates,
@@ -1000,7 +1170,8 @@ impl ExploreRun {
                 r.decision_ms,
                 r.plan_ms,
                 r.sweep_ms,
-                r.integrate_ms
+                r.integrate_ms,
+                r.target_disc.map_or(String::new(), |t| t.to_string())
             );
         }
         out
@@ -1046,8 +1217,12 @@ impl ExploreRun {
         });
         serde_json::json!({
             "scenario": self.scenario,
-            "viewpoints": {"stage_one": self.viewpoints.len(), "stage_two": 0},
+            "viewpoints": {
+                "stage_one": self.viewpoints.iter().filter(|r| r.stage == 1).count(),
+                "stage_two": self.viewpoints.iter().filter(|r| r.stage == 2).count(),
+            },
             "termination": self.termination.name(),
+            "stage_two_termination": self.stage_two_termination,
             "collisions": self.collisions,
             "unsafe_configurations": self.unsafe_configurations.len(),
             "unsafe_configuration_list": self.unsafe_configurations,

@@ -250,3 +250,55 @@ fn a_urdf_ur5_explores_a_bridge_sized_to_its_reach_safely() {
     assert!(run.unsafe_configurations.is_empty());
     assert!(run.coverage.as_ref().unwrap()[0].fraction() > 0.3);
 }
+
+#[test]
+#[ignore = "seconds in release; run by .ci/run"]
+fn stage_two_aims_at_discs_safely_and_lowers_the_material_information() {
+    let loaded = Scenario::load("bridge1").unwrap();
+    let mut config = loaded.scenario.explore.clone().unwrap();
+    // Stage One to its own end (after 8 viewpoints no disc is targetable yet:
+    // the arm has not seen enough free space to reach a valid pose).
+    config.max_viewpoints = 40;
+    config.stage_two_max_viewpoints = 5;
+    let options = ExploreOptions {
+        seed: 0,
+        config: Some(config),
+        stage_two: true,
+        ..ExploreOptions::default()
+    };
+    let run = run_stage_one(&loaded, &options, &mut |_| {}).unwrap();
+    let two: Vec<_> = run.viewpoints.iter().filter(|r| r.stage == 2).collect();
+    println!(
+        "stage two: {} viewpoints ({:?}); H3 {:?}; accuracy {:?}",
+        two.len(),
+        run.stage_two_termination,
+        two.iter()
+            .map(|r| r.h3.unwrap().round())
+            .collect::<Vec<_>>(),
+        run.discs.material_accuracy()
+    );
+    assert!(!two.is_empty());
+    assert_eq!(run.collisions, 0);
+    assert!(run.unsafe_configurations.is_empty());
+    // Each Stage Two viewpoint aimed at a disc: re-measure the view from the
+    // joints it stood at (the LRC's constraints, Table 6.1).
+    let robot = loaded.build_robot().unwrap();
+    let wfb = loaded.scenario.world_from_base();
+    for r in &two {
+        let disc = &run.discs.discs[r.target_disc.unwrap()];
+        let pose = wfb * robot.scanner_pose(&r.joints).unwrap().unwrap();
+        let view = plan::view_geometry(&pose, &plan::Target::from_disc(disc));
+        let hit = view.hit.expect("the centre ray meets the disc's plane");
+        assert!(
+            view.phi_rad.to_degrees() < 42.0 + 1e-6,
+            "{}",
+            view.phi_rad.to_degrees()
+        );
+        assert!((0.25..=0.8).contains(&hit.d_m), "{}", hit.d_m);
+        assert!(hit.rho_m <= 0.015 + 1e-9, "{}", hit.rho_m);
+    }
+    // The material information falls over Stage Two.
+    let first = two.first().unwrap().h3.unwrap();
+    let last = two.last().unwrap().h3.unwrap();
+    assert!(last < first, "{first} → {last}");
+}

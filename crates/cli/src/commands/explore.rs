@@ -19,7 +19,11 @@ and checkpoint.json, rewritten after every viewpoint: after an interruption (Ctr
 power), the same command with --resume continues the run, and with --no-timings its outputs \
 are byte-identical to an uninterrupted run's.
 
-Stage One only for now (--stages one): Stage Two (material identification) is not built yet.")]
+--stages both runs Stage Two after Stage One: the scanner is aimed (LM pose selection) at the \
+disc with the most material information left that a valid, reachable pose can target, the sweep \
+is classified and the beliefs updated, until no disc can be targeted or the budget \
+([explore] stage_two_max_viewpoints) is spent. Work in progress: its material accuracy is short \
+of issue 10's target.")]
 pub struct ExploreArgs {
     /// Built-in scenario (bridge1, bridge2, bridge3) or scenario file.
     #[arg(long, default_value = "bridge1")]
@@ -39,7 +43,7 @@ pub struct ExploreArgs {
     /// Most Stage One viewpoints (the start pose's sweep included).
     #[arg(long)]
     max_viewpoints: Option<usize>,
-    /// Stages to run: `one` (Stage Two is not built yet).
+    /// Stages to run: `one` or `both`.
     #[arg(long, default_value = "one")]
     stages: String,
     /// Where to cache the C-space model [default: a file in the system's
@@ -61,12 +65,11 @@ pub struct ExploreArgs {
 }
 
 pub fn explore(args: &ExploreArgs) -> Result<()> {
-    if args.stages != "one" {
-        bail!(
-            "--stages {}: only `one` (Stage One) is built so far; Stage Two is issue 10's next step",
-            args.stages
-        );
-    }
+    let stage_two = match args.stages.as_str() {
+        "one" => false,
+        "both" => true,
+        other => bail!("--stages {other}: expected `one` or `both`"),
+    };
     let mut loaded = Scenario::load(&args.scenario)?;
     if let Some(robot) = &args.robot {
         let spec = &mut loaded.scenario.robot;
@@ -112,6 +115,7 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         timings: !args.no_timings,
         checkpoint: Some(args.out.join("checkpoint.json")),
         resume: args.resume,
+        stage_two,
         ..ExploreOptions::default()
     };
     std::fs::create_dir_all(&args.out)
@@ -119,11 +123,13 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     let t = std::time::Instant::now();
     let run = run_stage_one(&loaded, &options, &mut |r| {
         eprintln!(
-            "stage 1, viewpoint {:>2}: H1 {:>9.1} (weighted {:>8.1}), H2 {:>7.3}, revealed {:>6}, A1 covered {}, {} candidates, decision {:>6.0} ms",
+            "stage {}, viewpoint {:>2}: H1 {:>9.1} (weighted {:>8.1}), H2 {:>7.3}, H3 {}, revealed {:>6}, A1 covered {}, {} candidates, decision {:>6.0} ms",
+            r.stage,
             r.k,
             r.h1,
             r.h1_weighted,
             r.h2,
+            r.h3.map_or("-".into(), |h| format!("{h:.0}")),
             r.revealed,
             r.coverage_a1
                 .map_or("-".into(), |c| format!("{:.1} %", 100.0 * c)),
