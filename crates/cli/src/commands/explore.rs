@@ -11,13 +11,16 @@ use std::path::PathBuf;
 #[command(after_help = "\
 Outputs in --out: viewpoints.csv (one row per viewpoint: k, stage, joints, f1-f4, H1, weighted \
 H1, H2, H3, the weighted H1 predicted and obtained, candidates, Pareto front, unreachable \
-choices, voxels predicted and revealed, joint travel, waypoints, decision_ms, plan_ms, \
-sweep_ms, integrate_ms), cloud.ply (every measured point with its ray origin), mesh.ply (the \
-TSDF mesh) and run.json (viewpoints, termination, collisions, unsafe_configurations with \
-their dist(Q), min_clearance_m, coverage of A1, A2, A3 and per material, decision_ms, wall_s), \
-and checkpoint.json, rewritten after every viewpoint: after an interruption (Ctrl-C, kill, \
-power), the same command with --resume continues the run, and with --no-timings its outputs \
-are byte-identical to an uninterrupted run's.
+choices, voxels predicted and revealed, A1 coverage so far, joint travel, waypoints, \
+decision_ms, plan_ms, sweep_ms, integrate_ms, Stage Two's target disc), cloud.ply (every \
+measured point with its ray origin), mesh.ply (the TSDF mesh), discs.csv (the Scale-Like Discs \
+of the Stage One mesh with segment, viewpoint, true material, material posterior, H3 and LRC \
+observations), segments.json, run.json (viewpoints per stage, terminations, collisions, \
+unsafe_configurations with their dist(Q), min_clearance_m, coverage of A1, A2, A3, per \
+material and of the observable surfaces, material_accuracy, decision_ms, wall_s), and \
+checkpoint.json, rewritten after every Stage One viewpoint: after an interruption (Ctrl-C, \
+kill, power), the same command with --resume continues the run, and with --no-timings its \
+outputs are byte-identical to an uninterrupted run's.
 
 --stages both runs Stage Two after Stage One: the scanner is aimed (LM pose selection) at the \
 disc with the most material information left that a valid, reachable pose can target, the sweep \
@@ -140,16 +143,26 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     run.write(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
     let json = run.run_json();
+    let per_stage = |k: u8| run.viewpoints.iter().filter(|r| r.stage == k).count();
     println!(
-        "{}: stage one ended ({}) after {} viewpoints; {} collisions, {} unsafe configurations, min clearance {:.3} m; C-space model {}",
+        "{}: stage one ended ({}) after {} viewpoints; {} collisions, {} unsafe configurations (both stages), min clearance {:.3} m; C-space model {}",
         loaded.scenario.name,
         json["termination"].as_str().unwrap_or(""),
-        run.viewpoints.len(),
+        per_stage(1),
         run.collisions,
         run.unsafe_configurations.len(),
         run.min_clearance_m,
         run.cspace
     );
+    if let Some(end) = &run.stage_two_termination {
+        println!(
+            "stage two ended ({end}) after {} viewpoints; material right on {} of the discs the LRC observed",
+            per_stage(2),
+            run.discs
+                .material_accuracy()
+                .map_or("none".into(), |a| format!("{:.1} %", 100.0 * a))
+        );
+    }
     if let Some(c) = &run.coverage {
         println!(
             "coverage of the true surfaces: A1 {:.1} %, A2 {:.1} %, A3 {:.1} %",
