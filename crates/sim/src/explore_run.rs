@@ -119,7 +119,9 @@ pub struct ViewpointRecord {
     pub f: Option<[Real; 4]>,
     /// Stage Two: the disc aimed at (index into the disc map).
     pub target_disc: Option<usize>,
-    /// Stage Two: `H3` over every disc voxel after the sweep (eq. 4.17).
+    /// `H3` over every disc voxel after the viewpoint (eq. 4.17): every Stage
+    /// Two row, and Stage One's last, once Stage One's sweeps are classified
+    /// on its map (Stage Two's baseline); `None` on the other rows.
     pub h3: Option<Real>,
     /// Unweighted H1 (eq. 4.10) after the sweep.
     pub h1: Real,
@@ -235,6 +237,9 @@ pub struct DiscMap {
     pub h3: Vec<Real>,
     /// Per disc: LRC observations that updated it.
     pub observations: Vec<usize>,
+    /// `H3` over every disc voxel (eq. 4.17; a voxel shared by two discs
+    /// counts once), when materials were identified.
+    pub h3_total: Option<Real>,
 }
 
 impl DiscMap {
@@ -277,6 +282,9 @@ impl DiscMap {
 struct Materials {
     lrc: sensor::Lrc,
     belief: map::MaterialBelief,
+    /// Per disc: whether the mapped surface within the LRC's patch radius of
+    /// its centre is flat enough for the LRC (see [`flat_patches`]).
+    flat: Vec<bool>,
     patch_m: Real,
     reach_m: Real,
 }
@@ -285,6 +293,7 @@ impl Materials {
     /// `None` for a scene without materials or a map without discs.
     fn new(
         d: &mut DiscMap,
+        mesh: &TriMesh,
         scene: &Scene,
         scanner: &sensor::ScannerConfig,
         seed: u64,
@@ -314,9 +323,16 @@ impl Materials {
             belief.insert_disc(disc);
         }
         let patch_m = training.patch_radius_m;
+        let flat = flat_patches(
+            &d.discs,
+            &mesh.vertices,
+            patch_m,
+            lrc.plane_rms_limit_m * config.max_plane_rms_ratio,
+        );
         Ok(Some(Self {
             lrc,
             belief,
+            flat,
             patch_m,
             reach_m: config.max_range_m + patch_m,
         }))
@@ -378,7 +394,97 @@ impl Materials {
             .iter()
             .map(|disc| self.belief.h3_disc(disc))
             .collect();
+        d.h3_total = Some(self.h3_total());
     }
+}
+
+/// Poses the arm has stood at that are tried as the last waypoint before a
+/// goal the roadmap cannot reach.
+const VISITED_BRIDGES: usize = 5;
+
+/// A safe path from `from` to `goal`: the roadmap's (a direct motion, or A*
+/// through the roadmap), or else through one of the poses the arm has
+/// already stood at (`visited`; the [`VISITED_BRIDGES`] nearest to the goal,
+/// nearest first) from which a straight motion reaches the goal. A Stage Two
+/// pose is chosen by LM anywhere in free space, often beside a viewpoint
+/// the arm took but far from every roadmap node whose surroundings are known
+/// free.
+fn path_via_visited(
+    roadmap: &plan::Roadmap,
+    visited: &[&[Real]],
+    from: &[Real],
+    goal: &[Real],
+    link_k: usize,
+    checker: &mut dyn plan::MotionChecker,
+) -> Option<plan::Path> {
+    if let Some(path) = roadmap.plan(from, goal, link_k, checker) {
+        return Some(path);
+    }
+    let mut near: Vec<(Real, &[Real])> = visited
+        .iter()
+        .map(|v| (roadmap.distance(v, goal), *v))
+        .collect();
+    near.sort_by(|a, b| a.0.total_cmp(&b.0));
+    near.dedup_by(|a, b| a.1 == b.1);
+    for (d, v) in near.into_iter().take(VISITED_BRIDGES) {
+        if v == from || !checker.motion_ok(v, goal) {
+            continue;
+        }
+        if let Some(mut path) = roadmap.plan(from, v, link_k, checker) {
+            path.waypoints.push(goal.to_vec());
+            path.cost += d;
+            return Some(path);
+        }
+    }
+    None
+}
+
+/// Per disc: whether the vertices of the mapped surface `vertices` within
+/// `radius_m` of its centre lie within `limit_m` RMS of their plane of best
+/// fit. The LRC refuses an observation of a patch that is not flat (an edge,
+/// a corner, a second surface or a curve within its patch), so a disc whose
+/// mapped surroundings are not flat is not worth a Stage Two viewpoint: it
+/// cannot be identified within the LRC's constraints.
+fn flat_patches(
+    discs: &[map::Disc],
+    vertices: &[geom::Point3],
+    radius_m: Real,
+    limit_m: Real,
+) -> Vec<bool> {
+    use rayon::prelude::*;
+    if vertices.is_empty() {
+        return vec![false; discs.len()];
+    }
+    let coords: Vec<[Real; 3]> = vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
+    let tree: kiddo::ImmutableKdTree<Real, 3> = kiddo::ImmutableKdTree::new_from_slice(&coords);
+    discs
+        .par_iter()
+        .map(|disc| {
+            let c = disc.centre;
+            let near = tree
+                .within_unsorted::<kiddo::SquaredEuclidean>(&[c.x, c.y, c.z], radius_m * radius_m);
+            let offsets: Vec<geom::Vector3> =
+                near.iter().map(|n| vertices[n.item as usize] - c).collect();
+            offsets.len() >= 3
+                && geom::Pca::of_offsets(&offsets)
+                    .is_some_and(|p| p.eigenvalues[0].max(0.0).sqrt() <= limit_m)
+        })
+        .collect()
+}
+
+/// The returns of `points` within `radius_m` of `target`, as an LRC
+/// observation ([`patch_observation`] with its own kd-tree).
+fn sweep_patch(
+    points: &[SweepPoint],
+    target: &geom::Point3,
+    radius_m: Real,
+) -> sensor::Observation {
+    let coords: Vec<[Real; 3]> = points
+        .iter()
+        .map(|p| [p.point.x, p.point.y, p.point.z])
+        .collect();
+    let tree: kiddo::ImmutableKdTree<Real, 3> = kiddo::ImmutableKdTree::new_from_slice(&coords);
+    patch_observation(points, &tree, target, radius_m)
 }
 
 /// The returns of `points` (indexed by `tree`) within `radius_m` of
@@ -805,13 +911,18 @@ pub fn run_stage_one(
     let mut materials = match scene {
         Some(scene) => {
             let scanner_config = s.scanner.clone().unwrap_or_default().config;
-            Materials::new(&mut discs, scene, &scanner_config, options.seed)?
+            Materials::new(&mut discs, &mesh, scene, &scanner_config, options.seed)?
         }
         None => None,
     };
     if let Some(m) = &mut materials {
         for sweep in &sweeps {
             m.observe(&mut discs, sweep)?;
+        }
+        // Stage One's last row holds H3 once its sweeps are classified on
+        // the map Stage One built: the baseline of Stage Two's curve.
+        if let Some(last) = viewpoints.last_mut() {
+            last.h3 = Some(m.h3_total());
         }
     }
     // Stage Two (A§3.3): aim the scanner at the disc with the most material
@@ -822,6 +933,29 @@ pub fn run_stage_one(
         let safety = stage.model().safety().clone();
         let selector = plan::PoseSelector::new(&safety, config.pose.clone())?;
         let mut tried = vec![false; discs.discs.len()];
+        // The map as the scanner would see it: a simulated sweep of the
+        // mapped surface (Stage One's mesh) from a candidate pose, with the
+        // scanner's own model and noise, predicts the observation the LRC
+        // will get; a pose whose predicted observation fails the LRC's
+        // geometric checks (range, incidence, returns and span in the fit
+        // window, flatness) is not a viewpoint for that disc.
+        let mut probe = {
+            let scanner = s.scanner.clone().unwrap_or_default().config;
+            let map_scene = Scene::from_mesh(
+                "map",
+                mesh.clone(),
+                vec![scene::Material::new("map", 0.5, 0.5)],
+                scene::MaterialId(0),
+            )?;
+            SimRig::new(
+                robot.clone(),
+                Arc::new(scene::World::Mesh(map_scene)),
+                world_from_base,
+                &q,
+                Some(Scanner::new(scanner)?),
+                options.seed,
+            )?
+        };
         let a2 = regions.a2;
         let uniform = (discs.material_names.len() as Real).ln();
         let end = loop {
@@ -830,7 +964,7 @@ pub fn run_stage_one(
                 break "viewpoint_budget";
             }
             let mut ranked: Vec<(usize, Real)> = (0..discs.discs.len())
-                .filter(|&i| !tried[i] && a2.contains(&discs.discs[i].centre))
+                .filter(|&i| !tried[i] && m.flat[i] && a2.contains(&discs.discs[i].centre))
                 .map(|i| (i, m.h3(&discs, i)))
                 .filter(|(i, h)| {
                     let voxels = m.belief.disc_voxels(&discs.discs[*i]).len() as Real;
@@ -852,13 +986,33 @@ pub fn run_stage_one(
                 if stage.sweep_dist(&goal)?.is_none() {
                     continue;
                 }
+                probe.move_to(&goal)?;
+                probe.reseed(viewpoint_seed(options.seed, k) ^ i as u64);
+                let predicted = tilt_sweep(
+                    &mut probe,
+                    &robot,
+                    &world_from_base,
+                    &config.sweep,
+                    &mut |_, _| {},
+                )?;
+                let check = m.lrc.check_geometry(
+                    &sweep_patch(predicted.points(), &discs.discs[i].centre, m.patch_m),
+                    &m.lrc.config,
+                );
+                if check.is_err() {
+                    continue;
+                }
                 let mut checker = stage.model().safety().checker(stage.grid());
-                if let Some(path) =
-                    stage
-                        .model()
-                        .roadmap()
-                        .plan(&q, &goal, config.link_k, &mut checker)
-                {
+                let visited: Vec<&[Real]> =
+                    viewpoints.iter().map(|r| r.joints.as_slice()).collect();
+                if let Some(path) = path_via_visited(
+                    stage.model().roadmap(),
+                    &visited,
+                    &q,
+                    &goal,
+                    config.link_k,
+                    &mut checker,
+                ) {
                     found = Some((i, path));
                     break;
                 }
@@ -1179,16 +1333,22 @@ impl ExploreRun {
 
     /// `run.json`'s summary.
     pub fn run_json(&self) -> serde_json::Value {
-        let decisions: Vec<Real> = self
-            .viewpoints
-            .iter()
-            .filter(|r| r.f.is_some())
-            .map(|r| r.decision_ms)
-            .collect();
-        let mut sorted = decisions.clone();
-        sorted.sort_by(Real::total_cmp);
-        let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
-        let max = sorted.last().copied().unwrap_or(0.0);
+        // Median and largest decision time of the viewpoints `pick` selects.
+        let decisions = |pick: &dyn Fn(&ViewpointRecord) -> bool| {
+            let mut sorted: Vec<Real> = self
+                .viewpoints
+                .iter()
+                .filter(|r| pick(r))
+                .map(|r| r.decision_ms)
+                .collect();
+            sorted.sort_by(Real::total_cmp);
+            (
+                sorted.get(sorted.len() / 2).copied().unwrap_or(0.0),
+                sorted.last().copied().unwrap_or(0.0),
+            )
+        };
+        let (median, max) = decisions(&|r| r.f.is_some());
+        let (median2, max2) = decisions(&|r| r.stage == 2);
         let share = |k: usize| {
             self.observable.get(k).map(|(n, c)| {
                 if *n == 0 {
@@ -1236,8 +1396,9 @@ impl ExploreRun {
             "coverage": coverage,
             "material_accuracy": self.discs.material_accuracy(),
             "discs_observed_by_lrc": self.discs.observations.iter().filter(|o| **o > 0).count(),
-            "h3": self.discs.h3.iter().sum::<Real>(),
+            "h3": self.discs.h3_total,
             "decision_ms": {"median": median, "max": max},
+            "stage_two_decision_ms": {"median": median2, "max": max2},
             "wall_s": self.wall_s,
         })
     }

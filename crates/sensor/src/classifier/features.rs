@@ -103,6 +103,10 @@ pub struct PatchGeometry {
     pub points_used: usize,
     /// Smallest and largest incidence of the fitted returns, radians.
     pub incidence_span_rad: (Real, Real),
+    /// Root-mean-square distance of the observation's points from its
+    /// fitted plane, metres: the range noise alone on a flat patch, more
+    /// where the patch takes in an edge, a corner or a curved surface.
+    pub plane_rms_m: Real,
 }
 
 /// Least-squares `y = b₀ + b₁u + b₂u²`; returns `(b, mse)`.
@@ -312,6 +316,7 @@ pub fn extract_features(
             incidence_rad,
             points_used: u.len(),
             incidence_span_rad: (lo, hi),
+            plane_rms_m: pca.eigenvalues[0].max(0.0).sqrt(),
         },
     ))
 }

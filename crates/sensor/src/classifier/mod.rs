@@ -28,6 +28,13 @@
 //!    the four features are the quadratic coefficients `a₂` and the mean
 //!    squared residuals (MSE) of the two fits ([`Features`]).
 //!
+//! 5. refuses a patch that is not flat: the RMS distance of its points from
+//!    their plane ([`PatchGeometry::plane_rms_m`]) above the largest among
+//!    the training observations ([`Lrc::plane_rms_limit_m`], times
+//!    [`LrcConfig::max_plane_rms_ratio`]). App. B assumes the targeted
+//!    surface flat; a patch over an edge, a corner, a second surface or a
+//!    curve gives features of no material.
+//!
 //! # Features → posterior
 //!
 //! "Likelihoods are calculated from probability density functions (of the
@@ -39,7 +46,13 @@
 //! surface from 12° to 20° only samples the outer part of the curves),
 //! fitted to simulated observations, and returns the Bayes posterior under a
 //! uniform prior ([`Lrc::classify`]) — the probability vector the material
-//! belief of the map consumes (Paul eq. 4.15).
+//! belief of the map consumes (Paul eq. 4.15). Features whose squared
+//! Mahalanobis distance from every material's density exceeds
+//! [`LrcConfig::max_mahalanobis_sq`] (χ²₄'s 99th percentile) are refused
+//! ([`ClassifyError::Atypical`]): under a uniform prior the posterior of an
+//! observation unlike every material still names one of them, confidently.
+//! [`Lrc::check_geometry`] runs the geometric checks alone, to predict from
+//! a simulated observation of the map whether a pose can serve the LRC.
 //!
 //! The fits weigh equal bins of incidence equally ([`LrcConfig::fit_bins`]),
 //! so how densely a pose samples each incidence does not bend the curves.
@@ -119,6 +132,17 @@ pub struct LrcConfig {
     /// mean returns), so that how densely a pose samples each incidence does
     /// not bend the curve; 0 fits every return with equal weight.
     pub fit_bins: usize,
+    /// Largest plane residual accepted, as a multiple of the largest one
+    /// among the training observations ([`Lrc::plane_rms_limit_m`]): the
+    /// features assume a flat patch of one surface, and a patch that takes
+    /// in an edge, a corner, a second surface or a curve is not one.
+    pub max_plane_rms_ratio: Real,
+    /// Largest squared Mahalanobis distance of the features from the
+    /// nearest material's density (χ² with 4 degrees of freedom for an
+    /// observation like the training ones; 13.28 is its 99th percentile):
+    /// features unlike every material's are refused rather than given to
+    /// the least unlike one with a confident posterior.
+    pub max_mahalanobis_sq: Real,
 }
 
 impl Default for LrcConfig {
@@ -132,9 +156,14 @@ impl Default for LrcConfig {
             min_span_deg: 5.0,
             reference_range_m: 1.0,
             fit_bins: 20,
+            max_plane_rms_ratio: 1.0,
+            max_mahalanobis_sq: CHI2_4_P99,
         }
     }
 }
+
+/// The 99th percentile of χ² with 4 degrees of freedom.
+pub const CHI2_4_P99: Real = 13.2767;
 
 impl LrcConfig {
     /// A configuration that accepts any range and incidence (for studying
@@ -147,6 +176,8 @@ impl LrcConfig {
             max_incidence_deg: 90.0,
             min_points: 10,
             min_span_deg: 0.0,
+            max_plane_rms_ratio: Real::INFINITY,
+            max_mahalanobis_sq: Real::INFINITY,
             ..Self::default()
         }
     }
@@ -199,6 +230,20 @@ impl LrcConfig {
                 "reference_range_m",
                 "a positive distance",
                 self.reference_range_m,
+            );
+        }
+        if self.max_plane_rms_ratio.is_nan() || self.max_plane_rms_ratio < 1.0 {
+            return bad(
+                "max_plane_rms_ratio",
+                "a ratio ≥ 1 (infinite: no limit)",
+                self.max_plane_rms_ratio,
+            );
+        }
+        if self.max_mahalanobis_sq.is_nan() || self.max_mahalanobis_sq <= 0.0 {
+            return bad(
+                "max_mahalanobis_sq",
+                "a positive value (infinite: no limit)",
+                self.max_mahalanobis_sq,
             );
         }
         Ok(())
@@ -275,6 +320,27 @@ pub enum ClassifyError {
         /// The field.
         field: &'static str,
     },
+    /// The patch is not flat: its points lie farther from their plane than
+    /// those of any training observation.
+    #[error(
+        "the patch is not flat: {rms_m:.4} m RMS from its plane, the LRC accepts up to {limit_m:.4} m"
+    )]
+    NotFlat {
+        /// RMS distance of the points from their plane, metres.
+        rms_m: Real,
+        /// The limit, metres.
+        limit_m: Real,
+    },
+    /// The features are unlike every material's training observations.
+    #[error(
+        "the features are unlike every material (squared Mahalanobis distance {distance_sq:.1} to the nearest, limit {limit})"
+    )]
+    Atypical {
+        /// Squared Mahalanobis distance to the nearest material's density.
+        distance_sq: Real,
+        /// The limit.
+        limit: Real,
+    },
     /// The points do not define a plane or a fit (collinear, singular).
     #[error("the returns do not define a plane and a fit")]
     Degenerate,
@@ -315,8 +381,8 @@ impl MaterialModel {
         })
     }
 
-    /// `ln p(x | g)` up to the constant shared by all materials.
-    fn log_likelihood(&self, x: &[Real; 4], g: &[Real; COVERAGE_TERMS]) -> Real {
+    /// The squared Mahalanobis distance of `x` from the mean at `g`.
+    fn mahalanobis_sq(&self, x: &[Real; 4], g: &[Real; COVERAGE_TERMS]) -> Real {
         let mean = self.mean(g);
         let d: [Real; 4] = std::array::from_fn(|i| x[i] - mean[i]);
         let mut q = 0.0;
@@ -325,7 +391,7 @@ impl MaterialModel {
                 q += d[i] * v * d[j];
             }
         }
-        -0.5 * (q + self.log_det)
+        q
     }
 }
 
@@ -339,6 +405,10 @@ pub struct Classification {
     pub features: Features,
     /// The estimated patch geometry.
     pub geometry: PatchGeometry,
+    /// Per material, the squared Mahalanobis distance of the features from
+    /// its density's mean (χ² with 4 degrees of freedom for an observation
+    /// of that material): how typical the observation is of each.
+    pub mahalanobis_sq: Vec<Real>,
 }
 
 impl Classification {
@@ -365,6 +435,9 @@ pub struct Lrc {
     pub feature_scale: [Real; 4],
     /// One density per material, in material order.
     pub materials: Vec<MaterialModel>,
+    /// The largest [`PatchGeometry::plane_rms_m`] among the training
+    /// observations, metres (see [`LrcConfig::max_plane_rms_ratio`]).
+    pub plane_rms_limit_m: Real,
 }
 
 impl Lrc {
@@ -407,6 +480,8 @@ impl Lrc {
                 t.features.model_vector().iter().all(|v| v.is_finite())
                     && t.coverage_rad.0.is_finite()
                     && t.coverage_rad.1.is_finite()
+                    && t.plane_rms_m.is_finite()
+                    && t.plane_rms_m >= 0.0
             };
             if !s.iter().all(finite) {
                 return Err(LrcError::Training {
@@ -468,11 +543,17 @@ impl Lrc {
                 samples: rows,
             });
         }
+        let plane_rms_limit_m = samples
+            .iter()
+            .flatten()
+            .map(|t| t.plane_rms_m)
+            .fold(0.0, Real::max);
         Ok(Self {
             config,
             feature_mean,
             feature_scale,
             materials,
+            plane_rms_limit_m,
         })
     }
 
@@ -488,14 +569,31 @@ impl Lrc {
         features: &Features,
         coverage_rad: (Real, Real),
     ) -> Result<Vec<Real>, ClassifyError> {
+        Ok(self.evaluate(features, coverage_rad)?.0)
+    }
+
+    /// The posterior (uniform prior) and each material's squared
+    /// Mahalanobis distance.
+    fn evaluate(
+        &self,
+        features: &Features,
+        coverage_rad: (Real, Real),
+    ) -> Result<(Vec<Real>, Vec<Real>), ClassifyError> {
         let x = features.model_vector();
         let z: [Real; 4] =
             std::array::from_fn(|k| (x[k] - self.feature_mean[k]) / self.feature_scale[k]);
         let g = coverage_terms(coverage_rad, self.config.fit_window_deg.to_radians());
+        let q: Vec<Real> = self
+            .materials
+            .iter()
+            .map(|m| m.mahalanobis_sq(&z, &g))
+            .collect();
+        // ln p(x | g) up to the constant shared by all materials.
         let log: Vec<Real> = self
             .materials
             .iter()
-            .map(|m| m.log_likelihood(&z, &g))
+            .zip(&q)
+            .map(|(m, q)| -0.5 * (q + m.log_det))
             .collect();
         let top = log.iter().copied().fold(Real::NEG_INFINITY, Real::max);
         if !top.is_finite() {
@@ -503,12 +601,43 @@ impl Lrc {
         }
         let w: Vec<Real> = log.iter().map(|l| (l - top).exp()).collect();
         let sum: Real = w.iter().sum();
-        Ok(w.into_iter().map(|v| v / sum).collect())
+        Ok((w.into_iter().map(|v| v / sum).collect(), q))
     }
 
     /// Classify an observation under this classifier's constraints.
     pub fn classify(&self, obs: &Observation) -> Result<Classification, ClassifyError> {
         self.classify_with(obs, &self.config)
+    }
+
+    /// The checks of [`Lrc::classify_with`] that depend on the geometry of
+    /// the observation alone (range, incidence, returns and incidence span in
+    /// the fit window, flatness), without the features' typicality: whether
+    /// an observation of this shape could be classified at all. Used to
+    /// predict, from a simulated observation of the map, whether a pose will
+    /// give the LRC what it needs.
+    pub fn check_geometry(
+        &self,
+        obs: &Observation,
+        config: &LrcConfig,
+    ) -> Result<PatchGeometry, ClassifyError> {
+        let (_, geometry) = extract_features(obs, config)?;
+        self.check_flat(&geometry, config)?;
+        Ok(geometry)
+    }
+
+    fn check_flat(
+        &self,
+        geometry: &PatchGeometry,
+        config: &LrcConfig,
+    ) -> Result<(), ClassifyError> {
+        let limit_m = self.plane_rms_limit_m * config.max_plane_rms_ratio;
+        if geometry.plane_rms_m > limit_m {
+            return Err(ClassifyError::NotFlat {
+                rms_m: geometry.plane_rms_m,
+                limit_m,
+            });
+        }
+        Ok(())
     }
 
     /// Classify under other constraints (e.g. [`LrcConfig::permissive`], to
@@ -519,10 +648,23 @@ impl Lrc {
         config: &LrcConfig,
     ) -> Result<Classification, ClassifyError> {
         let (features, geometry) = extract_features(obs, config)?;
+        self.check_flat(&geometry, config)?;
+        let (posterior, mahalanobis_sq) = self.evaluate(&features, geometry.incidence_span_rad)?;
+        let nearest = mahalanobis_sq
+            .iter()
+            .copied()
+            .fold(Real::INFINITY, Real::min);
+        if nearest > config.max_mahalanobis_sq {
+            return Err(ClassifyError::Atypical {
+                distance_sq: nearest,
+                limit: config.max_mahalanobis_sq,
+            });
+        }
         Ok(Classification {
-            posterior: self.posterior(&features, geometry.incidence_span_rad)?,
+            posterior,
             features,
             geometry,
+            mahalanobis_sq,
         })
     }
 }

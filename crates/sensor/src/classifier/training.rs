@@ -20,6 +20,8 @@ pub struct TrainingSample {
     pub features: Features,
     /// Smallest and largest fitted incidence, radians.
     pub coverage_rad: (Real, Real),
+    /// [`PatchGeometry::plane_rms_m`](super::PatchGeometry::plane_rms_m) of the observation, metres.
+    pub plane_rms_m: Real,
 }
 
 /// How training observations are drawn (see [`Lrc::train`]).
@@ -284,6 +286,7 @@ impl Lrc {
                     s.push(TrainingSample {
                         features,
                         coverage_rad: geometry.incidence_span_rad,
+                        plane_rms_m: geometry.plane_rms_m,
                     });
                 }
             }
