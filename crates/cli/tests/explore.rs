@@ -9,71 +9,69 @@ mod support;
 use std::path::Path;
 use support::{fails, ok};
 
-fn viewpoints_in_checkpoint(dir: &Path) -> usize {
-    std::fs::read(dir.join("checkpoint.json"))
+/// The viewpoints recorded in `dir`'s checkpoint, by stage.
+fn checkpointed(dir: &Path) -> (usize, usize) {
+    let v = std::fs::read(dir.join("checkpoint.json"))
         .ok()
-        .and_then(|t| serde_json::from_slice::<serde_json::Value>(&t).ok())
-        .and_then(|v| v["viewpoints"].as_array().map(Vec::len))
-        .unwrap_or(0)
+        .and_then(|t| serde_json::from_slice::<serde_json::Value>(&t).ok());
+    let stages: Vec<u64> = v
+        .as_ref()
+        .and_then(|v| v["viewpoints"].as_array())
+        .map(|a| a.iter().filter_map(|r| r["stage"].as_u64()).collect())
+        .unwrap_or_default();
+    (
+        stages.iter().filter(|s| **s == 1).count(),
+        stages.iter().filter(|s| **s == 2).count(),
+    )
 }
 
+/// Run `surveyor explore <args> --no-timings --out DIR` whole, and again
+/// killed with `kill -9` once `kill_when` holds of its checkpoint, then
+/// resumed: every output must equal the whole run's.
 #[cfg(unix)]
-#[test]
-#[ignore = "three exploration runs: seconds in release; run by .ci/run"]
-fn kill_9_then_resume_gives_the_uninterrupted_outputs() {
+fn kill_9_then_resume(args: &[&str], kill_when: impl Fn((usize, usize)) -> bool) {
     use std::process::{Command, Stdio};
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cspace.json");
-    let args = |out: &Path| -> Vec<String> {
-        [
-            "explore",
-            "--scenario",
-            "bridge1",
-            "--max-viewpoints",
-            "5",
-            "--seed",
-            "4",
-            "--no-timings",
-            "--cspace-cache",
-            cache.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]
-        .map(String::from)
-        .to_vec()
+    let all = |out: &Path| -> Vec<String> {
+        let mut a: Vec<String> = std::iter::once("explore")
+            .chain(args.iter().copied())
+            .map(String::from)
+            .collect();
+        for s in ["--no-timings", "--cspace-cache", cache.to_str().unwrap()] {
+            a.push(s.into());
+        }
+        a.push("--out".into());
+        a.push(out.to_str().unwrap().into());
+        a
     };
     let whole = dir.path().join("whole");
-    let a: Vec<String> = args(&whole);
-    ok(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    ok(&all(&whole).iter().map(String::as_str).collect::<Vec<_>>());
 
     let cut = dir.path().join("cut");
     let mut child = Command::new(env!("CARGO_BIN_EXE_surveyor"))
-        .args(args(&cut))
+        .args(all(&cut))
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
-    // Kill it once two viewpoints are checkpointed (or give up waiting).
-    for _ in 0..600 {
-        if viewpoints_in_checkpoint(&cut) >= 2 {
+    for _ in 0..2400 {
+        if kill_when(checkpointed(&cut)) {
             break;
         }
-        std::thread::sleep(std::time::Duration::from_millis(50));
+        std::thread::sleep(std::time::Duration::from_millis(25));
     }
-    let killed_at = viewpoints_in_checkpoint(&cut);
+    let killed_at = checkpointed(&cut);
     let status = Command::new("kill")
         .args(["-9", &child.id().to_string()])
         .status()
         .unwrap();
     assert!(status.success());
     let _ = child.wait();
-    assert!(
-        (2..5).contains(&killed_at),
-        "killed after {killed_at} viewpoints"
-    );
+    assert!(kill_when(killed_at), "killed at {killed_at:?} viewpoints");
     assert!(!cut.join("run.json").exists(), "the killed run finished");
 
-    let mut resume = args(&cut);
+    let mut resume = all(&cut);
     resume.insert(1, "--resume".into());
     ok(&resume.iter().map(String::as_str).collect::<Vec<_>>());
     for name in [
@@ -90,9 +88,47 @@ fn kill_9_then_resume_gives_the_uninterrupted_outputs() {
         );
         assert!(
             x == y,
-            "{name} differs after resuming at viewpoint {killed_at}"
+            "{name} differs after resuming at {killed_at:?} viewpoints (stage one, stage two)"
         );
     }
+}
+
+#[cfg(unix)]
+#[test]
+#[ignore = "three exploration runs: seconds in release; run by .ci/run"]
+fn kill_9_in_stage_one_then_resume_gives_the_uninterrupted_outputs() {
+    kill_9_then_resume(
+        &[
+            "--scenario",
+            "bridge1",
+            "--stages",
+            "one",
+            "--max-viewpoints",
+            "5",
+            "--seed",
+            "4",
+        ],
+        |(one, _)| (2..5).contains(&one),
+    );
+}
+
+#[cfg(unix)]
+#[test]
+#[ignore = "three exploration runs: a minute in release; run by .ci/run"]
+fn kill_9_in_stage_two_then_resume_gives_the_uninterrupted_outputs() {
+    // bridge1 with a Stage Two budget of 3 viewpoints.
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = dir.path().join("b.toml");
+    let text = ok(&["scenario", "show", "bridge1"]).replace(
+        "stage_two_max_viewpoints = 20",
+        "stage_two_max_viewpoints = 3",
+    );
+    assert!(text.contains("stage_two_max_viewpoints = 3"));
+    std::fs::write(&scenario, text).unwrap();
+    kill_9_then_resume(
+        &["--scenario", scenario.to_str().unwrap(), "--seed", "4"],
+        |(_, two)| (1..3).contains(&two),
+    );
 }
 
 #[test]

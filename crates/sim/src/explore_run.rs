@@ -65,6 +65,9 @@ struct Checkpoint {
     collisions: usize,
     unsafe_configurations: Vec<UnsafeConfiguration>,
     min_clearance_m: Real,
+    /// Stage Two: the discs already tried as targets, ascending.
+    #[serde(default)]
+    stage_two_tried: Vec<usize>,
 }
 
 /// Version of the checkpoint format.
@@ -677,6 +680,8 @@ pub fn run_stage_one(
         cspace,
     } = StageOneSetup::new(loaded, options)?;
     let mut replay = std::collections::VecDeque::<ViewpointRecord>::default();
+    let mut replay_two = std::collections::VecDeque::<ViewpointRecord>::default();
+    let mut tried_before = Vec::new();
     let mut restored = None;
     if options.resume {
         let path = options
@@ -702,7 +707,19 @@ pub fn run_stage_one(
                 ),
             });
         }
-        replay = c.viewpoints.iter().cloned().collect();
+        replay = c
+            .viewpoints
+            .iter()
+            .filter(|r| r.stage == 1)
+            .cloned()
+            .collect();
+        replay_two = c
+            .viewpoints
+            .iter()
+            .filter(|r| r.stage == 2)
+            .cloned()
+            .collect();
+        tried_before.clone_from(&c.stage_two_tried);
         restored = Some(c);
     }
     let mut tsdf = TsdfMap::new(options.tsdf)?;
@@ -766,6 +783,27 @@ pub fn run_stage_one(
     let mut cloud: Vec<SweepPoint> = Vec::new();
     let mut cloud_viewpoint: Vec<usize> = Vec::new();
     let mut sweeps: Vec<sensor::Sweep> = Vec::new();
+    let save = |viewpoints: &[ViewpointRecord],
+                audit: &Audit<'_>,
+                tried: &[usize]|
+     -> Result<(), SimError> {
+        match &options.checkpoint {
+            Some(path) => Checkpoint {
+                format: CHECKPOINT_FORMAT,
+                scenario: s.name.clone(),
+                seed: options.seed,
+                config: config.clone(),
+                sweep: config.sweep,
+                viewpoints: viewpoints.to_vec(),
+                collisions: audit.collisions,
+                unsafe_configurations: audit.unsafe_configurations.clone(),
+                min_clearance_m: audit.min_clearance_m,
+                stage_two_tried: tried.to_vec(),
+            }
+            .write(path),
+            None => Ok(()),
+        }
+    };
     let mut q = start.clone();
     let mut pending: Option<(explore::Choice, usize, usize, usize, Real, Real)> = None;
     let termination = loop {
@@ -806,6 +844,7 @@ pub fn run_stage_one(
         for t in &mut trackers {
             t.add_points(&positions);
         }
+        let was_replayed = replayed.is_some();
         let record = if let Some(r) = replayed {
             r
         } else {
@@ -855,19 +894,10 @@ pub fn run_stage_one(
         if !replay.is_empty() {
             continue;
         }
-        if let Some(path) = &options.checkpoint {
-            Checkpoint {
-                format: CHECKPOINT_FORMAT,
-                scenario: s.name.clone(),
-                seed: options.seed,
-                config: config.clone(),
-                sweep: config.sweep,
-                viewpoints: viewpoints.clone(),
-                collisions: audit.collisions,
-                unsafe_configurations: audit.unsafe_configurations.clone(),
-                min_clearance_m: audit.min_clearance_m,
-            }
-            .write(path)?;
+        // A replayed viewpoint is in the checkpoint already (with any Stage
+        // Two viewpoints after it).
+        if !was_replayed {
+            save(&viewpoints, &audit, &[])?;
         }
         if let Some(t) = stage.termination() {
             break t;
@@ -933,6 +963,11 @@ pub fn run_stage_one(
         let safety = stage.model().safety().clone();
         let selector = plan::PoseSelector::new(&safety, config.pose.clone())?;
         let mut tried = vec![false; discs.discs.len()];
+        for &i in &tried_before {
+            if let Some(t) = tried.get_mut(i) {
+                *t = true;
+            }
+        }
         // The map as the scanner would see it: a simulated sweep of the
         // mapped surface (Stage One's mesh) from a candidate pose, with the
         // scanner's own model and noise, predicts the observation the LRC
@@ -963,73 +998,83 @@ pub fn run_stage_one(
             {
                 break "viewpoint_budget";
             }
-            let mut ranked: Vec<(usize, Real)> = (0..discs.discs.len())
-                .filter(|&i| !tried[i] && m.flat[i] && a2.contains(&discs.discs[i].centre))
-                .map(|i| (i, m.h3(&discs, i)))
-                .filter(|(i, h)| {
-                    let voxels = m.belief.disc_voxels(&discs.discs[*i]).len() as Real;
-                    *h > config.significant_h3 * uniform * voxels
-                })
-                .collect();
-            ranked.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
             let k = viewpoints.len();
-            let t = Instant::now();
-            let mut found = None;
-            for &(i, _) in ranked.iter().take(config.stage_two_target_attempts) {
-                tried[i] = true;
-                let target = plan::Target::from_disc(&discs.discs[i]);
-                let solution = selector.select(stage.grid(), &target, &q)?;
-                if !solution.valid() {
-                    continue;
+            // A replayed viewpoint: the arm is put where it stood (its
+            // record and audit come from the checkpoint).
+            let replayed = replay_two.pop_front();
+            let chosen = if let Some(r) = &replayed {
+                rig.move_to(&r.joints)?;
+                q.clone_from(&r.joints);
+                None
+            } else {
+                let mut ranked: Vec<(usize, Real)> = (0..discs.discs.len())
+                    .filter(|&i| !tried[i] && m.flat[i] && a2.contains(&discs.discs[i].centre))
+                    .map(|i| (i, m.h3(&discs, i)))
+                    .filter(|(i, h)| {
+                        let voxels = m.belief.disc_voxels(&discs.discs[*i]).len() as Real;
+                        *h > config.significant_h3 * uniform * voxels
+                    })
+                    .collect();
+                ranked.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+                let t = Instant::now();
+                let mut found = None;
+                for &(i, _) in ranked.iter().take(config.stage_two_target_attempts) {
+                    tried[i] = true;
+                    let target = plan::Target::from_disc(&discs.discs[i]);
+                    let solution = selector.select(stage.grid(), &target, &q)?;
+                    if !solution.valid() {
+                        continue;
+                    }
+                    let goal = solution.joints().to_vec();
+                    if stage.sweep_dist(&goal)?.is_none() {
+                        continue;
+                    }
+                    probe.move_to(&goal)?;
+                    probe.reseed(viewpoint_seed(options.seed, k) ^ i as u64);
+                    let predicted = tilt_sweep(
+                        &mut probe,
+                        &robot,
+                        &world_from_base,
+                        &config.sweep,
+                        &mut |_, _| {},
+                    )?;
+                    let check = m.lrc.check_geometry(
+                        &sweep_patch(predicted.points(), &discs.discs[i].centre, m.patch_m),
+                        &m.lrc.config,
+                    );
+                    if check.is_err() {
+                        continue;
+                    }
+                    let mut checker = stage.model().safety().checker(stage.grid());
+                    let visited: Vec<&[Real]> =
+                        viewpoints.iter().map(|r| r.joints.as_slice()).collect();
+                    if let Some(path) = path_via_visited(
+                        stage.model().roadmap(),
+                        &visited,
+                        &q,
+                        &goal,
+                        config.link_k,
+                        &mut checker,
+                    ) {
+                        found = Some((i, path));
+                        break;
+                    }
                 }
-                let goal = solution.joints().to_vec();
-                if stage.sweep_dist(&goal)?.is_none() {
-                    continue;
+                let decision_ms = timed(t);
+                let Some((target, path)) = found else {
+                    break "no_targetable_disc";
+                };
+                for w in path.waypoints.windows(2) {
+                    audit.motion(stage.grid(), k, &w[0], &w[1])?;
+                    rig.move_to(&w[1])?;
                 }
-                probe.move_to(&goal)?;
-                probe.reseed(viewpoint_seed(options.seed, k) ^ i as u64);
-                let predicted = tilt_sweep(
-                    &mut probe,
-                    &robot,
-                    &world_from_base,
-                    &config.sweep,
-                    &mut |_, _| {},
-                )?;
-                let check = m.lrc.check_geometry(
-                    &sweep_patch(predicted.points(), &discs.discs[i].centre, m.patch_m),
-                    &m.lrc.config,
-                );
-                if check.is_err() {
-                    continue;
-                }
-                let mut checker = stage.model().safety().checker(stage.grid());
-                let visited: Vec<&[Real]> =
-                    viewpoints.iter().map(|r| r.joints.as_slice()).collect();
-                if let Some(path) = path_via_visited(
-                    stage.model().roadmap(),
-                    &visited,
-                    &q,
-                    &goal,
-                    config.link_k,
-                    &mut checker,
-                ) {
-                    found = Some((i, path));
-                    break;
-                }
-            }
-            let decision_ms = timed(t);
-            let Some((target, path)) = found else {
-                break "no_targetable_disc";
+                q = rig.joints();
+                let (lo, hi) = stage.sweep_range(&q);
+                audit.motion(stage.grid(), k, &q, &lo)?;
+                audit.motion(stage.grid(), k, &lo, &hi)?;
+                audit.motion(stage.grid(), k, &hi, &q)?;
+                Some((target, path, decision_ms, ranked.len()))
             };
-            for w in path.waypoints.windows(2) {
-                audit.motion(stage.grid(), k, &w[0], &w[1])?;
-                rig.move_to(&w[1])?;
-            }
-            q = rig.joints();
-            let (lo, hi) = stage.sweep_range(&q);
-            audit.motion(stage.grid(), k, &q, &lo)?;
-            audit.motion(stage.grid(), k, &lo, &hi)?;
-            audit.motion(stage.grid(), k, &hi, &q)?;
             rig.reseed(viewpoint_seed(options.seed, k));
             let t = Instant::now();
             let sweep = tilt_sweep(
@@ -1051,32 +1096,40 @@ pub fn run_stage_one(
                 t.add_points(&positions);
             }
             let (h1w, h2) = stage.information();
-            let record = ViewpointRecord {
-                k,
-                stage: 2,
-                joints: q.clone(),
-                f: None,
-                h1: stage.grid().h1_unweighted(),
-                h1_weighted: h1w,
-                h2,
-                h3: Some(m.h3_total()),
-                target_disc: Some(target),
-                predicted_h1_weighted: None,
-                candidates: ranked.len(),
-                front: 0,
-                unreachable: 0,
-                predicted_revealed: 0,
-                revealed: stats.newly_known,
-                coverage_a1: trackers.first().map(CoverageTracker::fraction),
-                joint_travel: path.joint_travel(),
-                waypoints: path.waypoints.len(),
-                decision_ms,
-                plan_ms: 0.0,
-                sweep_ms,
-                integrate_ms,
+            let record = match (replayed, chosen) {
+                (Some(r), _) => r,
+                (None, None) => unreachable!("a viewpoint is replayed or chosen"),
+                (None, Some((target, path, decision_ms, candidates))) => ViewpointRecord {
+                    k,
+                    stage: 2,
+                    joints: q.clone(),
+                    f: None,
+                    h1: stage.grid().h1_unweighted(),
+                    h1_weighted: h1w,
+                    h2,
+                    h3: Some(m.h3_total()),
+                    target_disc: Some(target),
+                    predicted_h1_weighted: None,
+                    candidates,
+                    front: 0,
+                    unreachable: 0,
+                    predicted_revealed: 0,
+                    revealed: stats.newly_known,
+                    coverage_a1: trackers.first().map(CoverageTracker::fraction),
+                    joint_travel: path.joint_travel(),
+                    waypoints: path.waypoints.len(),
+                    decision_ms,
+                    plan_ms: 0.0,
+                    sweep_ms,
+                    integrate_ms,
+                },
             };
             progress(&record);
             viewpoints.push(record);
+            if replay_two.is_empty() {
+                let tried: Vec<usize> = (0..tried.len()).filter(|&i| tried[i]).collect();
+                save(&viewpoints, &audit, &tried)?;
+            }
         };
         stage_two_end = Some(end.to_owned());
     }

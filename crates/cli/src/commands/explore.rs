@@ -18,15 +18,16 @@ of the Stage One mesh with segment, viewpoint, true material, material posterior
 observations), segments.json, run.json (viewpoints per stage, terminations, collisions, \
 unsafe_configurations with their dist(Q), min_clearance_m, coverage of A1, A2, A3, per \
 material and of the observable surfaces, material_accuracy, decision_ms, wall_s), and \
-checkpoint.json, rewritten after every Stage One viewpoint: after an interruption (Ctrl-C, \
-kill, power), the same command with --resume continues the run, and with --no-timings its \
-outputs are byte-identical to an uninterrupted run's.
+checkpoint.json, rewritten after every viewpoint of either stage: after an interruption \
+(Ctrl-C, kill, power), the same command with --resume continues the run, and with --no-timings \
+its outputs are byte-identical to an uninterrupted run's.
 
---stages both runs Stage Two after Stage One: the scanner is aimed (LM pose selection) at the \
-disc with the most material information left that a valid, reachable pose can target, the sweep \
-is classified and the beliefs updated, until no disc can be targeted or the budget \
-([explore] stage_two_max_viewpoints) is spent. Work in progress: its material accuracy is short \
-of issue 10's target.")]
+Stage Two (the default --stages both) follows Stage One: the scanner is aimed (LM pose \
+selection) at the disc with the most material information left that a valid, reachable pose \
+can target and whose observation, predicted by simulating the sweep on the Stage One mesh, the \
+material classifier can use; the sweep is classified and the beliefs updated, until no disc can \
+be targeted or the budget ([explore] stage_two_max_viewpoints) is spent. --stages one stops \
+after Stage One.")]
 pub struct ExploreArgs {
     /// Built-in scenario (bridge1, bridge2, bridge3) or scenario file.
     #[arg(long, default_value = "bridge1")]
@@ -46,8 +47,8 @@ pub struct ExploreArgs {
     /// Most Stage One viewpoints (the start pose's sweep included).
     #[arg(long)]
     max_viewpoints: Option<usize>,
-    /// Stages to run: `one` or `both`.
-    #[arg(long, default_value = "one")]
+    /// Stages to run: `one` (geometry) or `both` (then materials).
+    #[arg(long, default_value = "both")]
     stages: String,
     /// Where to cache the C-space model [default: a file in the system's
     /// temporary folder named after the robot]; it is rebuilt when its inputs
