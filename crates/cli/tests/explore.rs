@@ -151,6 +151,12 @@ fn bad_explore_input_is_a_clear_error() {
         e.contains("start pose") && e.contains("into the scene"),
         "{e}"
     );
+    // A bad mapping parameter names its field.
+    let bad = dir.path().join("bad.toml");
+    let text = ok(&["scenario", "show", "bridge1"]).replace("radius_m = 0.04", "radius_m = -0.04");
+    std::fs::write(&bad, text).unwrap();
+    let e = fails(&["explore", "--scenario", bad.to_str().unwrap(), "--out", o]);
+    assert!(e.contains("radius_m") && e.contains("-0.04"), "{e}");
     // A checkpoint of another run is refused, not continued.
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("checkpoint.json"), "{\"format\": 1}").unwrap();
@@ -159,4 +165,36 @@ fn bad_explore_input_is_a_clear_error() {
     for bad in ["panicked", "RUST_BACKTRACE"] {
         assert!(!e.contains(bad), "{e}");
     }
+}
+
+#[test]
+#[ignore = "an exploration run: seconds in release; run by .ci/run"]
+fn mapping_parameters_come_from_the_scenario() {
+    // Table 6.1's μ = 0.04 m changed to 0.06 m in the scenario file: every
+    // disc of the run has that radius.
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = dir.path().join("b.toml");
+    let text = ok(&["scenario", "show", "bridge1"]).replace("radius_m = 0.04", "radius_m = 0.06");
+    std::fs::write(&scenario, text).unwrap();
+    let out = dir.path().join("run");
+    ok(&[
+        "explore",
+        "--scenario",
+        scenario.to_str().unwrap(),
+        "--stages",
+        "one",
+        "--max-viewpoints",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let discs = std::fs::read_to_string(out.join("discs.csv")).unwrap();
+    let mut lines = discs.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "radius").unwrap();
+    let radii: Vec<f64> = lines
+        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
+        .collect();
+    assert!(radii.len() > 100, "{} discs", radii.len());
+    assert!(radii.iter().all(|r| (r - 0.06).abs() < 1e-12), "{radii:?}");
 }

@@ -27,6 +27,18 @@ impl Default for PredictionConfig {
     }
 }
 
+/// The map products made after Stage One (A§5.2–5.3, Table 6.1's
+/// "Mapping" row): Scale-Like Discs of the TSDF mesh (μ = 0.04 m, n_min = 8)
+/// and their segmentation (τq, τd, τp, τθ).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MappingConfig {
+    /// Disc generation.
+    pub sld: map::SldConfig,
+    /// Segmentation thresholds.
+    pub segment: map::SegmentConfig,
+}
+
 /// Parameters of Stage One (A§3.2).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -78,6 +90,8 @@ pub struct ExploreConfig {
     /// Two ends: a disc whose pose is invalid, whose sweep is unsafe or which
     /// no safe path reaches is passed over for good.
     pub stage_two_target_attempts: usize,
+    /// The discs and segments made of Stage One's map.
+    pub mapping: MappingConfig,
 }
 
 impl Default for ExploreConfig {
@@ -98,6 +112,7 @@ impl Default for ExploreConfig {
             stage_two_max_viewpoints: 20,
             significant_h3: 0.5,
             stage_two_target_attempts: 60,
+            mapping: MappingConfig::default(),
         }
     }
 }
@@ -164,6 +179,8 @@ impl ExploreConfig {
         if self.max_viewpoints == 0 {
             return Err(bad("explore.max_viewpoints", "at least 1", "0".into()));
         }
+        self.mapping.sld.validate()?;
+        self.mapping.segment.validate()?;
         if self.link_k == 0 || self.max_plan_attempts == 0 {
             return Err(bad(
                 "explore.link_k / explore.max_plan_attempts",

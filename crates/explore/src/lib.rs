@@ -16,6 +16,6 @@ mod error;
 pub mod pareto;
 pub mod stage_one;
 
-pub use config::{ExploreConfig, PredictionConfig};
+pub use config::{ExploreConfig, MappingConfig, PredictionConfig};
 pub use error::ExploreError;
 pub use stage_one::{Candidate, Choice, Decision, StageOne, Termination};

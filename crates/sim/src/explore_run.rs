@@ -297,6 +297,7 @@ impl Materials {
     fn new(
         d: &mut DiscMap,
         mesh: &TriMesh,
+        pose: &plan::PoseConfig,
         scene: &Scene,
         scanner: &sensor::ScannerConfig,
         seed: u64,
@@ -307,7 +308,14 @@ impl Materials {
         if materials.is_empty() || d.discs.is_empty() {
             return Ok(None);
         }
-        let config = LrcConfig::default();
+        // The LRC's validity domain is Stage Two's constraints (Table 6.1:
+        // φ_max, d_min, d_max), read from one place, `[explore.pose]`.
+        let config = LrcConfig {
+            min_range_m: pose.d_min_m,
+            max_range_m: pose.d_max_m,
+            max_incidence_deg: pose.phi_max_deg,
+            ..LrcConfig::default()
+        };
         let training = TrainingConfig {
             observations_per_material: LRC_TRAINING_OBSERVATIONS,
             ..TrainingConfig::default()
@@ -936,12 +944,20 @@ pub fn run_stage_one(
         &cloud_viewpoint,
         &viewpoints,
         scene,
+        &config.mapping,
         options.seed,
     )?;
     let mut materials = match scene {
         Some(scene) => {
             let scanner_config = s.scanner.clone().unwrap_or_default().config;
-            Materials::new(&mut discs, &mesh, scene, &scanner_config, options.seed)?
+            Materials::new(
+                &mut discs,
+                &mesh,
+                &config.pose,
+                scene,
+                &scanner_config,
+                options.seed,
+            )?
         }
         None => None,
     };
@@ -1176,6 +1192,7 @@ fn disc_map(
     cloud_viewpoint: &[usize],
     viewpoints: &[ViewpointRecord],
     scene: Option<&Scene>,
+    mapping: &explore::MappingConfig,
     seed: u64,
 ) -> Result<DiscMap, SimError> {
     use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -1186,7 +1203,7 @@ fn disc_map(
     let sld = map::generate_discs(
         &mesh.vertices,
         map::Orientation::ReferenceNormals(&normals),
-        &map::SldConfig::default(),
+        &mapping.sld,
         seed,
     )?;
     let pts: Vec<[Real; 3]> = cloud
@@ -1217,7 +1234,7 @@ fn disc_map(
     let segments = map::segment_discs(
         &sld.discs,
         dof6.then_some(poses.as_slice()),
-        &map::SegmentConfig::default(),
+        &mapping.segment,
     )?;
     let mut segment = vec![0; sld.discs.len()];
     for (s, members) in segments.iter().enumerate() {
