@@ -90,6 +90,13 @@ pub struct ExploreConfig {
     /// Two ends: a disc whose pose is invalid, whose sweep is unsafe or which
     /// no safe path reaches is passed over for good.
     pub stage_two_target_attempts: usize,
+    /// Stage Two keeps the robot's collision capsules at least this far from
+    /// the surface Stage One mapped (its TSDF mesh), along the path to a
+    /// viewpoint and through its sweep, metres. `dist(Q)` is measured to
+    /// voxel centres of the planning grid (0.1 m), so on its own it lets a
+    /// link pass within a few millimetres of a seen surface; Stage Two, which
+    /// aims the scanner at surfaces from 0.25–0.8 m, comes that close.
+    pub stage_two_clearance_m: Real,
     /// The discs and segments made of Stage One's map.
     pub mapping: MappingConfig,
 }
@@ -112,6 +119,7 @@ impl Default for ExploreConfig {
             stage_two_max_viewpoints: 20,
             significant_h3: 0.5,
             stage_two_target_attempts: 60,
+            stage_two_clearance_m: 0.05,
             mapping: MappingConfig::default(),
         }
     }
@@ -174,6 +182,13 @@ impl ExploreConfig {
                 "explore.local_reach_m",
                 "a non-negative length",
                 self.local_reach_m.to_string(),
+            ));
+        }
+        if !(self.stage_two_clearance_m.is_finite() && self.stage_two_clearance_m >= 0.0) {
+            return Err(bad(
+                "explore.stage_two_clearance_m",
+                "a non-negative length",
+                self.stage_two_clearance_m.to_string(),
             ));
         }
         if self.max_viewpoints == 0 {

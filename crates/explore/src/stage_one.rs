@@ -448,6 +448,9 @@ impl StageOne {
         let mut front_size = 0;
         let mut unreachable = 0;
         let mut choice = None;
+        // The map does not change during a decision: each attempt reuses
+        // the motion checks of the ones before.
+        let mut checker = plan::MemoChecker::new(self.safety().checker(&self.grid));
         for attempt in 0..self.config.max_plan_attempts {
             let f: Vec<Vec<Real>> = pool.iter().map(|&i| candidates[i].f.to_vec()).collect();
             if attempt == 0 {
@@ -457,7 +460,6 @@ impl StageOne {
                 break;
             };
             let c = &candidates[pool[k]];
-            let mut checker = self.safety().checker(&self.grid);
             if let Some(path) = self
                 .model
                 .roadmap()

@@ -52,5 +52,7 @@ pub use pose::{
     Constraints, PlaneHit, PoseConfig, PoseEvaluation, PoseRun, PoseSelector, PoseSolution,
     PoseTermination, Target, ViewGeometry, view_geometry,
 };
-pub use roadmap::{Edge, MotionChecker, Path, Roadmap, RoadmapParts, weighted_distance};
+pub use roadmap::{
+    Edge, MemoChecker, MotionChecker, Path, Roadmap, RoadmapParts, weighted_distance,
+};
 pub use safety::{Safety, SafetyChecker};

@@ -28,6 +28,60 @@ pub trait MotionChecker {
     fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool;
 }
 
+/// A [`MotionChecker`] that remembers every answer of the one it wraps, for
+/// many queries against one unchanged map: a failed A* search checks every
+/// edge it can reach, and the next query then finds them known. A motion
+/// `a → b` is remembered for `b → a` too (the checks are symmetric).
+#[derive(Debug)]
+pub struct MemoChecker<C> {
+    inner: C,
+    poses: HashMap<Vec<u64>, bool>,
+    motions: HashMap<(Vec<u64>, Vec<u64>), bool>,
+}
+
+impl<C: MotionChecker> MemoChecker<C> {
+    /// Remember the answers of `inner`.
+    pub fn new(inner: C) -> Self {
+        Self {
+            inner,
+            poses: HashMap::new(),
+            motions: HashMap::new(),
+        }
+    }
+
+    /// The wrapped checker.
+    pub fn inner(&self) -> &C {
+        &self.inner
+    }
+}
+
+fn bits(q: &[Real]) -> Vec<u64> {
+    q.iter().map(|v| v.to_bits()).collect()
+}
+
+impl<C: MotionChecker> MotionChecker for MemoChecker<C> {
+    fn pose_ok(&mut self, q: &[Real]) -> bool {
+        let key = bits(q);
+        if let Some(&ok) = self.poses.get(&key) {
+            return ok;
+        }
+        let ok = self.inner.pose_ok(q);
+        self.poses.insert(key, ok);
+        ok
+    }
+
+    fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
+        let (ka, kb) = (bits(a), bits(b));
+        let key = if ka <= kb { (ka, kb) } else { (kb, ka) };
+        if let Some(&ok) = self.motions.get(&key) {
+            return ok;
+        }
+        let ok = self.inner.motion_ok(a, b);
+        self.motions.insert(key, ok);
+        ok
+    }
+}
+
 /// One roadmap edge: node indices `a < b` and the joint-weighted distance.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Edge {
@@ -613,6 +667,91 @@ mod tests {
         assert!(direct.nodes.is_empty());
         // Into the square: no path.
         assert!(map.plan(&from, &[0.0, 0.0], 4, &mut checker).is_none());
+    }
+
+    /// Counts the calls that reach the checker it wraps.
+    struct Counting<C> {
+        inner: C,
+        calls: usize,
+    }
+
+    impl<C: MotionChecker> MotionChecker for Counting<C> {
+        fn pose_ok(&mut self, q: &[Real]) -> bool {
+            self.calls += 1;
+            self.inner.pose_ok(q)
+        }
+        fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
+            self.calls += 1;
+            self.inner.motion_ok(a, b)
+        }
+    }
+
+    #[test]
+    fn memo_checker_gives_the_same_paths_and_checks_each_motion_once() {
+        /// A forbidden square ring, 0.4 < |q|∞ < 0.6: the poses inside it
+        /// are safe but no motion reaches them from outside.
+        struct Ring(Square, Square);
+        impl MotionChecker for Ring {
+            fn pose_ok(&mut self, q: &[Real]) -> bool {
+                !self.0.inside(q) || self.1.inside(q)
+            }
+            fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
+                let len = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+                let steps = (len / 0.01).ceil().max(1.0) as usize;
+                (0..=steps).all(|s| {
+                    let t = s as Real / steps as Real;
+                    self.pose_ok(&[a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])])
+                })
+            }
+        }
+        let ring = || {
+            let sq = |h: Real| Square {
+                lo: [-h, -h],
+                hi: [h, h],
+                step: 0.01,
+            };
+            Ring(sq(0.6), sq(0.4))
+        };
+        let map = grid_roadmap(21);
+        let mut plain = Counting {
+            inner: ring(),
+            calls: 0,
+        };
+        let mut memo = MemoChecker::new(Counting {
+            inner: ring(),
+            calls: 0,
+        });
+        // Goals inside the ring fail after searching every node outside it;
+        // the others are reached.
+        let queries = [
+            ([-0.8, 0.0], [0.8, 0.05]),
+            ([-0.8, 0.0], [0.05, 0.05]),
+            ([-0.8, 0.0], [-0.15, 0.25]),
+            ([-0.8, 0.0], [0.8, 0.75]),
+        ];
+        let mut plain_calls = Vec::new();
+        let mut memo_calls = Vec::new();
+        for (from, to) in &queries {
+            let a = map.plan(from, to, 4, &mut plain);
+            let b = map.plan(from, to, 4, &mut memo);
+            assert_eq!(a, b);
+            let inside = to[0].abs() < 0.4 && to[1].abs() < 0.4;
+            assert_eq!(a.is_none(), inside, "{to:?}");
+            plain_calls.push(plain.calls);
+            memo_calls.push(memo.inner().calls);
+        }
+        // The first query costs the memo no more (a little less: a pose
+        // checked twice within one search is checked once); the later
+        // failed one costs it almost nothing (its whole search was done by
+        // the first failure), while the plain checker repeats it.
+        assert!(memo_calls[0] <= plain_calls[0]);
+        let plain_third = plain_calls[2] - plain_calls[1];
+        let memo_third = memo_calls[2] - memo_calls[1];
+        assert!(
+            memo_third * 10 < plain_third,
+            "memo {memo_third} vs plain {plain_third} checks"
+        );
+        assert!(memo_calls[3] < plain_calls[3]);
     }
 
     #[test]

@@ -409,6 +409,36 @@ impl Materials {
     }
 }
 
+/// Whether the robot's collision capsules stay `clearance_m` or more from
+/// `map` (the mapped surface) at every configuration checked along
+/// `waypoints` and through the tilt sweep `(lo, hi)` at its end.
+fn clear_of_map(
+    robot: &Robot,
+    world_from_base: &Isometry3,
+    map: &scene::World,
+    safety: &Safety,
+    waypoints: &[Vec<Real>],
+    (lo, hi): (Vec<Real>, Vec<Real>),
+    clearance_m: Real,
+) -> Result<bool, SimError> {
+    let (Some(map), true) = (map.as_scene(), clearance_m > 0.0) else {
+        return Ok(true);
+    };
+    let Some(goal) = waypoints.last() else {
+        return Ok(true);
+    };
+    let sweep = [goal.clone(), lo, hi];
+    for pair in waypoints.windows(2).chain(sweep.windows(2)) {
+        for c in safety.interpolate(&pair[0], &pair[1]) {
+            let frames = robot.forward_kinematics(&c)?;
+            if min_clearance(robot, &frames, world_from_base, map, clearance_m) < clearance_m {
+                return Ok(false);
+            }
+        }
+    }
+    Ok(true)
+}
+
 /// Poses the arm has stood at that are tried as the last waypoint before a
 /// goal the roadmap cannot reach.
 const VISITED_BRIDGES: usize = 5;
@@ -990,23 +1020,20 @@ pub fn run_stage_one(
         // will get; a pose whose predicted observation fails the LRC's
         // geometric checks (range, incidence, returns and span in the fit
         // window, flatness) is not a viewpoint for that disc.
-        let mut probe = {
-            let scanner = s.scanner.clone().unwrap_or_default().config;
-            let map_scene = Scene::from_mesh(
-                "map",
-                mesh.clone(),
-                vec![scene::Material::new("map", 0.5, 0.5)],
-                scene::MaterialId(0),
-            )?;
-            SimRig::new(
-                robot.clone(),
-                Arc::new(scene::World::Mesh(map_scene)),
-                world_from_base,
-                &q,
-                Some(Scanner::new(scanner)?),
-                options.seed,
-            )?
-        };
+        let map_world = Arc::new(scene::World::Mesh(Scene::from_mesh(
+            "map",
+            mesh.clone(),
+            vec![scene::Material::new("map", 0.5, 0.5)],
+            scene::MaterialId(0),
+        )?));
+        let mut probe = SimRig::new(
+            robot.clone(),
+            Arc::clone(&map_world),
+            world_from_base,
+            &q,
+            Some(Scanner::new(s.scanner.clone().unwrap_or_default().config)?),
+            options.seed,
+        )?;
         let a2 = regions.a2;
         let uniform = (discs.material_names.len() as Real).ln();
         let end = loop {
@@ -1034,6 +1061,10 @@ pub fn run_stage_one(
                 ranked.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
                 let t = Instant::now();
                 let mut found = None;
+                // One map for the whole decision: every motion checked while
+                // trying one disc is known when trying the next.
+                let mut checker =
+                    plan::MemoChecker::new(stage.model().safety().checker(stage.grid()));
                 for &(i, _) in ranked.iter().take(config.stage_two_target_attempts) {
                     tried[i] = true;
                     let target = plan::Target::from_disc(&discs.discs[i]);
@@ -1061,7 +1092,6 @@ pub fn run_stage_one(
                     if check.is_err() {
                         continue;
                     }
-                    let mut checker = stage.model().safety().checker(stage.grid());
                     let visited: Vec<&[Real]> =
                         viewpoints.iter().map(|r| r.joints.as_slice()).collect();
                     if let Some(path) = path_via_visited(
@@ -1071,7 +1101,15 @@ pub fn run_stage_one(
                         &goal,
                         config.link_k,
                         &mut checker,
-                    ) {
+                    ) && clear_of_map(
+                        &robot,
+                        &world_from_base,
+                        &map_world,
+                        &fine,
+                        &path.waypoints,
+                        stage.sweep_range(&goal),
+                        config.stage_two_clearance_m,
+                    )? {
                         found = Some((i, path));
                         break;
                     }
