@@ -745,18 +745,9 @@ pub fn run_stage_one(
                 ),
             });
         }
-        replay = c
-            .viewpoints
-            .iter()
-            .filter(|r| r.stage == 1)
-            .cloned()
-            .collect();
-        replay_two = c
-            .viewpoints
-            .iter()
-            .filter(|r| r.stage == 2)
-            .cloned()
-            .collect();
+        let (one, two): (Vec<_>, Vec<_>) = c.viewpoints.iter().cloned().partition(|r| r.stage == 1);
+        replay = one.into();
+        replay_two = two.into();
         tried_before.clone_from(&c.stage_two_tried);
         restored = Some(c);
     }
