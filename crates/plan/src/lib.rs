@@ -11,6 +11,8 @@
 //! - [`PoseSelector`]: Stage Two (A§3.3): a pose from which the scanner's
 //!   centre ray meets a disc [`Target`] within the LRC's constraints, by
 //!   Levenberg–Marquardt on the sigmoid costs `g₁…g₆` (eq. 3.14–3.20).
+//! - [`sequence`]: the order of a segment's blast targets (App. A.2): the
+//!   GA of eq. A.6–A.10, nearest neighbour and 2-opt.
 //!
 //! ```
 //! use geom::Isometry3;
@@ -43,6 +45,7 @@ mod model;
 pub mod pose;
 pub mod roadmap;
 pub mod safety;
+pub mod sequence;
 
 pub use config::PlanConfig;
 pub use error::PlanError;
