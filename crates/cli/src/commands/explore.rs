@@ -102,12 +102,17 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
             );
         }
     }
-    let robot_name = loaded
-        .scenario
-        .robot
-        .preset
-        .clone()
-        .unwrap_or_else(|| "urdf".into());
+    // One cache file per robot (a URDF by its file name), so runs that
+    // alternate robots do not rebuild each other's model.
+    let spec = &loaded.scenario.robot;
+    let robot_name = spec.preset.clone().unwrap_or_else(|| {
+        let stem = spec
+            .urdf
+            .as_ref()
+            .and_then(|p| p.file_stem())
+            .map(|s| s.to_string_lossy().into_owned());
+        format!("urdf-{}", stem.unwrap_or_default())
+    });
     let cache = args
         .cspace_cache
         .clone()
