@@ -11,6 +11,8 @@
 //! - [`PoseSelector`]: Stage Two (A§3.3): a pose from which the scanner's
 //!   centre ray meets a disc [`Target`] within the LRC's constraints, by
 //!   Levenberg–Marquardt on the sigmoid costs `g₁…g₆` (eq. 3.14–3.20).
+//! - [`BlastPoses`]: App. A.1: a pose from which a grit-blasting nozzle on
+//!   the flange hits a disc within the tool's limits (eq. A.1–A.5, LM).
 //! - [`sequence`]: the order of a segment's blast targets (App. A.2): the
 //!   GA of eq. A.6–A.10, nearest neighbour and 2-opt.
 //!
@@ -38,6 +40,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod blast;
 mod config;
 mod error;
 pub mod interference;
@@ -47,6 +50,7 @@ pub mod roadmap;
 pub mod safety;
 pub mod sequence;
 
+pub use blast::{BlastMeasure, BlastPoses, BlastTool};
 pub use config::PlanConfig;
 pub use error::PlanError;
 pub use interference::{Interference, interfering_voxels};

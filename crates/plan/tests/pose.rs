@@ -613,3 +613,90 @@ fn target_from_a_disc() {
     assert_eq!((t.centre, t.normal), (disc.centre, disc.normal));
     t.check().unwrap();
 }
+
+/// App. A.1: blast poses for a grid of discs on the wall, each re-measured
+/// in closed form from the nozzle's forward kinematics (the stream from the
+/// nozzle tip along its z axis meets the plane x = 0.7 at t = (0.7 − oₓ)/zₓ).
+#[test]
+fn blast_poses_hit_wall_discs_within_the_tool_limits() {
+    use plan::{BlastPoses, BlastTool};
+    let grid = walled_grid();
+    let tool = BlastTool::default();
+    let blast = BlastPoses::new(
+        &vm6083(),
+        Isometry3::identity(),
+        &PlanConfig::default(),
+        vec![1.0; 6],
+        &PoseConfig::default(),
+        tool,
+    )
+    .unwrap();
+    let robot = vm6083();
+    let offset = geom::math::isometry_from_xyz_rpy(tool.translation_m, [0.0; 3]);
+    let (mut targets, mut valid) = (0, 0);
+    for iy in -3..=3 {
+        for iz in 0..=8 {
+            let (y, z) = (0.1 * Real::from(iy), 0.3 + 0.1 * Real::from(iz));
+            let target = wall_target(y, z);
+            targets += 1;
+            let solution = blast.select(&grid, &target, &START).unwrap();
+            let m = blast.measure(&grid, &target, solution.joints()).unwrap();
+            assert_eq!(m.valid, solution.valid(), "({y}, {z}): {m:?}");
+            if !solution.valid() {
+                continue;
+            }
+            valid += 1;
+            let nozzle = robot.tool_pose(solution.joints()).unwrap() * offset;
+            let o = Point3::from(nozzle.translation.vector);
+            let dir = nozzle.rotation * Vector3::z();
+            let t = (WALL_X - o.x) / dir.x;
+            let hit = o + dir * t;
+            let phi = dir.x.clamp(-1.0, 1.0).acos().to_degrees();
+            let aim = (hit - target.centre).norm();
+            assert!(phi < tool.phi_max_deg, "φ {phi}");
+            assert!((tool.d_min_m..=tool.d_max_m).contains(&t), "d {t}");
+            assert!(aim <= tool.rho_min_m + 1e-9, "aim {aim}");
+            assert!(
+                safety().dist(&grid, solution.joints()).unwrap() > 1.0,
+                "dist(Q)"
+            );
+            assert!((phi - m.phi_deg).abs() < 1e-6 && (t - m.d_m).abs() < 1e-9);
+            assert!((aim - m.aim_error_m).abs() < 1e-9);
+        }
+    }
+    eprintln!("blast poses: {valid} of {targets} wall discs");
+    assert!(valid * 100 >= 95 * targets, "{valid} of {targets}");
+}
+
+#[test]
+fn bad_blast_tools_are_refused() {
+    use plan::BlastTool;
+    let ok = BlastTool::default();
+    assert!(ok.validate().is_ok());
+    for bad in [
+        BlastTool {
+            translation_m: [0.0, Real::NAN, 0.1],
+            ..ok
+        },
+        BlastTool { d_min_m: 0.6, ..ok },
+        BlastTool {
+            phi_max_deg: -5.0,
+            ..ok
+        },
+    ] {
+        let e = bad.validate().unwrap_err().to_string();
+        assert!(!e.is_empty());
+        assert!(
+            plan::BlastPoses::new(
+                &vm6083(),
+                Isometry3::identity(),
+                &PlanConfig::default(),
+                vec![1.0; 6],
+                &PoseConfig::default(),
+                bad,
+            )
+            .is_err(),
+            "{bad:?}"
+        );
+    }
+}

@@ -1,0 +1,206 @@
+//! Blast poses (Paul App. A.1): a joint configuration from which a
+//! grit-blasting nozzle on the robot's flange hits a disc target within the
+//! tool's limits, by Levenberg–Marquardt on the sigmoid costs of eq. A.1–A.5.
+//!
+//! Eq. A.1–A.5 are Stage Two's `g₁…g₄` and `g₆` (A§3.3, eq. 3.14–3.17 and
+//! 3.19) with the blast stream in place of the scanner's centre ray and the
+//! tool's angle `φ_max`, stream length `[d_min, d_max]` and aim tolerance
+//! `ρ_min` in place of the LRC's; there is no tilt sweep (Stage Two's `g₅`).
+//! So a [`BlastPoses`] is a [`PoseSelector`] on a copy of the robot whose
+//! "scanner" is the nozzle ([`BlastTool::mount`]) with its `g₅` switched off
+//! (no tilt room asked for). [`BlastPoses::measure`] re-measures a pose from
+//! the nozzle's forward kinematics and [`Safety::dist`], independently of the
+//! optimiser.
+
+use crate::{PlanConfig, PlanError, PoseConfig, PoseSelector, PoseSolution, Safety, Target};
+use geom::{Isometry3, Real};
+use map::OccupancyGrid;
+use robot::{Robot, ScannerMount};
+use serde::{Deserialize, Serialize};
+
+/// A grit-blasting nozzle on the robot's tool link (its flange) and the
+/// limits of an effective blast (App. A.1, Fig. A.1). The thesis gives no
+/// values; the defaults are ours: a nozzle 0.15 m long on the flange axis,
+/// φ < 30°, a stream of 0.2–0.5 m, aim within 15 mm (Stage Two's `ρ_min`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct BlastTool {
+    /// Nozzle tip in the tool-link frame, metres; the stream leaves it along
+    /// the nozzle frame's `z` axis.
+    pub translation_m: [Real; 3],
+    /// Nozzle orientation in the tool-link frame: roll, pitch, yaw, degrees
+    /// (URDF convention).
+    pub rpy_deg: [Real; 3],
+    /// Largest angle between the stream and the surface normal, `φ_max`.
+    pub phi_max_deg: Real,
+    /// Shortest effective stream, `d_min`, metres.
+    pub d_min_m: Real,
+    /// Longest effective stream, `d_max`, metres.
+    pub d_max_m: Real,
+    /// Largest distance from where the stream hits to the disc centre,
+    /// `ρ_min`, metres.
+    pub rho_min_m: Real,
+}
+
+impl Default for BlastTool {
+    fn default() -> Self {
+        Self {
+            translation_m: [0.0, 0.0, 0.15],
+            rpy_deg: [0.0; 3],
+            phi_max_deg: 30.0,
+            d_min_m: 0.2,
+            d_max_m: 0.5,
+            rho_min_m: 0.015,
+        }
+    }
+}
+
+impl BlastTool {
+    /// Check every field.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        let bad = |field: &'static str, expected: &'static str, got: String| PlanError::Config {
+            field,
+            expected,
+            got,
+        };
+        if !self
+            .translation_m
+            .iter()
+            .chain(&self.rpy_deg)
+            .all(|v| v.is_finite())
+        {
+            return Err(bad(
+                "tool.translation_m / tool.rpy_deg",
+                "finite values",
+                format!("{:?} / {:?}", self.translation_m, self.rpy_deg),
+            ));
+        }
+        // The limits are checked with the pose configuration they become.
+        self.pose_config(&PoseConfig::default()).validate()
+    }
+
+    /// The nozzle as the "scanner" of `robot`: on its tool link, at the tool
+    /// frame followed by this offset.
+    pub fn mount(&self, robot: &Robot) -> ScannerMount {
+        let (link, link_from_tool) = robot.tool;
+        let deg = self.rpy_deg.map(Real::to_radians);
+        ScannerMount {
+            link,
+            link_from_scanner: link_from_tool
+                * geom::math::isometry_from_xyz_rpy(self.translation_m, deg),
+        }
+    }
+
+    /// `base`'s LM settings with this tool's limits and no tilt room.
+    pub fn pose_config(&self, base: &PoseConfig) -> PoseConfig {
+        PoseConfig {
+            phi_max_deg: self.phi_max_deg,
+            d_min_m: self.d_min_m,
+            d_max_m: self.d_max_m,
+            rho_min_m: self.rho_min_m,
+            tilt_room_deg: 0.0,
+            ..base.clone()
+        }
+    }
+}
+
+/// A blast pose re-measured from the nozzle's forward kinematics.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BlastMeasure {
+    /// Angle between the stream and the disc normal, degrees.
+    pub phi_deg: Real,
+    /// Stream length from the nozzle to the disc's plane, metres.
+    pub d_m: Real,
+    /// Distance from where the stream meets the plane to the disc centre, m.
+    pub aim_error_m: Real,
+    /// `dist(Q)` of eq. 3.5 (capped).
+    pub dist: Real,
+    /// Every limit holds: `φ < φ_max`, `d ∈ [d_min, d_max]`, aim error
+    /// `≤ ρ_min`, `dist(Q) > 1`.
+    pub valid: bool,
+}
+
+/// Blast-pose selection for one robot, placement and tool.
+#[derive(Debug)]
+pub struct BlastPoses {
+    safety: Safety,
+    config: PoseConfig,
+    tool: BlastTool,
+}
+
+impl BlastPoses {
+    /// The nozzle `tool` on `robot` (its scanner, if any, is replaced by the
+    /// nozzle), placed at `world_from_base`, with `plan`'s safety settings
+    /// and joint `weights`, and `pose`'s LM settings.
+    pub fn new(
+        robot: &Robot,
+        world_from_base: Isometry3,
+        plan: &PlanConfig,
+        weights: Vec<Real>,
+        pose: &PoseConfig,
+        tool: BlastTool,
+    ) -> Result<Self, PlanError> {
+        tool.validate()?;
+        let mut robot = robot.clone();
+        robot.scanner = Some(tool.mount(&robot));
+        let config = tool.pose_config(pose);
+        config.validate()?;
+        Ok(Self {
+            safety: Safety::new(robot, world_from_base, plan, weights)?,
+            config,
+            tool,
+        })
+    }
+
+    /// The robot with the nozzle as its "scanner".
+    pub fn robot(&self) -> &Robot {
+        self.safety.robot()
+    }
+
+    /// A pose from which the stream hits `target` within the tool's limits,
+    /// starting from `start` (the LM runs of [`PoseSelector::select`]).
+    pub fn select(
+        &self,
+        grid: &OccupancyGrid,
+        target: &Target,
+        start: &[Real],
+    ) -> Result<PoseSolution, PlanError> {
+        PoseSelector::new(&self.safety, self.config.clone())?.select(grid, target, start)
+    }
+
+    /// Re-measure the pose `q` against `target` and `grid`: the nozzle's
+    /// pose by forward kinematics, the stream meeting the disc's plane, and
+    /// `dist(Q)`.
+    pub fn measure(
+        &self,
+        grid: &OccupancyGrid,
+        target: &Target,
+        q: &[Real],
+    ) -> Result<BlastMeasure, PlanError> {
+        let nozzle = self
+            .robot()
+            .scanner_pose(q)?
+            .map(|p| self.safety.world_from_base() * p)
+            .ok_or_else(|| PlanError::Robot {
+                robot: self.robot().name.clone(),
+                message: "no nozzle".into(),
+            })?;
+        let view = crate::view_geometry(&nozzle, target);
+        let dist = self.safety.dist(grid, q)?;
+        let phi_deg = view.phi_rad.to_degrees();
+        let (d_m, aim_error_m) = view
+            .hit
+            .map_or((Real::INFINITY, Real::INFINITY), |h| (h.d_m, h.rho_m));
+        let t = &self.tool;
+        Ok(BlastMeasure {
+            phi_deg,
+            d_m,
+            aim_error_m,
+            dist,
+            valid: phi_deg < t.phi_max_deg
+                && (t.d_min_m..=t.d_max_m).contains(&d_m)
+                && aim_error_m <= t.rho_min_m
+                && dist > 1.0,
+        })
+    }
+}
