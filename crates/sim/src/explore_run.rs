@@ -208,6 +208,10 @@ pub struct ExploreRun {
     /// The map products of Stage One (A§5.2–5.3): the mesh's Scale-Like
     /// Discs and their segments.
     pub discs: DiscMap,
+    /// The planning grid at the end of the run (occupancy at
+    /// `planning_voxel_m`, with H1 and H2): what later plans, such as blast
+    /// plans, must respect.
+    pub grid: map::OccupancyGrid,
     /// Wall time of the whole run, seconds (0 when timings are off).
     pub wall_s: Real,
 }
@@ -1205,6 +1209,7 @@ pub fn run_stage_one(
         discs,
         coverage,
         observable,
+        grid: stage.grid().clone(),
         wall_s: if options.timings {
             t_run.elapsed().as_secs_f64()
         } else {

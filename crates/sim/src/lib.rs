@@ -17,6 +17,7 @@
 //! | [`explore_run`] | [`explore_run::run_stage_one`]: AXBAM Stage One through the hardware traits, every motion audited against the map and the ground truth; [`explore_run::ExploreRun::write`] (the `surveyor explore` files) |
 //! | [`follow_run`] | [`follow_run::run_episode`]: a `follow::Follower` through the hardware traits with ground-truth safety; [`follow_run::FollowSetup`] (scenario or scene file → rig + follower), [`follow_run::FollowRun::outputs`] (the `surveyor follow` files) |
 
+pub mod blast;
 pub mod explore_run;
 pub mod follow_run;
 pub mod metrics;

@@ -311,3 +311,64 @@ fn stage_two_aims_at_discs_safely_and_lowers_the_material_information() {
     let accuracy = run.discs.material_accuracy().unwrap();
     assert!(accuracy >= 0.9, "material accuracy {accuracy}");
 }
+
+/// Issue 11's blast plan over a Stage One map: every pose re-measured in
+/// closed form (the stream from the nozzle tip meets the disc's plane) and
+/// by `dist(Q)` on the run's grid; in every segment the GA's order costs no
+/// more than 2-opt's, which costs no more than nearest neighbour's.
+#[test]
+#[ignore = "seconds in release; run by .ci/run"]
+fn blast_plan_poses_are_within_the_tool_limits_and_the_ga_order_is_cheapest() {
+    use sim::blast::{BlastConfig, plan_blast};
+    let loaded = Scenario::load("bridge1").unwrap();
+    let run = run(0);
+    let robot = loaded.build_robot().unwrap();
+    let wfb = loaded.scenario.world_from_base();
+    let a2 = loaded.scenario.regions.unwrap().a2;
+    let config = BlastConfig::default();
+    let plan = plan_blast(&run, &robot, wfb, &a2, &config).unwrap();
+    assert_eq!(plan, plan_blast(&run, &robot, wfb, &a2, &config).unwrap());
+    println!(
+        "blast plan: {} of {} discs in A2 have a pose; {} segments",
+        plan.discs_with_pose,
+        plan.discs_in_scope,
+        plan.segments.len()
+    );
+    // After eight viewpoints most of A2 is not yet known to be free around
+    // the arm: few discs have a safe pose (issue 11 asks for 95 % of the
+    // reachable roof and web discs; not reached yet).
+    assert!(plan.discs_with_pose > 50, "{} poses", plan.discs_with_pose);
+    let safety = plan::Safety::new(
+        robot.clone(),
+        wfb,
+        &plan::PlanConfig::default(),
+        vec![1.0; 6],
+    )
+    .unwrap();
+    let tool = config.tool;
+    let offset = geom::math::isometry_from_xyz_rpy(tool.translation_m, [0.0; 3]);
+    let mut listed = 0;
+    for s in &plan.segments {
+        listed += s.targets.len() + s.no_pose.len();
+        assert!(s.cost_ga <= s.cost_two_opt + 1e-9, "segment {}", s.segment);
+        assert!(s.cost_two_opt <= s.cost_nearest_neighbour + 1e-9);
+        for t in &s.targets {
+            let disc = &run.discs.discs[t.disc];
+            let nozzle = wfb * robot.tool_pose(&t.joints).unwrap() * offset;
+            let o = geom::Point3::from(nozzle.translation.vector);
+            let dir = nozzle.rotation * geom::Vector3::z();
+            let n = disc.normal.into_inner();
+            let along = (disc.centre - o).dot(&n) / dir.dot(&n);
+            let hit = o + dir * along;
+            let phi = (-dir.dot(&n)).clamp(-1.0, 1.0).acos().to_degrees();
+            let aim = (hit - disc.centre).norm();
+            assert!(phi < tool.phi_max_deg, "disc {}: φ {phi}", t.disc);
+            assert!((tool.d_min_m..=tool.d_max_m).contains(&along), "d {along}");
+            assert!(aim <= tool.rho_min_m + 1e-9, "aim {aim}");
+            assert!(safety.dist(&run.grid, &t.joints).unwrap() > 1.0);
+            assert!((t.phi_deg - phi).abs() < 1e-6 && (t.d_m - along).abs() < 1e-9);
+        }
+    }
+    // Every disc in A2 is in the plan, with a pose or listed without one.
+    assert_eq!(listed, plan.discs_in_scope);
+}
