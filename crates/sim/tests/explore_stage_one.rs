@@ -310,34 +310,32 @@ fn stage_two_aims_at_discs_safely_and_lowers_the_material_information() {
     // discs the LRC could classify (the ground truth is the scene's).
     let accuracy = run.discs.material_accuracy().unwrap();
     assert!(accuracy >= 0.9, "material accuracy {accuracy}");
+    check_blast_plan(&loaded, &run);
 }
 
-/// Issue 11's blast plan over a Stage One map: every pose re-measured in
-/// closed form (the stream from the nozzle tip meets the disc's plane) and
-/// by `dist(Q)` on the run's grid; in every segment the GA's order costs no
+/// Issue 11's blast plan over a run's map: every pose re-measured in closed
+/// form (the stream from the nozzle tip meets the disc's plane) and by
+/// `dist(Q)` on the run's grid; in every segment the GA's order costs no
 /// more than 2-opt's, which costs no more than nearest neighbour's.
-#[test]
-#[ignore = "seconds in release; run by .ci/run"]
-fn blast_plan_poses_are_within_the_tool_limits_and_the_ga_order_is_cheapest() {
+fn check_blast_plan(loaded: &sim::LoadedScenario, run: &sim::explore_run::ExploreRun) {
     use sim::blast::{BlastConfig, plan_blast};
-    let loaded = Scenario::load("bridge1").unwrap();
-    let run = run(0);
     let robot = loaded.build_robot().unwrap();
     let wfb = loaded.scenario.world_from_base();
     let a2 = loaded.scenario.regions.unwrap().a2;
     let config = BlastConfig::default();
-    let plan = plan_blast(&run, &robot, wfb, &a2, &config).unwrap();
-    assert_eq!(plan, plan_blast(&run, &robot, wfb, &a2, &config).unwrap());
+    let t = std::time::Instant::now();
+    let plan = plan_blast(run, &robot, wfb, &a2, &config).unwrap();
+    let seconds = t.elapsed().as_secs_f64();
+    assert_eq!(plan, plan_blast(run, &robot, wfb, &a2, &config).unwrap());
     println!(
-        "blast plan: {} of {} discs in A2 have a pose; {} segments",
+        "blast plan: {} of {} discs in A2 have a pose; {} segments; {seconds:.1} s",
         plan.discs_with_pose,
         plan.discs_in_scope,
         plan.segments.len()
     );
-    // After eight viewpoints most of A2 is not yet known to be free around
-    // the arm: few discs have a safe pose (issue 11 asks for 95 % of the
-    // reachable roof and web discs; not reached yet).
-    assert!(plan.discs_with_pose > 50, "{} poses", plan.discs_with_pose);
+    // Issue 11 asks for 95 % of the reachable roof and web discs; not
+    // measured against reachability yet.
+    assert!(plan.discs_with_pose * 2 > plan.discs_in_scope);
     let safety = plan::Safety::new(
         robot.clone(),
         wfb,
