@@ -81,6 +81,8 @@ fn kill_9_then_resume(args: &[&str], kill_when: impl Fn((usize, usize)) -> bool)
         "mesh.ply",
         "discs.csv",
         "segments.json",
+        "blast_plan.json",
+        "blast_plan.csv",
     ] {
         let (x, y) = (
             std::fs::read(whole.join(name)).unwrap(),

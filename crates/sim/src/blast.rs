@@ -208,3 +208,40 @@ fn robot_nozzle(
         .map(|p| world_from_base * p)
         .ok_or(SimError::NoScanner)
 }
+
+impl BlastPlan {
+    /// `blast_plan.csv`: one row per target, segments in order and the
+    /// targets of each in the GA's order.
+    pub fn csv(&self) -> String {
+        use std::fmt::Write as _;
+        let mut out = String::from(
+            "segment,order,disc,q1,q2,q3,q4,q5,q6,nozzle_x,nozzle_y,nozzle_z,dir_x,dir_y,dir_z,phi_deg,d_m,aim_error_m,dist\n",
+        );
+        for s in &self.segments {
+            for (k, t) in s.targets.iter().enumerate() {
+                let _ = write!(out, "{},{k},{}", s.segment, t.disc);
+                for v in t.joints.iter().chain(&t.nozzle).chain(&t.direction).chain([
+                    &t.phi_deg,
+                    &t.d_m,
+                    &t.aim_error_m,
+                    &t.dist,
+                ]) {
+                    let _ = write!(out, ",{v}");
+                }
+                out.push('\n');
+            }
+        }
+        out
+    }
+
+    /// Write `blast_plan.json` and `blast_plan.csv` into `dir`.
+    pub fn write(&self, dir: &std::path::Path) -> Result<(), SimError> {
+        let err = |e: &dyn std::fmt::Display| SimError::InvalidArgument {
+            what: dir.display().to_string(),
+            message: format!("cannot write the blast plan: {e}"),
+        };
+        let json = serde_json::to_string_pretty(self).map_err(|e| err(&e))?;
+        std::fs::write(dir.join("blast_plan.json"), json).map_err(|e| err(&e))?;
+        std::fs::write(dir.join("blast_plan.csv"), self.csv()).map_err(|e| err(&e))
+    }
+}

@@ -18,6 +18,10 @@ of the Stage One mesh with segment, viewpoint, true material, material posterior
 observations), segments.json, run.json (viewpoints per stage, terminations, collisions, \
 unsafe_configurations with their dist(Q), min_clearance_m, coverage of A1, A2, A3, per \
 material and of the observable surfaces, material_accuracy, decision_ms, wall_s), and \
+blast_plan.json and blast_plan.csv (Paul App. A: a nozzle pose for every disc in A2 that has one, \
+within the tool's angle, stream length and aim limits and dist(Q) > 1 on the final map, the discs \
+without one listed, each segment's targets ordered by the GA, with the nearest-neighbour and 2-opt \
+costs beside it), \
 checkpoint.json, rewritten after every viewpoint of either stage: after an interruption \
 (Ctrl-C, kill, power), the same command with --resume continues the run, and with --no-timings \
 its outputs are byte-identical to an uninterrupted run's.
@@ -148,6 +152,22 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     })?;
     run.write(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
+    // The maintenance plan over the map (Paul App. A): a nozzle pose for
+    // every disc in A2 that has one, each segment's targets ordered by the GA.
+    let blast = match (loaded.scenario.regions, run.discs.discs.is_empty()) {
+        (Some(regions), false) => {
+            let plan = sim::blast::plan_blast(
+                &run,
+                &loaded.build_robot()?,
+                loaded.scenario.world_from_base(),
+                &regions.a2,
+                &sim::blast::BlastConfig::default(),
+            )?;
+            plan.write(&args.out)?;
+            Some(plan)
+        }
+        _ => None,
+    };
     let json = run.run_json();
     let per_stage = |k: u8| run.viewpoints.iter().filter(|r| r.stage == k).count();
     println!(
@@ -183,6 +203,19 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
                 100.0 * *covered as f64 / (*n).max(1) as f64
             );
         }
+    }
+    if let Some(plan) = &blast {
+        let cost =
+            |f: fn(&sim::blast::SegmentPlan) -> f64| plan.segments.iter().map(f).sum::<f64>();
+        println!(
+            "blast plan: a nozzle pose for {} of the {} discs in A2, {} segments; path cost (eq. A.9) nearest neighbour {:.1}, 2-opt {:.1}, GA {:.1}",
+            plan.discs_with_pose,
+            plan.discs_in_scope,
+            plan.segments.len(),
+            cost(|s| s.cost_nearest_neighbour),
+            cost(|s| s.cost_two_opt),
+            cost(|s| s.cost_ga)
+        );
     }
     println!(
         "{} points, mesh of {} triangles; {:.1} s; outputs in {}",
