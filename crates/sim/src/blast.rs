@@ -93,33 +93,15 @@ pub fn plan_blast(
     config: &BlastConfig,
 ) -> Result<BlastPlan, SimError> {
     use rayon::prelude::*;
-    let poses = BlastPoses::new(
-        robot,
-        world_from_base,
-        &PlanConfig::default(),
-        vec![1.0; robot.dof()],
-        &config.pose,
-        config.tool,
-    )?;
+    let poses = blast_poses(robot, world_from_base, config)?;
     let d = &run.discs;
-    let scope: Vec<usize> = (0..d.discs.len())
-        .filter(|&i| a2.contains(&d.discs[i].centre))
-        .collect();
+    let scope = in_region(run, a2);
     let found: Vec<Option<BlastTarget>> = scope
         .par_iter()
         .map(|&i| -> Result<Option<BlastTarget>, SimError> {
-            let disc = &d.discs[i];
-            let target = Target::from_disc(disc);
-            let start = &run.viewpoints[d.viewpoint[i]].joints;
-            let solution = poses.select(&run.grid, &target, start)?;
-            if !solution.valid() {
+            let Some((q, m)) = disc_pose(&poses, &run.grid, run, i)? else {
                 return Ok(None);
-            }
-            let q = solution.joints().to_vec();
-            let m = poses.measure(&run.grid, &target, &q)?;
-            if !m.valid {
-                return Ok(None);
-            }
+            };
             let nozzle = robot_nozzle(&poses, &world_from_base, &q)?;
             let dir = nozzle.rotation * Vector3::z();
             let tip = nozzle.translation.vector;
@@ -194,6 +176,106 @@ pub fn plan_blast(
         discs_with_pose: with_pose,
         segments,
     })
+}
+
+/// The discs of `run` in `a2` that a nozzle pose reaches when everything is
+/// known: the same pose selection as [`plan_blast`], against a grid of
+/// `run.grid`'s geometry made from the ground truth (a voxel is occupied
+/// when the true surface passes within its half-diagonal of its centre,
+/// free otherwise). The denominator of "poses for ≥ 95 % of the discs
+/// reachable by the tool" (issue 11).
+pub fn reachable_discs(
+    run: &ExploreRun,
+    robot: &Robot,
+    world_from_base: Isometry3,
+    a2: &RegionBox,
+    scene: &scene::Scene,
+    config: &BlastConfig,
+) -> Result<Vec<usize>, SimError> {
+    use rayon::prelude::*;
+    let truth = ground_truth_grid(&run.grid, scene)?;
+    let poses = blast_poses(robot, world_from_base, config)?;
+    let found: Vec<Option<usize>> = in_region(run, a2)
+        .into_par_iter()
+        .map(|i| Ok(disc_pose(&poses, &truth, run, i)?.map(|_| i)))
+        .collect::<Result<_, SimError>>()?;
+    Ok(found.into_iter().flatten().collect())
+}
+
+/// The pose selection of `config` for `robot` at `world_from_base`.
+fn blast_poses(
+    robot: &Robot,
+    world_from_base: Isometry3,
+    config: &BlastConfig,
+) -> Result<BlastPoses, SimError> {
+    Ok(BlastPoses::new(
+        robot,
+        world_from_base,
+        &PlanConfig::default(),
+        vec![1.0; robot.dof()],
+        &config.pose,
+        config.tool,
+    )?)
+}
+
+/// The discs of `run` whose centres are in `region`.
+fn in_region(run: &ExploreRun, region: &RegionBox) -> Vec<usize> {
+    let d = &run.discs.discs;
+    (0..d.len())
+        .filter(|&i| region.contains(&d[i].centre))
+        .collect()
+}
+
+/// A valid blast pose for disc `i` of `run` against `grid` (the LM starting
+/// from the joints of the viewpoint that saw the disc), re-measured.
+fn disc_pose(
+    poses: &BlastPoses,
+    grid: &map::OccupancyGrid,
+    run: &ExploreRun,
+    i: usize,
+) -> Result<Option<(Vec<Real>, plan::BlastMeasure)>, SimError> {
+    let d = &run.discs;
+    let target = Target::from_disc(&d.discs[i]);
+    let start = &run.viewpoints[d.viewpoint[i]].joints;
+    let solution = poses.select(grid, &target, start)?;
+    if !solution.valid() {
+        return Ok(None);
+    }
+    let q = solution.joints().to_vec();
+    let m = poses.measure(grid, &target, &q)?;
+    Ok(m.valid.then_some((q, m)))
+}
+
+/// A grid of `like`'s geometry with the ground truth's occupancy: occupied
+/// where `scene`'s surface passes within a voxel's half-diagonal of its
+/// centre, free elsewhere.
+fn ground_truth_grid(
+    like: &map::OccupancyGrid,
+    scene: &scene::Scene,
+) -> Result<map::OccupancyGrid, SimError> {
+    let mut grid = map::OccupancyGrid::new(*like.config())?;
+    let g = *grid.geometry();
+    let v = g.voxel_m();
+    let reach = 0.5 * v * 3f64.sqrt();
+    let k0 = g.key_min().coords();
+    let [nx, ny, nz] = g.dims();
+    let (mut origins, mut points) = (Vec::new(), Vec::new());
+    for z in 0..nz as i32 {
+        for y in 0..ny as i32 {
+            for x in 0..nx as i32 {
+                let key = map::VoxelKey::new(k0[0] + x, k0[1] + y, k0[2] + z);
+                let c = key.center(v);
+                grid.mark_free(key)?;
+                if scene.closest_point(&c, reach).is_some() {
+                    // A return at the centre from inside the voxel: a hit.
+                    origins.push(c + Vector3::new(0.1 * v, 0.0, 0.0));
+                    points.push(c);
+                }
+            }
+        }
+    }
+    grid.integrate_points(&origins, &points)?;
+    Ok(grid)
 }
 
 /// The nozzle's pose in the world at `q`.

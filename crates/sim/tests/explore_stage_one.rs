@@ -1,7 +1,9 @@
-//! AXBAM Stage One on bridge1 (issue 10, in progress): the information
-//! prediction against the gain each candidate's sweep really brings
-//! (acceptance 3), and a run's safety audit, information history and
-//! determinism (acceptance 7).
+//! AXBAM exploration on bridge1 (issue 10): the information prediction
+//! against the gain each candidate's sweep really brings (acceptance 3), a
+//! Stage One run's safety audit, information history and determinism
+//! (acceptance 7), the UR5 run (acceptance 6), Stage Two's views, H3 and
+//! material accuracy (acceptance 2), and issue 11's blast plan over that
+//! run (poses re-measured, orders compared, reachability).
 //!
 //! They take seconds in release and a minute or more in a debug build, so
 //! they are ignored by `cargo test` and run by `.ci/run` in its release step:
@@ -333,9 +335,24 @@ fn check_blast_plan(loaded: &sim::LoadedScenario, run: &sim::explore_run::Explor
         plan.discs_in_scope,
         plan.segments.len()
     );
-    // Issue 11 asks for 95 % of the reachable roof and web discs; not
-    // measured against reachability yet.
+    // Issue 11 asks for poses for 95 % of the discs the tool can reach:
+    // those with a pose when all is known (the ground truth's occupancy).
+    let world = loaded.build_world().unwrap();
+    let scene = world.as_scene().unwrap();
+    let reachable = sim::blast::reachable_discs(run, &robot, wfb, &a2, scene, &config).unwrap();
+    let planned: std::collections::HashSet<usize> = plan
+        .segments
+        .iter()
+        .flat_map(|s| s.targets.iter().map(|t| t.disc))
+        .collect();
+    let of_reachable = reachable.iter().filter(|i| planned.contains(i)).count();
+    println!(
+        "reachable with everything known: {} discs; the plan has a pose for {of_reachable} of them ({:.1} %)",
+        reachable.len(),
+        100.0 * of_reachable as f64 / reachable.len().max(1) as f64
+    );
     assert!(plan.discs_with_pose * 2 > plan.discs_in_scope);
+    assert!(reachable.len() >= plan.discs_with_pose / 2);
     let safety = plan::Safety::new(
         robot.clone(),
         wfb,
