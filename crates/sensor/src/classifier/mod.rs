@@ -26,8 +26,7 @@
 //! 4. fits second-order polynomials `y = a₀ + a₁φ + a₂φ²` (φ in radians,
 //!    unsigned: the curves are even in φ) to intensity and to range error;
 //!    the four features are the quadratic coefficients `a₂` and the mean
-//!    squared residuals (MSE) of the two fits ([`Features`]).
-//!
+//!    squared residuals (MSE) of the two fits ([`Features`]);
 //! 5. refuses a patch that is not flat: the RMS distance of its points from
 //!    their plane ([`PatchGeometry::plane_rms_m`]) above the largest among
 //!    the training observations ([`Lrc::plane_rms_limit_m`], times
