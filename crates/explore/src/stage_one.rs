@@ -67,6 +67,8 @@ pub struct Decision {
     pub candidates: Vec<Candidate>,
     /// Size of the Pareto front of the first choice.
     pub front_size: usize,
+    /// Per candidate: on the Pareto front of the first choice.
+    pub on_front: Vec<bool>,
     /// The choice, or `None` when no safe candidate can be reached.
     pub choice: Option<Choice>,
     /// Candidates chosen but dropped for want of a safe path.
@@ -446,6 +448,7 @@ impl StageOne {
         let t1 = Instant::now();
         let mut pool: Vec<usize> = (0..candidates.len()).collect();
         let mut front_size = 0;
+        let mut on_front = vec![false; candidates.len()];
         let mut unreachable = 0;
         let mut choice = None;
         // The map does not change during a decision: each attempt reuses
@@ -454,7 +457,11 @@ impl StageOne {
         for attempt in 0..self.config.max_plan_attempts {
             let f: Vec<Vec<Real>> = pool.iter().map(|&i| candidates[i].f.to_vec()).collect();
             if attempt == 0 {
-                front_size = pareto::pareto_front(&f, &SENSES).len();
+                let front = pareto::pareto_front(&f, &SENSES);
+                front_size = front.len();
+                for &i in &front {
+                    on_front[i] = true;
+                }
             }
             let Some((k, rank_sum)) = pareto::choose(&f, &SENSES) else {
                 break;
@@ -478,6 +485,7 @@ impl StageOne {
         Ok(Decision {
             candidates,
             front_size,
+            on_front,
             choice,
             unreachable,
             score_ms,

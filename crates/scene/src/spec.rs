@@ -368,6 +368,23 @@ impl SceneSpec {
             })
     }
 
+    /// The same scene with its relative file paths (meshes, point cloud)
+    /// resolved against `base_dir`, so that it reads the same files from
+    /// anywhere.
+    #[must_use]
+    pub fn rebased(&self, base_dir: &Path) -> Self {
+        let mut out = self.clone();
+        for o in &mut out.objects {
+            if let ShapeSpec::Mesh { file, .. } = &mut o.shape {
+                *file = absolute(base_dir, file);
+            }
+        }
+        if let Some(c) = &mut out.point_cloud {
+            c.file = absolute(base_dir, &c.file);
+        }
+        out
+    }
+
     /// Build the world. Relative file paths are resolved against `base_dir`
     /// (the scenario file's folder).
     pub fn build(&self, base_dir: &Path) -> Result<World, SceneError> {
@@ -430,4 +447,11 @@ impl SceneSpec {
             }
         }
     }
+}
+
+/// `file` joined to `base_dir`, made absolute when the working directory is
+/// known (an absolute `file` is kept).
+fn absolute(base_dir: &Path, file: &Path) -> PathBuf {
+    let joined = base_dir.join(file);
+    std::path::absolute(&joined).unwrap_or(joined)
 }

@@ -152,6 +152,14 @@ pub struct ViewpointRecord {
     pub joint_travel: Real,
     /// Waypoints of the motion (2 for a direct one).
     pub waypoints: usize,
+    /// The motion's waypoints (joints), from the previous viewpoint's pose
+    /// to this one's (empty at the start).
+    #[serde(default)]
+    pub path: Vec<Vec<Real>>,
+    /// Stage One: `[f1, f2, f3, f4]` of every candidate the decision scored,
+    /// in its order, and whether it was on the first Pareto front (Fig. 6.6).
+    #[serde(default)]
+    pub scored: Vec<ScoredCandidate>,
     /// Wall times, ms (0 when timings are off).
     pub decision_ms: Real,
     /// Choice and path planning, ms.
@@ -160,6 +168,26 @@ pub struct ViewpointRecord {
     pub sweep_ms: Real,
     /// Integration into the planning grid and the TSDF, ms.
     pub integrate_ms: Real,
+}
+
+/// A Stage One choice waiting for its sweep: the choice, every candidate
+/// scored, the front size, unreachable choices, decision and plan ms.
+type Pending = (
+    explore::Choice,
+    Vec<ScoredCandidate>,
+    usize,
+    usize,
+    Real,
+    Real,
+);
+
+/// One candidate of a Stage One decision, as scored.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScoredCandidate {
+    /// `[f1, f2, f3, f4]`.
+    pub f: [Real; 4],
+    /// On the Pareto front of the decision's first choice.
+    pub front: bool,
 }
 
 /// A configuration found unsafe along an executed motion.
@@ -838,7 +866,7 @@ pub fn run_stage_one(
         }
     };
     let mut q = start.clone();
-    let mut pending: Option<(explore::Choice, usize, usize, usize, Real, Real)> = None;
+    let mut pending: Option<Pending> = None;
     let termination = loop {
         let k = viewpoints.len();
         // Replayed viewpoints: the arm is put where it stood and its sweep
@@ -901,22 +929,25 @@ pub fn run_stage_one(
                 coverage_a1: trackers.first().map(CoverageTracker::fraction),
                 joint_travel: 0.0,
                 waypoints: 0,
+                path: Vec::new(),
+                scored: Vec::new(),
                 decision_ms: 0.0,
                 plan_ms: 0.0,
                 sweep_ms,
                 integrate_ms,
             };
-            if let Some((choice, candidates, front, unreachable, decision_ms, plan_ms)) =
-                pending.take()
+            if let Some((choice, scored, front, unreachable, decision_ms, plan_ms)) = pending.take()
             {
                 record.f = Some(choice.candidate.f);
                 record.predicted_h1_weighted = Some(choice.candidate.f[0]);
                 record.predicted_revealed = choice.candidate.revealed;
-                record.candidates = candidates;
+                record.candidates = scored.len();
                 record.front = front;
                 record.unreachable = unreachable;
                 record.joint_travel = choice.path.joint_travel();
                 record.waypoints = choice.path.waypoints.len();
+                record.path.clone_from(&choice.path.waypoints);
+                record.scored = scored;
                 record.decision_ms = decision_ms;
                 record.plan_ms = plan_ms;
             }
@@ -952,9 +983,15 @@ pub fn run_stage_one(
             rig.move_to(&w[1])?;
         }
         q = rig.joints();
+        let scored = decision
+            .candidates
+            .iter()
+            .zip(&decision.on_front)
+            .map(|(c, &front)| ScoredCandidate { f: c.f, front })
+            .collect();
         pending = Some((
             choice,
-            decision.candidates.len(),
+            scored,
             decision.front_size,
             decision.unreachable,
             decision_ms,
@@ -1167,6 +1204,8 @@ pub fn run_stage_one(
                     coverage_a1: trackers.first().map(CoverageTracker::fraction),
                     joint_travel: path.joint_travel(),
                     waypoints: path.waypoints.len(),
+                    path: path.waypoints.clone(),
+                    scored: Vec::new(),
                     decision_ms,
                     plan_ms: 0.0,
                     sweep_ms,
@@ -1435,6 +1474,54 @@ impl ExploreRun {
         out
     }
 
+    /// `candidates.csv`: every candidate each Stage One decision scored
+    /// (k is the viewpoint the decision chose), with `[f1, f2, f3, f4]`,
+    /// whether it was on the Pareto front and whether it was chosen (Paul
+    /// Fig. 6.6).
+    pub fn candidates_csv(&self) -> String {
+        let mut out = String::from("k,candidate,f1,f2,f3,f4,front,chosen\n");
+        for r in &self.viewpoints {
+            for (i, c) in r.scored.iter().enumerate() {
+                let [f1, f2, f3, f4] = c.f;
+                let _ = writeln!(
+                    out,
+                    "{},{i},{f1},{f2},{f3},{f4},{},{}",
+                    r.k,
+                    u8::from(c.front),
+                    u8::from(r.f == Some(c.f))
+                );
+            }
+        }
+        out
+    }
+
+    /// `path.csv`: the executed motions, one row per waypoint (k is the
+    /// viewpoint the motion reached; the start pose is k 0's only row).
+    pub fn path_csv(&self) -> String {
+        let dof = self.viewpoints.first().map_or(0, |r| r.joints.len());
+        let mut out = String::from("k,stage,waypoint");
+        for j in 1..=dof {
+            let _ = write!(out, ",q{j}");
+        }
+        out.push('\n');
+        for r in &self.viewpoints {
+            let start = [r.joints.clone()];
+            let rows = if r.path.is_empty() {
+                &start[..]
+            } else {
+                &r.path[..]
+            };
+            for (i, q) in rows.iter().enumerate() {
+                let _ = write!(out, "{},{},{i}", r.k, r.stage);
+                for v in q {
+                    let _ = write!(out, ",{v}");
+                }
+                out.push('\n');
+            }
+        }
+        out
+    }
+
     /// `run.json`'s summary.
     pub fn run_json(&self) -> serde_json::Value {
         // Median and largest decision time of the viewpoints `pick` selects.
@@ -1507,16 +1594,23 @@ impl ExploreRun {
         })
     }
 
-    /// Write `viewpoints.csv`, `cloud.ply`, `mesh.ply` and `run.json` into
-    /// `dir` (created if needed).
+    /// Write `viewpoints.csv`, `candidates.csv`, `path.csv`, `cloud.ply`,
+    /// `mesh.ply`, `discs.csv`, `segments.json` and `run.json` into `dir`
+    /// (created if needed).
     pub fn write(&self, dir: &Path) -> Result<(), SimError> {
         let io = |path: &Path, e: &dyn std::fmt::Display| SimError::InvalidArgument {
             what: path.display().to_string(),
             message: format!("cannot write: {e}"),
         };
         std::fs::create_dir_all(dir).map_err(|e| io(dir, &e))?;
-        let csv = dir.join("viewpoints.csv");
-        std::fs::write(&csv, self.viewpoints_csv()).map_err(|e| io(&csv, &e))?;
+        for (name, text) in [
+            ("viewpoints.csv", self.viewpoints_csv()),
+            ("candidates.csv", self.candidates_csv()),
+            ("path.csv", self.path_csv()),
+        ] {
+            let csv = dir.join(name);
+            std::fs::write(&csv, text).map_err(|e| io(&csv, &e))?;
+        }
         let cols: [Vec<f32>; 6] = [
             self.cloud.iter().map(|p| p.point.x as f32).collect(),
             self.cloud.iter().map(|p| p.point.y as f32).collect(),

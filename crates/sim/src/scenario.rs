@@ -373,6 +373,19 @@ impl Scenario {
 }
 
 impl LoadedScenario {
+    /// The scenario with its relative file paths (URDF, meshes, point
+    /// cloud) resolved against its folder: what a run folder keeps as
+    /// `scenario.toml`, readable from anywhere.
+    pub fn standalone(&self) -> Scenario {
+        let mut s = self.scenario.clone();
+        if let Some(urdf) = &mut s.robot.urdf {
+            let joined = self.base_dir.join(&*urdf);
+            *urdf = std::path::absolute(&joined).unwrap_or(joined);
+        }
+        s.scene = s.scene.rebased(&self.base_dir);
+        s
+    }
+
     /// Build the ground-truth world.
     pub fn build_world(&self) -> Result<World, SimError> {
         Ok(self.scenario.scene.build(&self.base_dir)?)

@@ -152,6 +152,11 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     })?;
     run.write(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
+    // The scenario as run (with any --robot), its paths made absolute: what
+    // `surveyor report` and `plan-blast` rebuild the robot and scene from.
+    let scenario_toml = args.out.join("scenario.toml");
+    std::fs::write(&scenario_toml, loaded.standalone().to_toml()?)
+        .with_context(|| format!("writing {}", scenario_toml.display()))?;
     // The maintenance plan over the map (Paul App. A): a nozzle pose for
     // every disc in A2 that has one, each segment's targets ordered by the GA.
     let blast = match (loaded.scenario.regions, run.discs.discs.is_empty()) {
@@ -217,6 +222,8 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
             cost(|s| s.cost_ga)
         );
     }
+    let report = report::write(&args.out)?;
+    println!("report: {}", report.display());
     println!(
         "{} points, mesh of {} triangles; {:.1} s; outputs in {}",
         run.cloud.len(),

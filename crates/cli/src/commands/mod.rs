@@ -62,6 +62,15 @@ enum Command {
     /// the voxel map and the arm's configuration space, moving only through
     /// known free space; the viewpoints, cloud, mesh and a run summary.
     Explore(explore::ExploreArgs),
+    /// Write RUN_DIR/report.html: one self-contained page (works offline)
+    /// with a WebGL 3-D view of the run and the plots of its series.
+    Report(ReportArgs),
+}
+
+#[derive(Debug, Args)]
+struct ReportArgs {
+    /// A run folder written by `surveyor explore`.
+    run_dir: PathBuf,
 }
 
 #[derive(Debug, Subcommand)]
@@ -213,6 +222,11 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Sld(a) => maps::sld(&a),
         Command::Segment(a) => maps::segment(&a),
         Command::Model(a) => model::model(&a),
+        Command::Report(a) => {
+            let path = report::write(&a.run_dir)?;
+            println!("{}", path.display());
+            Ok(())
+        }
         Command::Follow(a) => follow::follow(&a),
         Command::Explore(a) => explore::explore(&a),
     }

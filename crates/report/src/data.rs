@@ -1,0 +1,146 @@
+//! Reading a run folder's files: CSV tables by column name, JSON.
+
+use crate::ReportError;
+use geom::Real;
+use std::path::Path;
+
+/// A CSV table held as text cells, read by column name.
+#[derive(Clone, Debug)]
+pub struct Table {
+    /// The file, for errors.
+    pub source: String,
+    header: Vec<String>,
+    rows: Vec<Vec<String>>,
+}
+
+impl Table {
+    /// Read `path` (a header row, then records).
+    pub fn read(path: &Path) -> Result<Self, ReportError> {
+        let source = path.display().to_string();
+        let mut reader = csv::ReaderBuilder::new()
+            .flexible(false)
+            .from_path(path)
+            .map_err(|e| ReportError::file(&source, e))?;
+        let header = reader
+            .headers()
+            .map_err(|e| ReportError::file(&source, e))?
+            .iter()
+            .map(str::to_owned)
+            .collect();
+        let mut rows = Vec::new();
+        for record in reader.records() {
+            let record = record.map_err(|e| ReportError::file(&source, e))?;
+            rows.push(record.iter().map(str::to_owned).collect());
+        }
+        Ok(Self {
+            source,
+            header,
+            rows,
+        })
+    }
+
+    /// Number of records.
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// No records.
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
+    /// Whether the table has column `name`.
+    pub fn has(&self, name: &str) -> bool {
+        self.header.iter().any(|h| h == name)
+    }
+
+    /// Column names starting with `prefix`, in order.
+    pub fn columns_with_prefix(&self, prefix: &str) -> Vec<String> {
+        self.header
+            .iter()
+            .filter(|h| h.starts_with(prefix))
+            .cloned()
+            .collect()
+    }
+
+    fn index(&self, name: &str) -> Result<usize, ReportError> {
+        self.header
+            .iter()
+            .position(|h| h == name)
+            .ok_or_else(|| ReportError::Field {
+                file: self.source.clone(),
+                line: 1,
+                field: name.to_owned(),
+                message: "missing column".into(),
+            })
+    }
+
+    /// Column `name` as numbers; an empty cell is `None`.
+    pub fn optional(&self, name: &str) -> Result<Vec<Option<Real>>, ReportError> {
+        let c = self.index(name)?;
+        self.rows
+            .iter()
+            .enumerate()
+            .map(|(i, row)| {
+                let cell = row[c].trim();
+                if cell.is_empty() {
+                    return Ok(None);
+                }
+                cell.parse::<Real>()
+                    .map(Some)
+                    .map_err(|_| ReportError::Field {
+                        file: self.source.clone(),
+                        line: i + 2,
+                        field: name.to_owned(),
+                        message: format!("expected a number, found `{cell}`"),
+                    })
+            })
+            .collect()
+    }
+
+    /// Column `name` as numbers, every cell required.
+    pub fn numbers(&self, name: &str) -> Result<Vec<Real>, ReportError> {
+        self.optional(name)?
+            .into_iter()
+            .enumerate()
+            .map(|(i, v)| {
+                v.ok_or_else(|| ReportError::Field {
+                    file: self.source.clone(),
+                    line: i + 2,
+                    field: name.to_owned(),
+                    message: "expected a number, found an empty cell".into(),
+                })
+            })
+            .collect()
+    }
+
+    /// Column `name` as non-negative integers.
+    pub fn indices(&self, name: &str) -> Result<Vec<usize>, ReportError> {
+        let c = self.index(name)?;
+        self.rows
+            .iter()
+            .enumerate()
+            .map(|(i, row)| {
+                let cell = row[c].trim();
+                cell.parse::<usize>().map_err(|_| ReportError::Field {
+                    file: self.source.clone(),
+                    line: i + 2,
+                    field: name.to_owned(),
+                    message: format!("expected a non-negative integer, found `{cell}`"),
+                })
+            })
+            .collect()
+    }
+}
+
+/// Read a JSON file.
+pub fn read_json(path: &Path) -> Result<serde_json::Value, ReportError> {
+    let source = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| ReportError::file(&source, e))?;
+    serde_json::from_str(&text).map_err(|e| ReportError::Field {
+        file: source,
+        line: e.line(),
+        field: String::new(),
+        message: e.to_string(),
+    })
+}

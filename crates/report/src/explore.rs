@@ -1,0 +1,719 @@
+//! The report of a `surveyor explore` run (Paul ch. 6): the 3-D view of the
+//! ground truth, cloud, mesh, discs by material with their segments, the
+//! viewpoints and paths, the blast path; the plots of Figs 6.6, 6.12 and
+//! 4.10, coverage and timings.
+
+use crate::ReportError;
+use crate::data::{Table, read_json};
+use crate::geometry::{Polylines, columns, convex_hull, plane_basis, simplify, stride_for};
+use crate::page::{Page, flatten, plot_of};
+use geom::{Isometry3, Point3, Real, Vector3};
+use plotly::common::{Line, Marker, Mode, Title, Visible};
+use plotly::layout::{AspectMode, Axis, BarMode, LayoutScene, Legend, Margin};
+use plotly::{Bar, Layout, Mesh3D, Scatter, Scatter3D, Trace};
+use std::path::Path;
+
+/// At most this many cloud points are drawn.
+pub const MAX_CLOUD_POINTS: usize = 60_000;
+/// The TSDF mesh is simplified to at most this many triangles for display.
+pub const MAX_MESH_TRIANGLES: usize = 80_000;
+/// Length of the drawn scanner fans, metres.
+const FAN_M: Real = 0.2;
+
+/// A colour per material name (the five of SPEC §3.1; others cycle).
+pub fn material_colour(name: &str, index: usize) -> &'static str {
+    const OTHERS: [&str; 5] = ["#ff7f0e", "#2ca02c", "#9467bd", "#d62728", "#7f7f7f"];
+    match name {
+        "painted_metal" => "#1f77b4",
+        "timber" => "#a0522d",
+        "concrete" => "#bcbd22",
+        "plastic" => "#e377c2",
+        "stainless_steel" => "#17becf",
+        _ => OTHERS[index % OTHERS.len()],
+    }
+}
+
+/// Everything the 3-D view needs from the scenario.
+struct Setup {
+    robot: robot::Robot,
+    world_from_base: Isometry3,
+    half_fov_rad: Real,
+    world: Option<scene::Scene>,
+}
+
+fn setup(dir: &Path) -> Result<Option<Setup>, ReportError> {
+    let path = dir.join("scenario.toml");
+    if !path.exists() {
+        return Ok(None);
+    }
+    let loaded = sim::Scenario::load(&path.display().to_string())?;
+    let robot = loaded.build_robot()?;
+    let half_fov_rad = loaded
+        .scenario
+        .scanner
+        .clone()
+        .unwrap_or_default()
+        .config
+        .half_fov_deg
+        .to_radians();
+    let world = match loaded.build_world()? {
+        scene::World::Mesh(s) => Some(s),
+        scene::World::Cloud(_) => None,
+    };
+    Ok(Some(Setup {
+        robot,
+        world_from_base: loaded.scenario.world_from_base(),
+        half_fov_rad,
+        world,
+    }))
+}
+
+/// Build the page of the explore run in `dir`.
+pub fn page(dir: &Path) -> Result<Page, ReportError> {
+    let run = read_json(&dir.join("run.json"))?;
+    let viewpoints = Table::read(&dir.join("viewpoints.csv"))?;
+    let scenario = run["scenario"].as_str().unwrap_or("?").to_owned();
+    let mut page = Page::new(&format!("surveyor explore: {scenario}"));
+    page.paragraph(&format!(
+        "AXBAM exploration (Paul 2010) of scenario {scenario}, run folder {}.",
+        dir.display()
+    ));
+    page.heading("Summary (run.json)");
+    let mut rows = Vec::new();
+    flatten(&run, "", &["reports"], 8, &mut rows);
+    page.table(&rows);
+
+    let setup = setup(dir)?;
+    view_3d(&mut page, dir, &viewpoints, setup.as_ref())?;
+    information_plots(&mut page, dir, &viewpoints)?;
+    Ok(page)
+}
+
+fn view_3d(
+    page: &mut Page,
+    dir: &Path,
+    viewpoints: &Table,
+    setup: Option<&Setup>,
+) -> Result<(), ReportError> {
+    let mut traces: Vec<Box<dyn Trace>> = Vec::new();
+    let mut notes = Vec::new();
+    if let Some(scene) = setup.and_then(|s| s.world.as_ref()) {
+        truth_traces(scene, &mut traces);
+    } else {
+        notes.push("no ground truth to show (no scenario.toml or a point-cloud world)".to_owned());
+    }
+    let cloud_path = dir.join("cloud.ply");
+    if cloud_path.exists() {
+        let cloud = scene::io::load_cloud(&cloud_path)?;
+        let stride = stride_for(cloud.points.len(), MAX_CLOUD_POINTS);
+        let shown: Vec<Point3> = cloud.points.iter().step_by(stride).copied().collect();
+        let [x, y, z] = columns(&shown);
+        notes.push(format!(
+            "cloud: 1 point in {stride} of {} drawn ({})",
+            cloud.points.len(),
+            shown.len()
+        ));
+        traces.push(
+            Scatter3D::new(x, y, z.clone())
+                .mode(Mode::Markers)
+                .name(format!("cloud (1 in {stride})"))
+                .visible(Visible::LegendOnly)
+                .marker(Marker::new().size(1).color_array(z).color_scale(
+                    plotly::common::ColorScale::Palette(plotly::common::ColorScalePalette::Viridis),
+                )),
+        );
+    }
+    let mesh_path = dir.join("mesh.ply");
+    if mesh_path.exists() {
+        let mesh = scene::io::load_mesh(&mesh_path, 1.0)?;
+        let (shown, cell) = simplify(&mesh, MAX_MESH_TRIANGLES);
+        if cell > 0.0 {
+            notes.push(format!(
+                "mesh: {} triangles simplified to {} by vertex clustering on {:.0} mm cells",
+                mesh.triangles.len(),
+                shown.triangles.len(),
+                cell * 1000.0
+            ));
+        }
+        traces.push(mesh_trace(&shown, "TSDF mesh", "#b0c4de", 1.0));
+    }
+    let discs_path = dir.join("discs.csv");
+    if discs_path.exists() {
+        disc_traces(&Table::read(&discs_path)?, &mut traces)?;
+    }
+    if let Some(s) = setup {
+        viewpoint_traces(dir, viewpoints, s, &mut traces, &mut notes)?;
+    } else {
+        notes.push("no scenario.toml: viewpoints and paths are not drawn".to_owned());
+    }
+    let blast_path = dir.join("blast_plan.json");
+    if blast_path.exists() {
+        blast_traces(&read_json(&blast_path)?, &blast_path, &mut traces)?;
+    }
+    page.heading("3-D view");
+    page.paragraph(
+        "Drag to rotate, scroll to zoom; click a legend entry to show or hide it (the ground \
+         truth and the cloud start hidden).",
+    );
+    for n in &notes {
+        page.paragraph(n);
+    }
+    let layout = Layout::new()
+        .height(800)
+        .margin(Margin::new().left(0).right(0).top(30).bottom(0))
+        .legend(Legend::new())
+        .scene(
+            LayoutScene::new()
+                .aspect_mode(AspectMode::Data)
+                .x_axis(Axis::new().title(Title::with_text("x (m)")))
+                .y_axis(Axis::new().title(Title::with_text("y (m)")))
+                .z_axis(Axis::new().title(Title::with_text("z (m)"))),
+        );
+    page.plot("view3d", &plot_of(traces, layout), 820, "view3d");
+    Ok(())
+}
+
+fn mesh_trace(
+    mesh: &geom::TriMesh,
+    name: &str,
+    colour: &'static str,
+    opacity: f64,
+) -> Box<dyn Trace> {
+    let [x, y, z] = columns(&mesh.vertices);
+    let idx = |c: usize| -> Vec<usize> { mesh.triangles.iter().map(|t| t[c] as usize).collect() };
+    Mesh3D::new(x, y, z, Some(idx(0)), Some(idx(1)), Some(idx(2)))
+        .name(name)
+        .color(colour)
+        .opacity(opacity)
+        .show_legend(true)
+        .flat_shading(true)
+}
+
+fn truth_traces(scene: &scene::Scene, traces: &mut Vec<Box<dyn Trace>>) {
+    for (m, material) in scene.materials().iter().enumerate() {
+        let mut mesh = geom::TriMesh {
+            vertices: Vec::new(),
+            triangles: Vec::new(),
+        };
+        for o in scene
+            .objects()
+            .iter()
+            .filter(|o| usize::from(o.material.0) == m)
+        {
+            for t in &scene.mesh().triangles[o.triangles.clone()] {
+                let base = u32::try_from(mesh.vertices.len()).unwrap_or(u32::MAX);
+                mesh.vertices
+                    .extend(t.iter().map(|&v| scene.mesh().vertices[v as usize]));
+                mesh.triangles.push([base, base + 1, base + 2]);
+            }
+        }
+        if mesh.triangles.is_empty() {
+            continue;
+        }
+        traces.push(
+            Mesh3D::new(
+                columns(&mesh.vertices)[0].clone(),
+                columns(&mesh.vertices)[1].clone(),
+                columns(&mesh.vertices)[2].clone(),
+                Some(mesh.triangles.iter().map(|t| t[0] as usize).collect()),
+                Some(mesh.triangles.iter().map(|t| t[1] as usize).collect()),
+                Some(mesh.triangles.iter().map(|t| t[2] as usize).collect()),
+            )
+            .name(format!("truth: {}", material.name))
+            .legend_group("truth")
+            .color(material_colour(&material.name, m))
+            .opacity(0.35)
+            .show_legend(true)
+            .visible(Visible::LegendOnly),
+        );
+    }
+}
+
+/// Discs coloured by their most probable material (grey while every
+/// material is equally likely), drawn as 8-sided fans 3 mm above their
+/// plane, and each segment's outline (the convex hull of its discs' rims in
+/// the segment's mean plane).
+fn disc_traces(discs: &Table, traces: &mut Vec<Box<dyn Trace>>) -> Result<(), ReportError> {
+    let c = [
+        discs.numbers("cx")?,
+        discs.numbers("cy")?,
+        discs.numbers("cz")?,
+    ];
+    let n = [
+        discs.numbers("nx")?,
+        discs.numbers("ny")?,
+        discs.numbers("nz")?,
+    ];
+    let radius = discs.numbers("radius")?;
+    let segment = if discs.has("segment") {
+        discs.indices("segment")?
+    } else {
+        vec![0; discs.len()]
+    };
+    let posterior_columns = discs.columns_with_prefix("p_");
+    let mut posterior = Vec::new();
+    for name in &posterior_columns {
+        posterior.push(discs.numbers(name)?);
+    }
+    let names: Vec<String> = posterior_columns
+        .iter()
+        .map(|s| s.trim_start_matches("p_").to_owned())
+        .collect();
+    // The MAP material, or None when the belief is still flat.
+    let map: Vec<Option<usize>> = (0..discs.len())
+        .map(|i| {
+            let p: Vec<Real> = posterior.iter().map(|col| col[i]).collect();
+            let (best, &top) = p
+                .iter()
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))?;
+            let min = p.iter().copied().fold(Real::INFINITY, Real::min);
+            (top - min > 1e-6).then_some(best)
+        })
+        .collect();
+    let centre = |i: usize| Point3::new(c[0][i], c[1][i], c[2][i]);
+    let normal = |i: usize| {
+        geom::unit(Vector3::new(n[0][i], n[1][i], n[2][i]))
+            .map_or_else(Vector3::z, geom::UnitVector3::into_inner)
+    };
+    let rim = |i: usize| -> Vec<Point3> {
+        let (u, v) = plane_basis(&normal(i));
+        (0..8)
+            .map(|k| {
+                let a = f64::from(k) * std::f64::consts::TAU / 8.0;
+                centre(i) + normal(i) * 0.003 + radius[i] * (a.cos() * u + a.sin() * v)
+            })
+            .collect()
+    };
+    let groups: Vec<Option<usize>> = std::iter::once(None)
+        .chain((0..names.len()).map(Some))
+        .collect();
+    for g in groups {
+        let members: Vec<usize> = (0..discs.len()).filter(|&i| map[i] == g).collect();
+        if members.is_empty() {
+            continue;
+        }
+        let mut mesh = geom::TriMesh {
+            vertices: Vec::new(),
+            triangles: Vec::new(),
+        };
+        for &i in &members {
+            let base = u32::try_from(mesh.vertices.len()).unwrap_or(u32::MAX);
+            mesh.vertices.push(centre(i) + normal(i) * 0.003);
+            mesh.vertices.extend(rim(i));
+            for k in 0..8u32 {
+                mesh.triangles
+                    .push([base, base + 1 + k, base + 1 + (k + 1) % 8]);
+            }
+        }
+        let (name, colour) = match g {
+            Some(m) => (
+                format!("discs: {} ({})", names[m], members.len()),
+                material_colour(&names[m], m),
+            ),
+            None => (
+                format!("discs: not identified ({})", members.len()),
+                "#c8c8c8",
+            ),
+        };
+        traces.push(mesh_trace(&mesh, &name, colour, 1.0));
+    }
+    let segments = segment.iter().copied().max().map_or(0, |m| m + 1);
+    let mut outlines = Polylines::default();
+    for s in 0..segments {
+        let members: Vec<usize> = (0..discs.len()).filter(|&i| segment[i] == s).collect();
+        if members.is_empty() {
+            continue;
+        }
+        let mean_n = members.iter().map(|&i| normal(i)).sum::<Vector3>();
+        let Some(mean_n) = mean_n.try_normalize(1e-9) else {
+            continue;
+        };
+        let origin = centre(members[0]);
+        let (u, v) = plane_basis(&mean_n);
+        let flat: Vec<[Real; 2]> = members
+            .iter()
+            .flat_map(|&i| rim(i))
+            .map(|p| [(p - origin).dot(&u), (p - origin).dot(&v)])
+            .collect();
+        let offset = members
+            .iter()
+            .map(|&i| (centre(i) - origin).dot(&mean_n))
+            .sum::<Real>()
+            / members.len() as Real
+            + 0.004;
+        let mut ring: Vec<Point3> = convex_hull(&flat)
+            .iter()
+            .map(|q| origin + q[0] * u + q[1] * v + offset * mean_n)
+            .collect();
+        if let Some(first) = ring.first().copied() {
+            ring.push(first);
+        }
+        outlines.push(&ring);
+    }
+    if !outlines.is_empty() {
+        let [x, y, z] = outlines.xyz;
+        traces.push(
+            Scatter3D::new(x, y, z)
+                .mode(Mode::Lines)
+                .name(format!("segment outlines ({segments})"))
+                .connect_gaps(false)
+                .line(Line::new().color("#202020").width(2.0)),
+        );
+    }
+    Ok(())
+}
+
+/// Scanner fans at the viewpoints (the scan plane's field, `FAN_M` long) and
+/// the scanner's path along the executed motions, per stage.
+fn viewpoint_traces(
+    dir: &Path,
+    viewpoints: &Table,
+    s: &Setup,
+    traces: &mut Vec<Box<dyn Trace>>,
+    notes: &mut Vec<String>,
+) -> Result<(), ReportError> {
+    let joints = joint_rows(viewpoints, "q")?;
+    let stage = viewpoints.indices("stage")?;
+    let scanner = |q: &[Real]| -> Result<Option<Isometry3>, ReportError> {
+        Ok(s.robot.scanner_pose(q)?.map(|p| s.world_from_base * p))
+    };
+    let colours = ["#ff7f0e", "#9467bd"];
+    for st in [1, 2] {
+        let mut fans = Polylines::default();
+        let mut apex = Vec::new();
+        let mut labels = Vec::new();
+        for (i, q) in joints.iter().enumerate().filter(|(i, _)| stage[*i] == st) {
+            let Some(pose) = scanner(q)? else {
+                continue;
+            };
+            let o = pose.translation.vector.into();
+            let ray = |b: Real| pose * (Point3::from(sensor::sweep::beam_direction(b) * FAN_M));
+            let n = 8;
+            let arc: Vec<Point3> = (0..=n)
+                .map(|k| ray(-s.half_fov_rad + 2.0 * s.half_fov_rad * f64::from(k) / f64::from(n)))
+                .collect();
+            let mut fan = vec![o];
+            fan.extend(arc.iter().copied());
+            fan.push(o);
+            fans.push(&fan);
+            fans.push(&[o, ray(0.0)]);
+            apex.push(o);
+            labels.push(format!("viewpoint {i}"));
+        }
+        if apex.is_empty() {
+            continue;
+        }
+        let [x, y, z] = fans.xyz;
+        let colour = colours[usize::from(st == 2)];
+        traces.push(
+            Scatter3D::new(x, y, z)
+                .mode(Mode::Lines)
+                .name(format!("stage {st} viewpoints: scanner fans"))
+                .legend_group(format!("stage{st}"))
+                .line(Line::new().color(colour).width(3.0)),
+        );
+        let [x, y, z] = columns(&apex);
+        traces.push(
+            Scatter3D::new(x, y, z)
+                .mode(Mode::Markers)
+                .name(format!("stage {st} viewpoints"))
+                .legend_group(format!("stage{st}"))
+                .show_legend(false)
+                .hover_text_array(labels)
+                .marker(Marker::new().size(4).color(colour)),
+        );
+    }
+    let path_csv = dir.join("path.csv");
+    if !path_csv.exists() {
+        notes.push("no path.csv: the executed motions are not drawn".to_owned());
+        return Ok(());
+    }
+    let path = Table::read(&path_csv)?;
+    let k = path.indices("k")?;
+    let pstage = path.indices("stage")?;
+    let q = joint_rows(&path, "q")?;
+    for st in [1, 2] {
+        let mut lines = Polylines::default();
+        let mut i = 0;
+        while i < k.len() {
+            let mut j = i;
+            while j < k.len() && k[j] == k[i] {
+                j += 1;
+            }
+            if pstage[i] == st && j - i >= 2 {
+                let mut pts = Vec::new();
+                for w in q[i..j].windows(2) {
+                    for step in 0..=8 {
+                        let t = f64::from(step) / 8.0;
+                        let qi: Vec<Real> = w[0]
+                            .iter()
+                            .zip(&w[1])
+                            .map(|(a, b)| a + t * (b - a))
+                            .collect();
+                        if let Some(p) = scanner(&qi)? {
+                            pts.push(Point3::from(p.translation.vector));
+                        }
+                    }
+                }
+                lines.push(&pts);
+            }
+            i = j;
+        }
+        if lines.is_empty() {
+            continue;
+        }
+        let [x, y, z] = lines.xyz;
+        traces.push(
+            Scatter3D::new(x, y, z)
+                .mode(Mode::Lines)
+                .name(format!("stage {st} motions (scanner path)"))
+                .connect_gaps(false)
+                .line(
+                    Line::new()
+                        .color(colours[usize::from(st == 2)])
+                        .width(2.0)
+                        .dash(plotly::common::DashType::Dot),
+                ),
+        );
+    }
+    Ok(())
+}
+
+/// Rows of the columns `q1`, `q2`, ... of `table`.
+fn joint_rows(table: &Table, prefix: &str) -> Result<Vec<Vec<Real>>, ReportError> {
+    let mut cols = Vec::new();
+    for j in 1.. {
+        let name = format!("{prefix}{j}");
+        if !table.has(&name) {
+            break;
+        }
+        cols.push(table.numbers(&name)?);
+    }
+    Ok((0..table.len())
+        .map(|i| cols.iter().map(|c| c[i]).collect())
+        .collect())
+}
+
+/// The blast path: the nozzle tips in the plan's order, segment by segment.
+fn blast_traces(
+    plan: &serde_json::Value,
+    path: &Path,
+    traces: &mut Vec<Box<dyn Trace>>,
+) -> Result<(), ReportError> {
+    let bad = |field: &str| ReportError::Field {
+        file: path.display().to_string(),
+        line: 0,
+        field: field.to_owned(),
+        message: "expected an array of segments with targets holding `nozzle: [x, y, z]`".into(),
+    };
+    let segments = plan["segments"].as_array().ok_or_else(|| bad("segments"))?;
+    let mut lines = Polylines::default();
+    let mut count = 0;
+    for s in segments {
+        let targets = s["targets"]
+            .as_array()
+            .ok_or_else(|| bad("segments[].targets"))?;
+        let mut pts = Vec::new();
+        for t in targets {
+            let p = t["nozzle"].as_array().ok_or_else(|| bad("nozzle"))?;
+            let v: Vec<Real> = p.iter().filter_map(serde_json::Value::as_f64).collect();
+            if let [x, y, z] = v[..] {
+                pts.push(Point3::new(x, y, z));
+            } else {
+                return Err(bad("nozzle"));
+            }
+        }
+        count += pts.len();
+        if pts.len() == 1 {
+            pts.push(pts[0]);
+        }
+        lines.push(&pts);
+    }
+    if lines.is_empty() {
+        return Ok(());
+    }
+    let [x, y, z] = lines.xyz;
+    traces.push(
+        Scatter3D::new(x, y, z)
+            .mode(Mode::LinesMarkers)
+            .name(format!("blast path: nozzle tips ({count})"))
+            .connect_gaps(false)
+            .visible(Visible::LegendOnly)
+            .marker(Marker::new().size(2).color("#d62728"))
+            .line(Line::new().color("#d62728").width(1.5)),
+    );
+    Ok(())
+}
+
+fn xy_layout(title: &str, x: &str, y: &str) -> Layout {
+    Layout::new()
+        .title(Title::with_text(title))
+        .height(380)
+        .x_axis(Axis::new().title(Title::with_text(x)))
+        .y_axis(Axis::new().title(Title::with_text(y)))
+}
+
+fn information_plots(page: &mut Page, dir: &Path, vp: &Table) -> Result<(), ReportError> {
+    let k: Vec<usize> = vp.indices("k")?;
+    // Fig. 6.6: the objectives of every candidate per decision.
+    let candidates_csv = dir.join("candidates.csv");
+    page.heading("Objectives of the candidates, per Stage One decision (Paul Fig. 6.6)");
+    if candidates_csv.exists() {
+        let c = Table::read(&candidates_csv)?;
+        let ck = c.indices("k")?;
+        let front = c.indices("front")?;
+        let chosen = c.indices("chosen")?;
+        let titles = [
+            ("f1", "f1: weighted geometric information left"),
+            ("f2", "f2: C-space information left"),
+            ("f3", "f3: joint travel (rad)"),
+            ("f4", "f4: dist(Q), smallest over the sweep"),
+        ];
+        for (name, title) in titles {
+            let f = c.numbers(name)?;
+            let pick = |keep: &dyn Fn(usize) -> bool| -> (Vec<usize>, Vec<Real>) {
+                (0..f.len())
+                    .filter(|&i| keep(i))
+                    .map(|i| (ck[i], f[i]))
+                    .unzip()
+            };
+            let (x0, y0) = pick(&|i| front[i] == 0);
+            let (x1, y1) = pick(&|i| front[i] == 1 && chosen[i] == 0);
+            let (x2, y2) = pick(&|i| chosen[i] == 1);
+            let traces: Vec<Box<dyn Trace>> = vec![
+                Scatter::new(x0, y0)
+                    .mode(Mode::Markers)
+                    .name("candidate")
+                    .marker(Marker::new().size(4).color("#bbbbbb")),
+                Scatter::new(x1, y1)
+                    .mode(Mode::Markers)
+                    .name("on the Pareto front")
+                    .marker(Marker::new().size(5).color("#1f77b4")),
+                Scatter::new(x2, y2)
+                    .mode(Mode::Markers)
+                    .name("chosen")
+                    .marker(Marker::new().size(9).color("#d62728")),
+            ];
+            page.plot(
+                name,
+                &plot_of(traces, xy_layout(title, "viewpoint k", name)),
+                380,
+                "xy",
+            );
+        }
+    } else {
+        page.paragraph("no candidates.csv in this run folder");
+    }
+
+    // Fig. 6.12: information remaining over viewpoints, each relative to its first value.
+    page.heading("Information remaining over viewpoints (Paul Fig. 6.12)");
+    let mut traces: Vec<Box<dyn Trace>> = Vec::new();
+    for (name, label) in [
+        ("h1_weighted", "H1 (weighted, eq. 4.11)"),
+        ("h2", "H2 (C-space, eq. 4.14)"),
+        ("h3", "H3 (materials, eq. 4.17)"),
+    ] {
+        let v = vp.optional(name)?;
+        let Some(first) = v.iter().flatten().copied().find(|x| *x != 0.0) else {
+            continue;
+        };
+        let (x, y): (Vec<usize>, Vec<Real>) = k
+            .iter()
+            .zip(&v)
+            .filter_map(|(k, v)| v.map(|v| (*k, v / first)))
+            .unzip();
+        traces.push(
+            Scatter::new(x, y)
+                .mode(Mode::LinesMarkers)
+                .name(format!("{label}, first value {first:.4e}")),
+        );
+    }
+    page.plot(
+        "information",
+        &plot_of(
+            traces,
+            xy_layout(
+                "Information remaining (relative to its first value)",
+                "viewpoint k",
+                "fraction",
+            ),
+        ),
+        400,
+        "xy",
+    );
+
+    // Fig. 4.10: predicted against obtained.
+    page.heading("Predicted and obtained information (Paul Fig. 4.10)");
+    let predicted = vp.optional("predicted_h1_weighted")?;
+    let actual = vp.numbers("h1_weighted")?;
+    let (xp, yp): (Vec<usize>, Vec<Real>) = k
+        .iter()
+        .zip(&predicted)
+        .filter_map(|(k, v)| v.map(|v| (*k, v)))
+        .unzip();
+    let traces: Vec<Box<dyn Trace>> = vec![
+        Scatter::new(xp, yp)
+            .mode(Mode::LinesMarkers)
+            .name("predicted to remain after the chosen view (f1)"),
+        Scatter::new(k.clone(), actual)
+            .mode(Mode::LinesMarkers)
+            .name("remaining after its sweep"),
+    ];
+    page.plot(
+        "prediction",
+        &plot_of(
+            traces,
+            xy_layout(
+                "Weighted H1: predicted and obtained",
+                "viewpoint k",
+                "H1 (weighted)",
+            ),
+        ),
+        400,
+        "xy",
+    );
+
+    page.heading("Coverage and effort");
+    let cov = vp.optional("coverage_a1")?;
+    let (xc, yc): (Vec<usize>, Vec<Real>) = k
+        .iter()
+        .zip(&cov)
+        .filter_map(|(k, v)| v.map(|v| (*k, 100.0 * v)))
+        .unzip();
+    let travel = vp.numbers("joint_travel")?;
+    let traces: Vec<Box<dyn Trace>> = vec![
+        Scatter::new(xc, yc)
+            .mode(Mode::LinesMarkers)
+            .name("A1 surfaces covered (%)"),
+        Scatter::new(k.clone(), travel)
+            .mode(Mode::LinesMarkers)
+            .name("joint travel to the viewpoint (rad)")
+            .y_axis("y2"),
+    ];
+    let layout = xy_layout(
+        "Coverage of the A1 surfaces and joint travel",
+        "viewpoint k",
+        "covered (%)",
+    )
+    .y_axis2(
+        Axis::new()
+            .title(Title::with_text("rad"))
+            .overlaying("y")
+            .side(plotly::common::AxisSide::Right),
+    );
+    page.plot("coverage", &plot_of(traces, layout), 400, "xy");
+
+    let mut traces: Vec<Box<dyn Trace>> = Vec::new();
+    for (name, label) in [
+        ("decision_ms", "decision"),
+        ("plan_ms", "of it, choice and path planning"),
+        ("sweep_ms", "sweep"),
+        ("integrate_ms", "integration"),
+    ] {
+        traces.push(Bar::new(k.clone(), vp.numbers(name)?).name(label));
+    }
+    let layout = xy_layout("Time per viewpoint", "viewpoint k", "ms").bar_mode(BarMode::Group);
+    page.plot("timings", &plot_of(traces, layout), 400, "xy");
+    Ok(())
+}

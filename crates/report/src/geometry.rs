@@ -1,0 +1,218 @@
+//! Geometry made small enough to display: points to the millimetre, the
+//! cloud subsampled, meshes simplified by vertex clustering, convex outlines.
+
+use geom::{Point3, Real, TriMesh, Vector3};
+use std::collections::HashMap;
+
+/// A coordinate rounded to the millimetre, as `f32` so it prints short.
+#[allow(clippy::cast_possible_truncation)]
+pub fn mm(x: Real) -> f32 {
+    ((x * 1000.0).round() / 1000.0) as f32
+}
+
+/// Columns x, y, z of points, to the millimetre.
+pub fn columns<'a>(points: impl IntoIterator<Item = &'a Point3>) -> [Vec<f32>; 3] {
+    let mut out = [Vec::new(), Vec::new(), Vec::new()];
+    for p in points {
+        for (c, v) in out.iter_mut().zip([p.x, p.y, p.z]) {
+            c.push(mm(v));
+        }
+    }
+    out
+}
+
+/// Polyline columns with `None` between pieces (plotly breaks the line there).
+#[derive(Debug, Default)]
+pub struct Polylines {
+    /// x, y, z.
+    pub xyz: [Vec<Option<f32>>; 3],
+}
+
+impl Polylines {
+    /// Append one polyline.
+    pub fn push(&mut self, points: &[Point3]) {
+        if points.len() < 2 {
+            return;
+        }
+        for p in points {
+            for (c, v) in self.xyz.iter_mut().zip([p.x, p.y, p.z]) {
+                c.push(Some(mm(v)));
+            }
+        }
+        for c in &mut self.xyz {
+            c.push(None);
+        }
+    }
+
+    /// No line pushed.
+    pub fn is_empty(&self) -> bool {
+        self.xyz[0].is_empty()
+    }
+}
+
+/// Every `stride`-th of `n` items, the stride chosen so at most `max` remain.
+pub fn stride_for(n: usize, max: usize) -> usize {
+    n.div_ceil(max.max(1)).max(1)
+}
+
+/// A mesh simplified by vertex clustering on a grid of `cell` metres: every
+/// vertex moves to the mean of its cell's vertices and triangles that
+/// collapse are dropped.
+pub fn cluster(mesh: &TriMesh, cell: Real) -> TriMesh {
+    let mut index: HashMap<[i64; 3], u32> = HashMap::new();
+    let mut sums: Vec<(Vector3, Real)> = Vec::new();
+    #[allow(clippy::cast_possible_truncation)]
+    let key = |p: &Point3| {
+        [
+            (p.x / cell).floor() as i64,
+            (p.y / cell).floor() as i64,
+            (p.z / cell).floor() as i64,
+        ]
+    };
+    let mut remap = Vec::with_capacity(mesh.vertices.len());
+    for p in &mesh.vertices {
+        let next = u32::try_from(sums.len()).unwrap_or(u32::MAX);
+        let id = *index.entry(key(p)).or_insert(next);
+        if id == next {
+            sums.push((Vector3::zeros(), 0.0));
+        }
+        let s = &mut sums[id as usize];
+        s.0 += p.coords;
+        s.1 += 1.0;
+        remap.push(id);
+    }
+    let vertices = sums.iter().map(|(s, n)| Point3::from(s / *n)).collect();
+    let mut seen = std::collections::HashSet::new();
+    let triangles = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|v| remap[v as usize]))
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        .filter(|t| {
+            let mut k = *t;
+            k.sort_unstable();
+            seen.insert(k)
+        })
+        .collect();
+    TriMesh {
+        vertices,
+        triangles,
+    }
+}
+
+/// `mesh` simplified (cells from 1 cm, doubling) until it has at most
+/// `max_triangles`; returns it and the cell used (0 when untouched).
+pub fn simplify(mesh: &TriMesh, max_triangles: usize) -> (TriMesh, Real) {
+    if mesh.triangles.len() <= max_triangles {
+        return (mesh.clone(), 0.0);
+    }
+    let mut cell = 0.01;
+    loop {
+        let m = cluster(mesh, cell);
+        if m.triangles.len() <= max_triangles || cell > 1.0 {
+            return (m, cell);
+        }
+        cell *= 2.0;
+    }
+}
+
+/// Two unit vectors spanning the plane normal to `n`.
+pub fn plane_basis(n: &Vector3) -> (Vector3, Vector3) {
+    let helper = if n.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let u = geom::unit(n.cross(&helper)).map_or_else(Vector3::x, geom::UnitVector3::into_inner);
+    (u, n.cross(&u))
+}
+
+/// The convex hull (anticlockwise, first point not repeated) of 2-D points,
+/// by Andrew's monotone chain.
+pub fn convex_hull(points: &[[Real; 2]]) -> Vec<[Real; 2]> {
+    let mut p = points.to_vec();
+    p.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    p.dedup();
+    if p.len() < 3 {
+        return p;
+    }
+    let cross = |o: &[Real; 2], a: &[Real; 2], b: &[Real; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    let mut hull: Vec<[Real; 2]> = Vec::with_capacity(2 * p.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &[Real; 2]>> = if pass == 0 {
+            Box::new(p.iter())
+        } else {
+            Box::new(p.iter().rev())
+        };
+        for q in iter {
+            while hull.len() >= start + 2
+                && cross(&hull[hull.len() - 2], &hull[hull.len() - 1], q) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(*q);
+        }
+        hull.pop();
+    }
+    hull
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hull_of_square_with_inner_points() {
+        let pts = [
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [1.0, 1.0],
+            [0.0, 1.0],
+            [0.5, 0.5],
+            [0.2, 0.7],
+            [1.0, 0.5],
+        ];
+        let h = convex_hull(&pts);
+        assert_eq!(h, vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
+    }
+
+    #[test]
+    fn clustering_keeps_a_plane_a_plane() {
+        // A 1 m square grid of 0.01 m cells at z = 0.3, two triangles each.
+        let n = 101;
+        let mut vertices = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                vertices.push(Point3::new(f64::from(i) * 0.01, f64::from(j) * 0.01, 0.3));
+            }
+        }
+        let mut triangles = Vec::new();
+        for i in 0..n - 1 {
+            for j in 0..n - 1 {
+                let v = i * n + j;
+                triangles.push([v, v + n, v + 1]);
+                triangles.push([v + 1, v + n, v + n + 1]);
+            }
+        }
+        let mesh = TriMesh {
+            vertices,
+            triangles,
+        };
+        let (m, cell) = simplify(&mesh, 5000);
+        assert!(cell > 0.0 && m.triangles.len() <= 5000 && m.triangles.len() > 500);
+        assert!(m.vertices.iter().all(|p| (p.z - 0.3).abs() < 1e-12));
+        // Area is roughly kept (vertex means pull the border in by < a cell).
+        let area: Real = m
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| m.vertices[v as usize]);
+                0.5 * (b - a).cross(&(c - a)).norm()
+            })
+            .sum();
+        assert!(area > 0.8 && area <= 1.0 + 1e-9, "{area}");
+    }
+}

@@ -1,0 +1,189 @@
+//! The page: a title, a summary table, and sections of text and plots, with
+//! plotly.js embedded once in the head so the file works offline.
+
+use plotly::{Layout, Plot, Trace};
+use std::fmt::Write;
+
+/// One HTML page under construction.
+#[derive(Debug, Default)]
+pub struct Page {
+    title: String,
+    body: String,
+    plots: usize,
+}
+
+/// Escape text for HTML.
+pub fn escape(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+impl Page {
+    /// An empty page.
+    pub fn new(title: &str) -> Self {
+        Self {
+            title: title.to_owned(),
+            ..Self::default()
+        }
+    }
+
+    /// A section heading.
+    pub fn heading(&mut self, text: &str) {
+        let _ = writeln!(self.body, "<h2>{}</h2>", escape(text));
+    }
+
+    /// A paragraph of plain text.
+    pub fn paragraph(&mut self, text: &str) {
+        let _ = writeln!(self.body, "<p>{}</p>", escape(text));
+    }
+
+    /// A two-column table of keys and values.
+    pub fn table(&mut self, rows: &[(String, String)]) {
+        self.body.push_str("<table class=\"summary\">\n");
+        for (k, v) in rows {
+            let _ = writeln!(
+                self.body,
+                "<tr><th>{}</th><td>{}</td></tr>",
+                escape(k),
+                escape(v)
+            );
+        }
+        self.body.push_str("</table>\n");
+    }
+
+    /// A plot `height_px` tall, its div id `plot-<id>`; `class` lets the test
+    /// and the style find the 3-D views. Returns the div id.
+    pub fn plot(&mut self, id: &str, plot: &Plot, height_px: u32, class: &str) -> String {
+        let div = format!("plot-{id}");
+        let _ = writeln!(
+            self.body,
+            "<div class=\"plot {}\" style=\"height:{height_px}px\">{}</div>",
+            escape(class),
+            plot.to_inline_html(Some(&div))
+        );
+        self.plots += 1;
+        div
+    }
+
+    /// Number of plots on the page.
+    pub fn plots(&self) -> usize {
+        self.plots
+    }
+
+    /// The whole page.
+    pub fn finish(&self) -> String {
+        format!(
+            "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
+             <title>{title}</title>\n<style>{STYLE}</style>\n{js}</head>\n<body>\n\
+             <h1>{title}</h1>\n{body}</body>\n</html>\n",
+            title = escape(&self.title),
+            js = Plot::offline_js_sources(),
+            body = self.body,
+        )
+    }
+}
+
+const STYLE: &str = "body{font-family:sans-serif;margin:1.5em;max-width:1400px;color:#222}\
+table.summary{border-collapse:collapse;font-size:0.9em}\
+table.summary th,table.summary td{border:1px solid #ccc;padding:2px 8px;text-align:left}\
+table.summary th{background:#f3f3f3;font-weight:normal}\
+div.plot{width:100%;margin-bottom:1em}";
+
+/// A plot of `traces` with `layout`.
+pub fn plot_of(traces: Vec<Box<dyn Trace>>, layout: Layout) -> Plot {
+    let mut plot = Plot::new();
+    plot.add_traces(traces);
+    plot.set_layout(layout);
+    plot
+}
+
+/// Flatten a JSON summary into `key.sub: value` rows; arrays longer than
+/// `max_array` and objects named in `skip` are left out.
+pub fn flatten(
+    value: &serde_json::Value,
+    prefix: &str,
+    skip: &[&str],
+    max_array: usize,
+    out: &mut Vec<(String, String)>,
+) {
+    match value {
+        serde_json::Value::Object(map) => {
+            for (k, v) in map {
+                if skip.contains(&k.as_str()) {
+                    continue;
+                }
+                let key = if prefix.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{prefix}.{k}")
+                };
+                flatten(v, &key, skip, max_array, out);
+            }
+        }
+        serde_json::Value::Array(items) => {
+            if items.len() <= max_array && items.iter().all(|v| !v.is_object()) {
+                let cells: Vec<String> = items.iter().map(short).collect();
+                out.push((prefix.to_owned(), format!("[{}]", cells.join(", "))));
+            } else {
+                out.push((prefix.to_owned(), format!("{} entries", items.len())));
+            }
+        }
+        v => out.push((prefix.to_owned(), short(v))),
+    }
+}
+
+/// A JSON scalar as short text (numbers to 4 significant figures).
+fn short(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::Number(n) => match (n.as_i64(), n.as_f64()) {
+            (Some(i), _) => i.to_string(),
+            (None, Some(x)) if x != 0.0 && (x.abs() < 1e-3 || x.abs() >= 1e6) => format!("{x:.4e}"),
+            (None, Some(x)) => {
+                let digits = (3 - x.abs().log10().floor() as i32).clamp(0, 6);
+                format!("{x:.*}", usize::try_from(digits).unwrap_or(0))
+            }
+            _ => n.to_string(),
+        },
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn escapes_markup() {
+        assert_eq!(
+            escape("<a href='x'>&</a>"),
+            "&lt;a href=&#39;x&#39;&gt;&amp;&lt;/a&gt;"
+        );
+    }
+
+    #[test]
+    fn flattens_nested_summary() {
+        let v = serde_json::json!({"a": {"b": 0.123_456, "c": [1, 2]}, "d": "x", "big": [1, 2, 3], "skip": {"z": 1}});
+        let mut rows = Vec::new();
+        flatten(&v, "", &["skip"], 2, &mut rows);
+        assert_eq!(
+            rows,
+            vec![
+                ("a.b".into(), "0.1235".into()),
+                ("a.c".into(), "[1, 2]".into()),
+                ("big".into(), "3 entries".into()),
+                ("d".into(), "x".into()),
+            ]
+        );
+    }
+}
