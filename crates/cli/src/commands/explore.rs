@@ -152,6 +152,9 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     })?;
     run.write(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
+    // What `surveyor plan-blast --run` reads.
+    sim::blast::write_blast_inputs(&run, &loaded, &args.out)
+        .with_context(|| format!("writing {}", args.out.display()))?;
     // The maintenance plan over the map (Paul App. A): a nozzle pose for
     // every disc in A2 that has one, each segment's targets ordered by the GA.
     let blast = match (loaded.scenario.regions, run.discs.discs.is_empty()) {
