@@ -57,6 +57,11 @@ fn load_tool(path: &Path) -> Result<sim::blast::BlastTool> {
 }
 
 pub fn plan_blast(args: &PlanBlastArgs) -> Result<()> {
+    let mut config = BlastConfig::default();
+    if let Some(path) = &args.tool {
+        config.tool = load_tool(path)?;
+    }
+    config.ga.seed = args.seed;
     let scenario_path = args.run.join("scenario.toml");
     if !scenario_path.is_file() || !args.run.join(BLAST_INPUTS_FILE).is_file() {
         bail!(
@@ -75,11 +80,6 @@ pub fn plan_blast(args: &PlanBlastArgs) -> Result<()> {
         .build_robot()
         .with_context(|| format!("{}: building the robot", scenario_path.display()))?;
     let inputs = BlastInputs::load(&args.run)?;
-    let mut config = BlastConfig::default();
-    if let Some(path) = &args.tool {
-        config.tool = load_tool(path)?;
-    }
-    config.ga.seed = args.seed;
     let t = std::time::Instant::now();
     let plan = plan_blast_inputs(
         &inputs,
