@@ -11,6 +11,12 @@
 //! (no tilt room asked for). [`BlastPoses::measure`] re-measures a pose from
 //! the nozzle's forward kinematics and [`Safety::dist`], independently of the
 //! optimiser.
+//!
+//! The nozzle is part of the arm for `dist(Q)` (eq. A.4): the tool link's
+//! bounding ellipsoid is replaced by one enclosing both the old ellipsoid
+//! and the nozzle's capsule ([`BlastTool::robot_with_nozzle`]), so the
+//! safety rule of eq. 3.5, ellipsoids against occupied and unknown voxels,
+//! covers the nozzle too.
 
 use crate::{PlanConfig, PlanError, PoseConfig, PoseSelector, PoseSolution, Safety, Target};
 use geom::{Isometry3, Real};
@@ -21,7 +27,9 @@ use serde::{Deserialize, Serialize};
 /// A grit-blasting nozzle on the robot's tool link (its flange) and the
 /// limits of an effective blast (App. A.1, Fig. A.1). The thesis gives no
 /// values; the defaults are ours: a nozzle 0.15 m long on the flange axis,
-/// φ < 30°, a stream of 0.2–0.5 m, aim within 15 mm (Stage Two's `ρ_min`).
+/// φ < 30°, a stream of 0.2–0.5 m, aim within 15 mm (Stage Two's `ρ_min`),
+/// and a nozzle capsule of radius 30 mm (a blast nozzle with its hose
+/// fitting is a few centimetres thick).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct BlastTool {
@@ -40,6 +48,9 @@ pub struct BlastTool {
     /// Largest distance from where the stream hits to the disc centre,
     /// `ρ_min`, metres.
     pub rho_min_m: Real,
+    /// Radius of the nozzle's collision capsule, metres: the segment from
+    /// the tool frame's origin (the flange) to the nozzle tip, this thick.
+    pub nozzle_radius_m: Real,
 }
 
 impl Default for BlastTool {
@@ -51,6 +62,7 @@ impl Default for BlastTool {
             d_min_m: 0.2,
             d_max_m: 0.5,
             rho_min_m: 0.015,
+            nozzle_radius_m: 0.03,
         }
     }
 }
@@ -75,6 +87,13 @@ impl BlastTool {
                 format!("{:?} / {:?}", self.translation_m, self.rpy_deg),
             ));
         }
+        if !(self.nozzle_radius_m.is_finite() && self.nozzle_radius_m > 0.0) {
+            return Err(bad(
+                "tool.nozzle_radius_m",
+                "a positive finite radius",
+                self.nozzle_radius_m.to_string(),
+            ));
+        }
         // The limits are checked with the pose configuration they become.
         self.pose_config(&PoseConfig::default()).validate()
     }
@@ -89,6 +108,54 @@ impl BlastTool {
             link_from_scanner: link_from_tool
                 * geom::math::isometry_from_xyz_rpy(self.translation_m, deg),
         }
+    }
+
+    /// The nozzle's collision capsule in the tool link's frame: from the
+    /// tool frame's origin (the flange) to the nozzle tip, of radius
+    /// [`BlastTool::nozzle_radius_m`].
+    pub fn nozzle_capsule(&self, robot: &Robot) -> geom::Capsule {
+        let flange = robot.tool.1;
+        let tip = self.mount(robot).link_from_scanner;
+        geom::Capsule::new(
+            geom::Point3::from(flange.translation.vector),
+            geom::Point3::from(tip.translation.vector),
+            self.nozzle_radius_m,
+        )
+    }
+
+    /// `robot` carrying this nozzle: its "scanner" is the nozzle
+    /// ([`BlastTool::mount`]) and the tool link's bounding ellipsoid is the
+    /// smallest one enclosing both the link's old ellipsoid and the nozzle's
+    /// capsule (each represented by points whose convex hull contains it,
+    /// [`robot::bounds::capsule_sample_points`]; the old ellipsoid as the
+    /// image of a sampled unit sphere). Fails when no ellipsoid can be fitted.
+    pub fn robot_with_nozzle(&self, robot: &Robot) -> Result<Robot, PlanError> {
+        let mut out = robot.clone();
+        out.scanner = Some(self.mount(robot));
+        let link = robot.tool.0.index();
+        let capsule = self.nozzle_capsule(robot);
+        let mut points = robot::bounds::capsule_sample_points(&capsule);
+        if let Some(old) = robot.links.get(link).and_then(|l| l.ellipsoid) {
+            let origin = geom::Point3::origin();
+            let sphere =
+                robot::bounds::capsule_sample_points(&geom::Capsule::new(origin, origin, 1.0));
+            points.extend(
+                sphere
+                    .iter()
+                    .map(|p| old.pose * geom::Point3::from(p.coords.component_mul(&old.radii))),
+            );
+        }
+        let fitted =
+            robot::bounds::enclosing_ellipsoid(&points).ok_or_else(|| PlanError::Robot {
+                robot: robot.name.clone(),
+                message: "cannot fit an ellipsoid around the tool link and the nozzle".into(),
+            })?;
+        let slot = out.links.get_mut(link).ok_or_else(|| PlanError::Robot {
+            robot: robot.name.clone(),
+            message: format!("no tool link {link}"),
+        })?;
+        slot.ellipsoid = Some(fitted);
+        Ok(out)
     }
 
     /// `base`'s LM settings with this tool's limits and no tilt room.
@@ -129,9 +196,10 @@ pub struct BlastPoses {
 }
 
 impl BlastPoses {
-    /// The nozzle `tool` on `robot` (its scanner, if any, is replaced by the
-    /// nozzle), placed at `world_from_base`, with `plan`'s safety settings
-    /// and joint `weights`, and `pose`'s LM settings.
+    /// The nozzle `tool` on `robot` ([`BlastTool::robot_with_nozzle`]: its
+    /// scanner, if any, is replaced by the nozzle, and the nozzle is inside
+    /// the tool link's ellipsoid), placed at `world_from_base`, with `plan`'s
+    /// safety settings and joint `weights`, and `pose`'s LM settings.
     pub fn new(
         robot: &Robot,
         world_from_base: Isometry3,
@@ -141,14 +209,28 @@ impl BlastPoses {
         tool: BlastTool,
     ) -> Result<Self, PlanError> {
         tool.validate()?;
-        let mut robot = robot.clone();
-        robot.scanner = Some(tool.mount(&robot));
+        let robot = tool.robot_with_nozzle(robot)?;
         let config = tool.pose_config(pose);
         config.validate()?;
         Ok(Self {
             safety: Safety::new(robot, world_from_base, plan, weights)?,
             config,
             tool,
+        })
+    }
+
+    /// The same selection with `starts` LM runs at most
+    /// ([`PoseConfig::starts`]).
+    pub fn with_starts(&self, starts: usize) -> Result<Self, PlanError> {
+        let config = PoseConfig {
+            starts,
+            ..self.config.clone()
+        };
+        config.validate()?;
+        Ok(Self {
+            safety: self.safety.clone(),
+            config,
+            tool: self.tool,
         })
     }
 

@@ -22,6 +22,7 @@ blast_plan.json and blast_plan.csv (Paul App. A: a nozzle pose for every disc in
 within the tool's angle, stream length and aim limits and dist(Q) > 1 on the final map, the discs \
 without one listed, each segment's targets ordered by the GA, with the nearest-neighbour and 2-opt \
 costs beside it), \
+scenario.toml and blast_inputs.json (what `surveyor plan-blast --run` reads), \
 checkpoint.json, rewritten after every viewpoint of either stage: after an interruption \
 (Ctrl-C, kill, power), the same command with --resume continues the run, and with --no-timings \
 its outputs are byte-identical to an uninterrupted run's.
@@ -152,11 +153,11 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     })?;
     run.write(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
-    // The scenario as run (with any --robot), its paths made absolute: what
-    // `surveyor report` and `plan-blast` rebuild the robot and scene from.
-    let scenario_toml = args.out.join("scenario.toml");
-    std::fs::write(&scenario_toml, loaded.standalone().to_toml()?)
-        .with_context(|| format!("writing {}", scenario_toml.display()))?;
+    // The scenario as run (with any --robot, its paths made absolute:
+    // `scenario.toml`) and the map products `plan-blast --run` reads; the
+    // report rebuilds the robot and scene from the same scenario file.
+    sim::blast::write_blast_inputs(&run, &loaded, &args.out)
+        .with_context(|| format!("writing {}", args.out.display()))?;
     // The maintenance plan over the map (Paul App. A): a nozzle pose for
     // every disc in A2 that has one, each segment's targets ordered by the GA.
     let blast = match (loaded.scenario.regions, run.discs.discs.is_empty()) {

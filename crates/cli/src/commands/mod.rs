@@ -1,5 +1,6 @@
 //! Argument definitions and the one library call behind each command.
 
+mod blast;
 mod explore;
 mod follow;
 mod maps;
@@ -62,6 +63,9 @@ enum Command {
     /// the voxel map and the arm's configuration space, moving only through
     /// known free space; the viewpoints, cloud, mesh and a run summary.
     Explore(explore::ExploreArgs),
+    /// The grit-blasting plan over an explore run's map (Paul App. A): a nozzle
+    /// pose per disc in A2, each segment's targets ordered by the GA.
+    PlanBlast(blast::PlanBlastArgs),
     /// Write RUN_DIR/report.html: one self-contained page (works offline)
     /// with a WebGL 3-D view of the run and the plots of its series.
     Report(ReportArgs),
@@ -229,6 +233,7 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::Follow(a) => follow::follow(&a),
         Command::Explore(a) => explore::explore(&a),
+        Command::PlanBlast(a) => blast::plan_blast(&a),
     }
 }
 

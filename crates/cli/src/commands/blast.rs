@@ -1,0 +1,107 @@
+//! `surveyor plan-blast`: the grit-blasting plan (Paul App. A) over the map of
+//! a `surveyor explore` run folder ([`sim::blast`]).
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use sim::Scenario;
+use sim::blast::{BLAST_INPUTS_FILE, BlastConfig, BlastInputs, plan_blast_inputs};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Reads, from the --run folder written by `surveyor explore`: scenario.toml (the robot, its \
+placement and the region A2) and blast_inputs.json (the discs, their segments and start joints, \
+and the planning grid at the end of the run). Writes blast_plan.json and blast_plan.csv into \
+--out: a nozzle pose for every disc in A2 that has one (within the tool's angle, stream length \
+and aim limits, dist(Q) > 1 against the run's occupied and unknown voxels), the discs without \
+one listed, each segment's targets ordered by the GA with the nearest-neighbour and 2-opt costs \
+beside it. With the default tool and seed the plan is the one `surveyor explore` wrote.
+
+--tool FILE.toml holds any of the BlastTool fields (the rest keep their defaults):
+  translation_m = [0.0, 0.0, 0.15]   # nozzle tip on the flange, metres
+  rpy_deg = [0.0, 0.0, 0.0]          # nozzle orientation on the flange
+  phi_max_deg = 30.0                 # largest angle between stream and surface normal
+  d_min_m = 0.2                      # shortest effective stream
+  d_max_m = 0.5                      # longest effective stream
+  rho_min_m = 0.015                  # largest miss of the disc centre
+  nozzle_radius_m = 0.03             # the nozzle's collision capsule")]
+pub struct PlanBlastArgs {
+    /// A folder written by `surveyor explore`.
+    #[arg(long)]
+    run: PathBuf,
+    /// The nozzle and its limits (TOML; default: the built-in tool).
+    #[arg(long)]
+    tool: Option<PathBuf>,
+    /// Seed of the GA (each segment mixes in its index).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// The tool of a `--tool` file.
+fn load_tool(path: &Path) -> Result<sim::blast::BlastTool> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("--tool {}: cannot read the file", path.display()))?;
+    let tool: sim::blast::BlastTool = toml::from_str(&text).map_err(|e| {
+        anyhow::anyhow!(
+            "--tool {}: {} (expected the fields of a blast tool; see `surveyor plan-blast --help`)",
+            path.display(),
+            e.to_string().trim_end()
+        )
+    })?;
+    tool.validate()
+        .with_context(|| format!("--tool {}", path.display()))?;
+    Ok(tool)
+}
+
+pub fn plan_blast(args: &PlanBlastArgs) -> Result<()> {
+    let mut config = BlastConfig::default();
+    if let Some(path) = &args.tool {
+        config.tool = load_tool(path)?;
+    }
+    config.ga.seed = args.seed;
+    let scenario_path = args.run.join("scenario.toml");
+    if !scenario_path.is_file() || !args.run.join(BLAST_INPUTS_FILE).is_file() {
+        bail!(
+            "--run {}: expected scenario.toml and {BLAST_INPUTS_FILE}, as `surveyor explore --out DIR` writes them",
+            args.run.display()
+        );
+    }
+    let loaded = Scenario::load(&scenario_path.display().to_string())?;
+    let Some(regions) = loaded.scenario.regions else {
+        bail!(
+            "{}: the scenario has no regions (A2 is where discs are blasted)",
+            scenario_path.display()
+        );
+    };
+    let robot = loaded
+        .build_robot()
+        .with_context(|| format!("{}: building the robot", scenario_path.display()))?;
+    let inputs = BlastInputs::load(&args.run)?;
+    let t = std::time::Instant::now();
+    let plan = plan_blast_inputs(
+        &inputs,
+        &robot,
+        loaded.scenario.world_from_base(),
+        &regions.a2,
+        &config,
+    )?;
+    let seconds = t.elapsed().as_secs_f64();
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    plan.write(&args.out)?;
+    let cost = |f: fn(&sim::blast::SegmentPlan) -> f64| plan.segments.iter().map(f).sum::<f64>();
+    say!(
+        "blast plan: a nozzle pose for {} of the {} discs in A2, {} segments; path cost (eq. A.9) nearest neighbour {:.1}, 2-opt {:.1}, GA {:.1}; {seconds:.1} s; outputs in {}",
+        plan.discs_with_pose,
+        plan.discs_in_scope,
+        plan.segments.len(),
+        cost(|s| s.cost_nearest_neighbour),
+        cost(|s| s.cost_two_opt),
+        cost(|s| s.cost_ga),
+        args.out.display()
+    )?;
+    Ok(())
+}
