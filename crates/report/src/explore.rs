@@ -18,7 +18,7 @@ pub const MAX_CLOUD_POINTS: usize = 60_000;
 /// The TSDF mesh is simplified to at most this many triangles for display.
 pub const MAX_MESH_TRIANGLES: usize = 80_000;
 /// Length of the drawn scanner fans, metres.
-const FAN_M: Real = 0.2;
+const FAN_M: Real = 0.3;
 
 /// A colour per material name (the five of SPEC §3.1; others cycle).
 pub fn material_colour(name: &str, index: usize) -> &'static str {
@@ -135,7 +135,7 @@ fn view_3d(
                 cell * 1000.0
             ));
         }
-        traces.push(mesh_trace(&shown, "TSDF mesh", "#b0c4de", 1.0));
+        traces.push(mesh_trace(&shown, "TSDF mesh", "#b0c4de", Visible::True));
     }
     let discs_path = dir.join("discs.csv");
     if discs_path.exists() {
@@ -177,14 +177,14 @@ fn mesh_trace(
     mesh: &geom::TriMesh,
     name: &str,
     colour: &'static str,
-    opacity: f64,
+    visible: Visible,
 ) -> Box<dyn Trace> {
     let [x, y, z] = columns(&mesh.vertices);
     let idx = |c: usize| -> Vec<usize> { mesh.triangles.iter().map(|t| t[c] as usize).collect() };
     Mesh3D::new(x, y, z, Some(idx(0)), Some(idx(1)), Some(idx(2)))
         .name(name)
         .color(colour)
-        .opacity(opacity)
+        .visible(visible)
         .show_legend(true)
         .flat_shading(true)
 }
@@ -316,7 +316,13 @@ fn disc_traces(discs: &Table, traces: &mut Vec<Box<dyn Trace>>) -> Result<(), Re
                 "#c8c8c8",
             ),
         };
-        traces.push(mesh_trace(&mesh, &name, colour, 1.0));
+        // Discs with no material information start hidden: the mesh shows there.
+        let visible = if g.is_none() {
+            Visible::LegendOnly
+        } else {
+            Visible::True
+        };
+        traces.push(mesh_trace(&mesh, &name, colour, visible));
     }
     let segments = segment.iter().copied().max().map_or(0, |m| m + 1);
     let mut outlines = Polylines::default();

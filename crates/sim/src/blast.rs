@@ -375,9 +375,11 @@ pub fn write_blast_inputs(
     dir: &std::path::Path,
 ) -> Result<(), SimError> {
     let path = dir.join("scenario.toml");
-    std::fs::write(&path, loaded.standalone().to_toml()?).map_err(|e| SimError::InvalidArgument {
-        what: path.display().to_string(),
-        message: format!("cannot write: {e}"),
+    std::fs::write(&path, loaded.standalone().to_toml()?).map_err(|e| {
+        SimError::InvalidArgument {
+            what: path.display().to_string(),
+            message: format!("cannot write: {e}"),
+        }
     })?;
     BlastInputs::of_run(run)?.save(dir)
 }

@@ -22,7 +22,10 @@ blast_plan.json and blast_plan.csv (Paul App. A: a nozzle pose for every disc in
 within the tool's angle, stream length and aim limits and dist(Q) > 1 on the final map, the discs \
 without one listed, each segment's targets ordered by the GA, with the nearest-neighbour and 2-opt \
 costs beside it), \
-scenario.toml and blast_inputs.json (what `surveyor plan-blast --run` reads), \
+scenario.toml and blast_inputs.json (what `surveyor plan-blast --run` reads), candidates.csv \
+(f1-f4 of every candidate of every Stage One decision, on the Pareto front or not, chosen or \
+not), path.csv (the executed motions' waypoints), report.html (`surveyor report`: one page that \
+opens offline, a WebGL 3-D view of the run and its plots), \
 checkpoint.json, rewritten after every viewpoint of either stage: after an interruption \
 (Ctrl-C, kill, power), the same command with --resume continues the run, and with --no-timings \
 its outputs are byte-identical to an uninterrupted run's.
