@@ -101,28 +101,23 @@ fn plan_blast_on_an_explore_run_gives_the_plan_explore_wrote() {
         read(out.join("blast_plan.csv")),
         read(run.join("blast_plan.csv"))
     );
-    // Another seed reorders deterministically; a tool file changes the
-    // limits the plan records.
+    // A tool file changes the limits the plan records; --seed is taken
+    // (determinism per seed is checked on the library, sim's blast test).
     let tool = dir.path().join("tool.toml");
     std::fs::write(&tool, "phi_max_deg = 25.0\n").unwrap();
-    let t = tool.to_str().unwrap();
-    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
-    for p in [&a, &b] {
-        ok(&[
-            "plan-blast",
-            "--run",
-            r,
-            "--tool",
-            t,
-            "--seed",
-            "5",
-            "--out",
-            p.to_str().unwrap(),
-        ]);
-    }
-    let seeded = read(a.join("blast_plan.json"));
-    assert_eq!(seeded, read(b.join("blast_plan.json")));
-    let v: serde_json::Value = serde_json::from_str(&seeded).unwrap();
+    let a = dir.path().join("a");
+    ok(&[
+        "plan-blast",
+        "--run",
+        r,
+        "--tool",
+        tool.to_str().unwrap(),
+        "--seed",
+        "5",
+        "--out",
+        a.to_str().unwrap(),
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&read(a.join("blast_plan.json"))).unwrap();
     assert_eq!(v["tool"]["phi_max_deg"].as_f64(), Some(25.0));
     // A damaged inputs file is named, not a panic.
     std::fs::write(run.join("blast_inputs.json"), "{\"format\": 1").unwrap();

@@ -346,8 +346,10 @@ fn roof_or_web(scene: &scene::Scene, disc: &map::Disc) -> bool {
 /// disc's plane) and by `dist(Q)` on the run's grid with the nozzle's
 /// ellipsoid (and without it); in every segment the GA's order costs no
 /// more than 2-opt's, which costs no more than nearest neighbour's, and over
-/// the run the GA is strictly cheaper than nearest neighbour; the same seed
-/// gives the same plan (two plans compared).
+/// the run the GA is strictly cheaper than nearest neighbour. (That the same
+/// seed gives the same plan is checked through the binary: `plan-blast` on
+/// the run folder reproduces `explore`'s plan byte for byte, cli's
+/// `plan_blast` test.)
 fn check_blast_plan(loaded: &sim::LoadedScenario, run: &sim::explore_run::ExploreRun) {
     use sim::blast::{BlastConfig, BlastInputs, plan_blast};
     let robot = loaded.build_robot().unwrap();
@@ -357,7 +359,6 @@ fn check_blast_plan(loaded: &sim::LoadedScenario, run: &sim::explore_run::Explor
     let t = std::time::Instant::now();
     let plan = plan_blast(run, &robot, wfb, &a2, &config).unwrap();
     let seconds = t.elapsed().as_secs_f64();
-    assert_eq!(plan, plan_blast(run, &robot, wfb, &a2, &config).unwrap());
     let nn: f64 = plan.segments.iter().map(|s| s.cost_nearest_neighbour).sum();
     let opt: f64 = plan.segments.iter().map(|s| s.cost_two_opt).sum();
     let ga: f64 = plan.segments.iter().map(|s| s.cost_ga).sum();
