@@ -338,6 +338,36 @@ pub fn can_sight_in_polygon(a: &Point2, b: &Point2, poly: &[Point2], tol: Real) 
     can_sight(a, b, (0..n).map(|i| (&poly[i], &poly[(i + 1) % n])), tol)
 }
 
+/// Convex hull (Andrew's monotone chain), anticlockwise from the lowest-x
+/// (then lowest-y) point, without collinear vertices or a repeated first
+/// vertex. Fewer than three distinct points come back sorted.
+pub fn convex_hull(mut pts: Vec<Point2>) -> Vec<Point2> {
+    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    pts.dedup();
+    if pts.len() < 3 {
+        return pts;
+    }
+    let mut hull: Vec<Point2> = Vec::with_capacity(2 * pts.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &Point2>> = if pass == 0 {
+            Box::new(pts.iter())
+        } else {
+            Box::new(pts.iter().rev())
+        };
+        for p in iter {
+            while hull.len() >= start + 2
+                && orient2d(&hull[hull.len() - 2], &hull[hull.len() - 1], p) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(*p);
+        }
+        hull.pop();
+    }
+    hull
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -477,5 +507,23 @@ mod tests {
         }
         // A segment lying along an edge but beyond its ends crosses (overlap).
         assert!(!can_sight_in_polygon(&p(-1.0, 0.0), &p(0.5, 0.0), &l, 1e-9));
+    }
+
+    #[test]
+    fn convex_hull_of_a_square_with_inner_and_edge_points() {
+        let pts = [
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (0.0, 1.0),
+            (0.5, 0.5),
+            (0.2, 0.7),
+            (1.0, 0.5),
+        ]
+        .map(|(x, y)| Point2::new(x, y));
+        let h = super::convex_hull(pts.to_vec());
+        let want = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(|(x, y)| Point2::new(x, y));
+        assert_eq!(h, want.to_vec());
+        assert!(super::is_anticlockwise(&h));
     }
 }

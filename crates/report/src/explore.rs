@@ -5,7 +5,7 @@
 
 use crate::ReportError;
 use crate::data::{Table, read_json};
-use crate::geometry::{Polylines, columns, convex_hull, plane_basis, simplify, stride_for};
+use crate::geometry::{Polylines, columns, plane_basis, simplify, stride_for};
 use crate::page::{Page, flatten, plot_of};
 use geom::{Isometry3, Point3, Real, Vector3};
 use plotly::common::{Line, Marker, Mode, Title, Visible};
@@ -337,10 +337,10 @@ fn disc_traces(discs: &Table, traces: &mut Vec<Box<dyn Trace>>) -> Result<(), Re
         };
         let origin = centre(members[0]);
         let (u, v) = plane_basis(&mean_n);
-        let flat: Vec<[Real; 2]> = members
+        let flat: Vec<geom::Point2> = members
             .iter()
             .flat_map(|&i| rim(i))
-            .map(|p| [(p - origin).dot(&u), (p - origin).dot(&v)])
+            .map(|p| geom::Point2::new((p - origin).dot(&u), (p - origin).dot(&v)))
             .collect();
         let offset = members
             .iter()
@@ -348,9 +348,9 @@ fn disc_traces(discs: &Table, traces: &mut Vec<Box<dyn Trace>>) -> Result<(), Re
             .sum::<Real>()
             / members.len() as Real
             + 0.004;
-        let mut ring: Vec<Point3> = convex_hull(&flat)
+        let mut ring: Vec<Point3> = geom::polygon2::convex_hull(flat)
             .iter()
-            .map(|q| origin + q[0] * u + q[1] * v + offset * mean_n)
+            .map(|q| origin + q.x * u + q.y * v + offset * mean_n)
             .collect();
         if let Some(first) = ring.first().copied() {
             ring.push(first);

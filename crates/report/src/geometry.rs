@@ -127,57 +127,9 @@ pub fn plane_basis(n: &Vector3) -> (Vector3, Vector3) {
     (u, n.cross(&u))
 }
 
-/// The convex hull (anticlockwise, first point not repeated) of 2-D points,
-/// by Andrew's monotone chain.
-pub fn convex_hull(points: &[[Real; 2]]) -> Vec<[Real; 2]> {
-    let mut p = points.to_vec();
-    p.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
-    p.dedup();
-    if p.len() < 3 {
-        return p;
-    }
-    let cross = |o: &[Real; 2], a: &[Real; 2], b: &[Real; 2]| {
-        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-    };
-    let mut hull: Vec<[Real; 2]> = Vec::with_capacity(2 * p.len());
-    for pass in 0..2 {
-        let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &[Real; 2]>> = if pass == 0 {
-            Box::new(p.iter())
-        } else {
-            Box::new(p.iter().rev())
-        };
-        for q in iter {
-            while hull.len() >= start + 2
-                && cross(&hull[hull.len() - 2], &hull[hull.len() - 1], q) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(*q);
-        }
-        hull.pop();
-    }
-    hull
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn hull_of_square_with_inner_points() {
-        let pts = [
-            [0.0, 0.0],
-            [1.0, 0.0],
-            [1.0, 1.0],
-            [0.0, 1.0],
-            [0.5, 0.5],
-            [0.2, 0.7],
-            [1.0, 0.5],
-        ];
-        let h = convex_hull(&pts);
-        assert_eq!(h, vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
-    }
 
     #[test]
     fn clustering_keeps_a_plane_a_plane() {

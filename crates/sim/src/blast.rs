@@ -692,6 +692,21 @@ fn robot_nozzle(
 }
 
 impl BlastPlan {
+    /// One line: discs with a pose, segments, and the summed path cost
+    /// (eq. A.9) of the nearest-neighbour, 2-opt and GA orders.
+    pub fn summary(&self) -> String {
+        let cost = |f: fn(&SegmentPlan) -> Real| self.segments.iter().map(f).sum::<Real>();
+        format!(
+            "blast plan: a nozzle pose for {} of the {} discs in A2, {} segments; path cost (eq. A.9) nearest neighbour {:.1}, 2-opt {:.1}, GA {:.1}",
+            self.discs_with_pose,
+            self.discs_in_scope,
+            self.segments.len(),
+            cost(|s| s.cost_nearest_neighbour),
+            cost(|s| s.cost_two_opt),
+            cost(|s| s.cost_ga)
+        )
+    }
+
     /// `blast_plan.csv`: one row per target, segments in order and the
     /// targets of each in the GA's order.
     pub fn csv(&self) -> String {

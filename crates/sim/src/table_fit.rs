@@ -36,38 +36,6 @@ pub struct TableFit {
     pub points: usize,
 }
 
-fn cross2(o: &Point2, a: &Point2, b: &Point2) -> Real {
-    (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x)
-}
-
-/// Convex hull (Andrew's monotone chain), anticlockwise, no collinear vertices.
-fn convex_hull(mut pts: Vec<Point2>) -> Vec<Point2> {
-    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    pts.dedup();
-    if pts.len() < 3 {
-        return pts;
-    }
-    let mut hull: Vec<Point2> = Vec::with_capacity(2 * pts.len());
-    for pass in 0..2 {
-        let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &Point2>> = if pass == 0 {
-            Box::new(pts.iter())
-        } else {
-            Box::new(pts.iter().rev())
-        };
-        for p in iter {
-            while hull.len() >= start + 2
-                && cross2(&hull[hull.len() - 2], &hull[hull.len() - 1], p) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(*p);
-        }
-        hull.pop();
-    }
-    hull
-}
-
 /// Fit the table plane to `points` seen from `sensor` (both in the scan's
 /// frame); see the [module documentation](self). `min_edge_m` thins the hull.
 ///
@@ -123,7 +91,7 @@ pub fn fit_table(
     dist.sort_by(Real::total_cmp);
     #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
     let p95_m = dist[((0.95 * dist.len() as Real).ceil() as usize).clamp(1, dist.len()) - 1];
-    let hull = convex_hull(
+    let hull = geom::polygon2::convex_hull(
         points
             .iter()
             .map(|p| {

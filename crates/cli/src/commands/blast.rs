@@ -92,16 +92,11 @@ pub fn plan_blast(args: &PlanBlastArgs) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     plan.write(&args.out)?;
-    let cost = |f: fn(&sim::blast::SegmentPlan) -> f64| plan.segments.iter().map(f).sum::<f64>();
     say!(
-        "blast plan: a nozzle pose for {} of the {} discs in A2, {} segments; path cost (eq. A.9) nearest neighbour {:.1}, 2-opt {:.1}, GA {:.1}; {seconds:.1} s; outputs in {}",
-        plan.discs_with_pose,
-        plan.discs_in_scope,
-        plan.segments.len(),
-        cost(|s| s.cost_nearest_neighbour),
-        cost(|s| s.cost_two_opt),
-        cost(|s| s.cost_ga),
+        "{}; {seconds:.1} s; outputs in {}",
+        plan.summary(),
         args.out.display()
     )?;
+
     Ok(())
 }

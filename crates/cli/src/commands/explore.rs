@@ -214,17 +214,7 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         }
     }
     if let Some(plan) = &blast {
-        let cost =
-            |f: fn(&sim::blast::SegmentPlan) -> f64| plan.segments.iter().map(f).sum::<f64>();
-        println!(
-            "blast plan: a nozzle pose for {} of the {} discs in A2, {} segments; path cost (eq. A.9) nearest neighbour {:.1}, 2-opt {:.1}, GA {:.1}",
-            plan.discs_with_pose,
-            plan.discs_in_scope,
-            plan.segments.len(),
-            cost(|s| s.cost_nearest_neighbour),
-            cost(|s| s.cost_two_opt),
-            cost(|s| s.cost_ga)
-        );
+        println!("{}", plan.summary());
     }
     let report = report::write(&args.out)?;
     println!("report: {}", report.display());
