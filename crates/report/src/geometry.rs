@@ -160,9 +160,150 @@ pub fn convex_hull(points: &[[Real; 2]]) -> Vec<[Real; 2]> {
     hull
 }
 
+/// Twice the signed area of a 2-D polygon (positive when anticlockwise).
+pub fn signed_area_2x(poly: &[[Real; 2]]) -> Real {
+    let n = poly.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (poly[i], poly[(i + 1) % n]);
+            a[0] * b[1] - b[0] * a[1]
+        })
+        .sum()
+}
+
+/// Triangles (indices into `poly`, anticlockwise) covering a simple 2-D
+/// polygon of either orientation, by ear clipping. A vertex in line with
+/// its neighbours is dropped without a triangle (a model perimeter has many
+/// such vertices); if no ear is found (a numerically degenerate or
+/// self-touching remainder) the rest is fanned from its first vertex.
+pub fn triangulate(poly: &[[Real; 2]]) -> Vec<[usize; 3]> {
+    let cross = |o: [Real; 2], a: [Real; 2], b: [Real; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    let mut idx: Vec<usize> = (0..poly.len()).collect();
+    if signed_area_2x(poly) < 0.0 {
+        idx.reverse();
+    }
+    // Tolerance on twice a triangle's area, relative to the polygon's size.
+    let scale = poly
+        .iter()
+        .flat_map(|p| p.iter().map(|v| v.abs()))
+        .fold(0.0, Real::max)
+        .max(1e-9);
+    let eps = 1e-12 * scale * scale;
+    let mut tris = Vec::with_capacity(poly.len().saturating_sub(2));
+    while idx.len() > 3 {
+        let m = idx.len();
+        let mut progress = false;
+        for k in 0..m {
+            let (a, b, c) = (idx[(k + m - 1) % m], idx[k], idx[(k + 1) % m]);
+            let turn = cross(poly[a], poly[b], poly[c]);
+            if turn.abs() <= eps {
+                idx.remove(k);
+                progress = true;
+                break;
+            }
+            if turn < 0.0 {
+                continue;
+            }
+            let blocked = idx.iter().any(|&o| {
+                let q = poly[o];
+                o != a
+                    && o != b
+                    && o != c
+                    && q != poly[a]
+                    && q != poly[b]
+                    && q != poly[c]
+                    && cross(poly[a], poly[b], q) >= -eps
+                    && cross(poly[b], poly[c], q) >= -eps
+                    && cross(poly[c], poly[a], q) >= -eps
+            });
+            if !blocked {
+                tris.push([a, b, c]);
+                idx.remove(k);
+                progress = true;
+                break;
+            }
+        }
+        if !progress {
+            for k in 1..idx.len() - 1 {
+                tris.push([idx[0], idx[k], idx[k + 1]]);
+            }
+            return tris;
+        }
+    }
+    if idx.len() == 3 && cross(poly[idx[0]], poly[idx[1]], poly[idx[2]]).abs() > eps {
+        tris.push([idx[0], idx[1], idx[2]]);
+    }
+    tris
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Crossing-number point-in-polygon test.
+    fn inside(poly: &[[Real; 2]], p: [Real; 2]) -> bool {
+        let n = poly.len();
+        let mut odd = false;
+        for i in 0..n {
+            let (a, b) = (poly[i], poly[(i + 1) % n]);
+            if (a[1] > p[1]) != (b[1] > p[1])
+                && p[0] < a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
+            {
+                odd = !odd;
+            }
+        }
+        odd
+    }
+
+    fn area_of(poly: &[[Real; 2]], tris: &[[usize; 3]]) -> Real {
+        tris.iter()
+            .map(|t| {
+                let tri = [poly[t[0]], poly[t[1]], poly[t[2]]];
+                let a = signed_area_2x(&tri);
+                assert!(a > 0.0, "a triangle is not anticlockwise: {t:?}");
+                0.5 * a
+            })
+            .sum()
+    }
+
+    #[test]
+    fn triangles_cover_concave_polygons_exactly() {
+        // An L with collinear vertices along its edges, a comb (three deep
+        // notches), and both again clockwise.
+        let l = vec![
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [2.0, 0.0],
+            [2.0, 1.0],
+            [1.0, 1.0],
+            [1.0, 2.0],
+            [1.0, 3.0],
+            [0.0, 3.0],
+            [0.0, 1.5],
+        ];
+        let mut comb = vec![[0.0, 0.0], [7.0, 0.0], [7.0, 3.0]];
+        for t in (0..3).rev() {
+            let x = 2.0 * f64::from(t) + 1.0;
+            comb.extend([[x + 1.0, 3.0], [x + 1.0, 0.5], [x, 0.5], [x, 3.0]]);
+        }
+        comb.push([0.0, 3.0]);
+        for (poly, area) in [(l, 4.0), (comb, 21.0 - 3.0 * 2.5)] {
+            assert!((0.5 * signed_area_2x(&poly) - area).abs() < 1e-12);
+            let tris = triangulate(&poly);
+            assert!((area_of(&poly, &tris) - area).abs() < 1e-9, "{tris:?}");
+            // Every triangle lies inside: its centroid is not in a notch.
+            for t in &tris {
+                let c = [0, 1].map(|k| t.iter().map(|&v| poly[v][k]).sum::<Real>() / 3.0);
+                assert!(inside(&poly, c), "{t:?}");
+            }
+            let mut rev = poly.clone();
+            rev.reverse();
+            let tris = triangulate(&rev);
+            assert!((area_of(&rev, &tris) - area).abs() < 1e-9, "{tris:?}");
+        }
+    }
 
     #[test]
     fn hull_of_square_with_inner_points() {
