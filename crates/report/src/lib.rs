@@ -2,7 +2,7 @@
 //! 3-D view and the plots the theses draw, made with plotly.js embedded in
 //! the page (no network request of any kind).
 //!
-//! [`write`] looks at the folder: a `surveyor explore` run (`viewpoints.csv`)
+//! [`write()`] looks at the folder: a `surveyor explore` run (`viewpoints.csv`)
 //! gets the view of Paul ch. 6; a `surveyor follow` run (`steps.csv`) the
 //! view of Pudney's Figs 44–47.
 
