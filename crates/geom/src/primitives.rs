@@ -208,8 +208,16 @@ pub fn cylinder(
 }
 
 /// Ear-clipping triangulation of a simple anticlockwise polygon; returns vertex
-/// index triples, anticlockwise.
+/// index triples, anticlockwise. A vertex in line with its neighbours is
+/// dropped without a triangle (perimeters often carry such vertices).
 pub fn triangulate(poly: &[Point2]) -> Vec<[u32; 3]> {
+    // Zero for twice a triangle's area, relative to the polygon's size.
+    let scale = poly
+        .iter()
+        .map(|p| p.x.abs().max(p.y.abs()))
+        .fold(0.0, Real::max)
+        .max(1e-9);
+    let eps = 1e-12 * scale * scale;
     let mut idx: Vec<u32> = (0..poly.len() as u32).collect();
     let mut out = Vec::with_capacity(poly.len().saturating_sub(2));
     let mut guard = 0usize;
@@ -220,8 +228,14 @@ pub fn triangulate(poly: &[Point2]) -> Vec<[u32; 3]> {
         for k in 0..n {
             let (ia, ib, ic) = (idx[(k + n - 1) % n], idx[k], idx[(k + 1) % n]);
             let (a, b, c) = (&poly[ia as usize], &poly[ib as usize], &poly[ic as usize]);
-            if orient2d(a, b, c) <= 0.0 {
-                continue; // reflex or degenerate corner
+            let turn = orient2d(a, b, c);
+            if turn.abs() <= eps {
+                idx.remove(k); // in line with its neighbours
+                clipped = true;
+                break;
+            }
+            if turn < 0.0 {
+                continue; // reflex corner
             }
             let blocked = idx.iter().any(|&j| {
                 if j == ia || j == ib || j == ic {
@@ -243,7 +257,11 @@ pub fn triangulate(poly: &[Point2]) -> Vec<[u32; 3]> {
     }
     if idx.len() >= 3 {
         for k in 1..idx.len() - 1 {
-            out.push([idx[0], idx[k], idx[k + 1]]);
+            let t = [idx[0], idx[k], idx[k + 1]];
+            let [a, b, c] = t.map(|i| &poly[i as usize]);
+            if orient2d(a, b, c).abs() > eps {
+                out.push(t);
+            }
         }
     }
     out

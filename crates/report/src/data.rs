@@ -114,6 +114,12 @@ impl Table {
             .collect()
     }
 
+    /// Column `name` as text.
+    pub fn text(&self, name: &str) -> Result<Vec<&str>, ReportError> {
+        let c = self.index(name)?;
+        Ok(self.rows.iter().map(|row| row[c].trim()).collect())
+    }
+
     /// Column `name` as non-negative integers.
     pub fn indices(&self, name: &str) -> Result<Vec<usize>, ReportError> {
         let c = self.index(name)?;

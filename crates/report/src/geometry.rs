@@ -127,9 +127,99 @@ pub fn plane_basis(n: &Vector3) -> (Vector3, Vector3) {
     (u, n.cross(&u))
 }
 
+/// Twice the signed area of a 2-D polygon (positive when anticlockwise).
+pub fn signed_area_2x(poly: &[[Real; 2]]) -> Real {
+    let n = poly.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (poly[i], poly[(i + 1) % n]);
+            a[0] * b[1] - b[0] * a[1]
+        })
+        .sum()
+}
+
+/// Triangles (indices into `poly`, anticlockwise) covering a simple 2-D
+/// polygon of either orientation: `geom`'s ear clipping on the polygon made
+/// anticlockwise.
+pub fn triangulate(poly: &[[Real; 2]]) -> Vec<[usize; 3]> {
+    let n = poly.len();
+    let reversed = signed_area_2x(poly) < 0.0;
+    let at = |k: usize| if reversed { n - 1 - k } else { k };
+    let pts: Vec<geom::Point2> = (0..n)
+        .map(|k| geom::Point2::new(poly[at(k)][0], poly[at(k)][1]))
+        .collect();
+    geom::primitives::triangulate(&pts)
+        .into_iter()
+        .map(|t| t.map(|k| at(k as usize)))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Crossing-number point-in-polygon test.
+    fn inside(poly: &[[Real; 2]], p: [Real; 2]) -> bool {
+        let n = poly.len();
+        let mut odd = false;
+        for i in 0..n {
+            let (a, b) = (poly[i], poly[(i + 1) % n]);
+            if (a[1] > p[1]) != (b[1] > p[1])
+                && p[0] < a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
+            {
+                odd = !odd;
+            }
+        }
+        odd
+    }
+
+    fn area_of(poly: &[[Real; 2]], tris: &[[usize; 3]]) -> Real {
+        tris.iter()
+            .map(|t| {
+                let tri = [poly[t[0]], poly[t[1]], poly[t[2]]];
+                let a = signed_area_2x(&tri);
+                assert!(a > 0.0, "a triangle is not anticlockwise: {t:?}");
+                0.5 * a
+            })
+            .sum()
+    }
+
+    #[test]
+    fn triangles_cover_concave_polygons_exactly() {
+        // An L with collinear vertices along its edges, a comb (three deep
+        // notches), and both again clockwise.
+        let l = vec![
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [2.0, 0.0],
+            [2.0, 1.0],
+            [1.0, 1.0],
+            [1.0, 2.0],
+            [1.0, 3.0],
+            [0.0, 3.0],
+            [0.0, 1.5],
+        ];
+        let mut comb = vec![[0.0, 0.0], [7.0, 0.0], [7.0, 3.0]];
+        for t in (0..3).rev() {
+            let x = 2.0 * f64::from(t) + 1.0;
+            comb.extend([[x + 1.0, 3.0], [x + 1.0, 0.5], [x, 0.5], [x, 3.0]]);
+        }
+        comb.push([0.0, 3.0]);
+        for (poly, area) in [(l, 4.0), (comb, 21.0 - 3.0 * 2.5)] {
+            assert!((0.5 * signed_area_2x(&poly) - area).abs() < 1e-12);
+            let tris = triangulate(&poly);
+            assert!((area_of(&poly, &tris) - area).abs() < 1e-9, "{tris:?}");
+            // Every triangle lies inside: its centroid is not in a notch.
+            for t in &tris {
+                let c = [0, 1].map(|k| t.iter().map(|&v| poly[v][k]).sum::<Real>() / 3.0);
+                assert!(inside(&poly, c), "{t:?}");
+            }
+            let mut rev = poly.clone();
+            rev.reverse();
+            let tris = triangulate(&rev);
+            assert!((area_of(&rev, &tris) - area).abs() < 1e-9, "{tris:?}");
+        }
+    }
 
     #[test]
     fn clustering_keeps_a_plane_a_plane() {

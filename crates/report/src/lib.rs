@@ -9,6 +9,7 @@
 pub mod data;
 pub mod error;
 pub mod explore;
+pub mod follow;
 pub mod geometry;
 pub mod page;
 
@@ -19,6 +20,8 @@ use std::path::{Path, PathBuf};
 pub fn render(dir: &Path) -> Result<String, ReportError> {
     let page = if dir.join("viewpoints.csv").exists() {
         explore::page(dir)?
+    } else if dir.join("steps.csv").exists() {
+        follow::page(dir)?
     } else {
         return Err(ReportError::NotARun {
             dir: dir.display().to_string(),

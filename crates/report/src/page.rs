@@ -75,6 +75,16 @@ impl Page {
         div
     }
 
+    /// Start a grid of small plots (closed by [`Page::end_grid`]).
+    pub fn begin_grid(&mut self) {
+        self.body.push_str("<div class=\"grid\">\n");
+    }
+
+    /// Close the grid opened by [`Page::begin_grid`].
+    pub fn end_grid(&mut self) {
+        self.body.push_str("</div>\n");
+    }
+
     /// Number of plots on the page.
     pub fn plots(&self) -> usize {
         self.plots
@@ -97,7 +107,8 @@ const STYLE: &str = "body{font-family:sans-serif;margin:1.5em;max-width:1400px;c
 table.summary{border-collapse:collapse;font-size:0.9em}\
 table.summary th,table.summary td{border:1px solid #ccc;padding:2px 8px;text-align:left}\
 table.summary th{background:#f3f3f3;font-weight:normal}\
-div.plot{width:100%;margin-bottom:1em}";
+div.plot{width:100%;margin-bottom:1em}\
+div.grid{display:grid;grid-template-columns:repeat(auto-fill,minmax(440px,1fr));gap:8px}";
 
 /// A plot of `traces` with `layout`.
 pub fn plot_of(traces: Vec<Box<dyn Trace>>, layout: Layout) -> Plot {
@@ -147,7 +158,8 @@ fn short(v: &serde_json::Value) -> String {
     match v {
         serde_json::Value::Number(n) => match (n.as_i64(), n.as_f64()) {
             (Some(i), _) => i.to_string(),
-            (None, Some(x)) if x != 0.0 && (x.abs() < 1e-3 || x.abs() >= 1e6) => format!("{x:.4e}"),
+            (None, Some(0.0)) => "0".to_owned(),
+            (None, Some(x)) if x.abs() < 1e-3 || x.abs() >= 1e6 => format!("{x:.4e}"),
             (None, Some(x)) => {
                 let digits = (3 - x.abs().log10().floor() as i32).clamp(0, 6);
                 format!("{x:.*}", usize::try_from(digits).unwrap_or(0))
@@ -173,7 +185,7 @@ mod tests {
 
     #[test]
     fn flattens_nested_summary() {
-        let v = serde_json::json!({"a": {"b": 0.123_456, "c": [1, 2]}, "d": "x", "big": [1, 2, 3], "skip": {"z": 1}});
+        let v = serde_json::json!({"a": {"b": 0.123_456, "c": [1, 2]}, "d": "x", "big": [1, 2, 3], "skip": {"z": 1}, "zero": 0.0});
         let mut rows = Vec::new();
         flatten(&v, "", &["skip"], 2, &mut rows);
         assert_eq!(
@@ -183,6 +195,7 @@ mod tests {
                 ("a.c".into(), "[1, 2]".into()),
                 ("big".into(), "3 entries".into()),
                 ("d".into(), "x".into()),
+                ("zero".into(), "0".into()),
             ]
         );
     }

@@ -6,18 +6,28 @@
 //! has not drawn coloured pixels. A screenshot is kept beside the report.
 //!
 //! Needs a run folder written by `surveyor explore` in `SURVEYOR_REPORT_RUN`
-//! (`.ci/run` makes one) and Chromium at `/usr/bin/chromium` or `$CHROME`:
+//! and one written by `surveyor follow` in `SURVEYOR_REPORT_FOLLOW_RUN`
+//! (`.ci/run` makes both), and Chromium at `/usr/bin/chromium` or `$CHROME`:
 //!
 //! ```text
 //! cargo run --release -- explore --scenario bridge1 --out /tmp/run
-//! SURVEYOR_REPORT_RUN=/tmp/run cargo test -p report --test browser -- --ignored --nocapture
+//! SURVEYOR_REPORT_RUN=/tmp/run cargo test -p report --test browser explore -- --ignored --nocapture
+//! cargo run --release -- follow --scenario block1 --robot arm4 --out /tmp/follow
+//! SURVEYOR_REPORT_FOLLOW_RUN=/tmp/follow cargo test -p report --test browser follow -- --ignored --nocapture
 //! ```
+
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test: the checks shared by both tests sit in helper functions, which \
+              allow-unwrap-in-tests does not cover"
+)]
 
 use headless_chrome::protocol::cdp::types::Event;
 use headless_chrome::protocol::cdp::{Log, Network, Page, Runtime};
 use headless_chrome::{Browser, LaunchOptions};
 use std::ffi::OsStr;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -34,6 +44,10 @@ const EXPLORE_PLOTS: [&str; 9] = [
     "plot-timings",
 ];
 
+/// The plots every follow report holds; one `plot-evolution-<sets>` per
+/// snapshot of `model_snapshots.json` comes beside them.
+const FOLLOW_PLOTS: [&str; 4] = ["plot-view3d", "plot-modes", "plot-times", "plot-sensing"];
+
 fn eval_u64(tab: &headless_chrome::Tab, js: &str) -> u64 {
     tab.evaluate(js, false)
         .unwrap_or_else(|e| panic!("`{js}`: {e}"))
@@ -45,10 +59,55 @@ fn eval_u64(tab: &headless_chrome::Tab, js: &str) -> u64 {
 #[test]
 #[ignore = "needs Chromium and SURVEYOR_REPORT_RUN=<explore run folder>; run by .ci/run"]
 fn explore_report_renders_offline_in_chromium() {
-    let run = PathBuf::from(std::env::var_os("SURVEYOR_REPORT_RUN").expect(
+    let run = run_folder(
+        "SURVEYOR_REPORT_RUN",
         "set SURVEYOR_REPORT_RUN to a folder written by `surveyor explore` (see this file's header)",
-    ));
-    let html = report::write(&run).unwrap();
+    );
+    check_report_in_chromium(&run, &EXPLORE_PLOTS.map(str::to_owned));
+}
+
+#[test]
+#[ignore = "needs Chromium and SURVEYOR_REPORT_FOLLOW_RUN=<follow run folder>; run by .ci/run"]
+fn follow_report_renders_offline_in_chromium() {
+    let run = run_folder(
+        "SURVEYOR_REPORT_FOLLOW_RUN",
+        "set SURVEYOR_REPORT_FOLLOW_RUN to a folder written by `surveyor follow` (see this file's header)",
+    );
+    let snapshots: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("model_snapshots.json")).unwrap())
+            .unwrap();
+    let sets: Vec<u64> = snapshots["snapshots"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["sets"].as_u64().unwrap())
+        .collect();
+    assert!(sets.len() >= 2, "too few snapshots: {sets:?}");
+    let mut expected: Vec<String> = FOLLOW_PLOTS.map(str::to_owned).to_vec();
+    expected.extend(sets.iter().map(|s| format!("plot-evolution-{s}")));
+    check_report_in_chromium(&run, &expected);
+}
+
+/// The run folder named by the environment variable `var`. Cargo runs this
+/// test in the package's folder, so a relative path that is not there is
+/// taken from the workspace root (where `.ci/run` makes the runs).
+fn run_folder(var: &str, missing: &str) -> PathBuf {
+    let given = PathBuf::from(std::env::var_os(var).expect(missing));
+    if given.is_relative() && !given.exists() {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../..")
+            .join(given)
+    } else {
+        given
+    }
+}
+
+/// Write the report of `run`, load it in headless Chromium and check it:
+/// exactly the plots `expected` (div ids) drawn, `plot-view3d` a WebGL view
+/// with coloured pixels, no console error, no request but the page; keeps
+/// `run/report_screenshot.png`.
+fn check_report_in_chromium(run: &Path, expected_ids: &[String]) {
+    let html = report::write(run).unwrap();
     let size_mb = std::fs::metadata(&html).unwrap().len() as f64 / 1e6;
     let chrome = std::env::var_os("CHROME")
         .map_or_else(|| PathBuf::from("/usr/bin/chromium"), PathBuf::from);
@@ -81,7 +140,7 @@ fn explore_report_renders_offline_in_chromium() {
     })
     .unwrap();
     let tab = browser.new_tab().unwrap();
-    tab.set_default_timeout(Duration::from_secs(120));
+    tab.set_default_timeout(Duration::from_secs(300));
 
     let errors = Arc::new(Mutex::new(Vec::<String>::new()));
     let requests = Arc::new(Mutex::new(Vec::<String>::new()));
@@ -149,8 +208,8 @@ fn explore_report_renders_offline_in_chromium() {
         .wait_until_navigated()
         .unwrap();
     // Every plot div becomes a plotly graph once plotly.js has drawn it.
-    let expected = EXPLORE_PLOTS.len() as u64;
-    let deadline = Instant::now() + Duration::from_secs(120);
+    let expected = expected_ids.len() as u64;
+    let deadline = Instant::now() + Duration::from_secs(300);
     let mut drawn = 0;
     while Instant::now() < deadline {
         drawn = eval_u64(
@@ -163,7 +222,7 @@ fn explore_report_renders_offline_in_chromium() {
         std::thread::sleep(Duration::from_millis(100));
     }
     let load_s = t.elapsed().as_secs_f64();
-    for id in EXPLORE_PLOTS {
+    for id in expected_ids {
         let present = eval_u64(
             &tab,
             &format!("document.querySelectorAll('#{id}.js-plotly-plot .main-svg').length"),
@@ -196,23 +255,50 @@ fn explore_report_renders_offline_in_chromium() {
     );
     std::thread::sleep(Duration::from_millis(1500));
 
-    // Pixels of the 3-D view: its left 70 % (the legend is on the right)
-    // must be far from blank: the axes' grid lines alone darken a few per
-    // cent of it; the mesh, the discs and the viewpoints cover much more.
-    let view = tab.find_element("#plot-view3d").unwrap();
-    let png_bytes = view
-        .capture_screenshot(Page::CaptureScreenshotFormatOption::Png)
+    // Pixels of the 3-D view, cut from a screenshot of the window with the
+    // view scrolled to its top (below a long summary table it may start
+    // under the window's bottom edge; an element screenshot of such an
+    // element captures the wrong region).
+    tab.evaluate(
+        "document.getElementById('plot-view3d').scrollIntoView({block: 'start'})",
+        false,
+    )
+    .unwrap();
+    std::thread::sleep(Duration::from_secs(1));
+    let rect: Vec<usize> = tab
+        .evaluate(
+            "(() => { const r = document.getElementById('plot-view3d').getBoundingClientRect(); \
+             return [r.left, r.top, r.width, r.height].map(v => Math.max(0, Math.round(v))).join(','); })()",
+            false,
+        )
+        .unwrap()
+        .value
+        .and_then(|v| v.as_str().map(str::to_owned))
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let shot = tab
+        .capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true)
         .unwrap();
-    let decoder = png::Decoder::new(std::io::Cursor::new(png_bytes));
+    let decoder = png::Decoder::new(std::io::Cursor::new(&shot));
     let mut reader = decoder.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
     let info = reader.next_frame(&mut buf).unwrap();
     let channels = info.color_type.samples();
     let (w, h) = (info.width as usize, info.height as usize);
+    // The view's left 70 % (the legend is on the right) must be far from
+    // blank: the axes' grid lines alone darken a few per cent of it; the
+    // model, mesh, discs, paths cover much more.
+    let (x0, y0) = (rect[0].min(w), rect[1].min(h));
+    let (x1, y1) = (
+        (rect[0] + rect[2] * 7 / 10).min(w),
+        (rect[1] + rect[3]).min(h),
+    );
     let mut drawn_px = 0usize;
     let mut total = 0usize;
-    for y in 0..h {
-        for x in 0..(w * 7 / 10) {
+    for y in y0..y1 {
+        for x in x0..x1 {
             let p = &buf[(y * w + x) * channels..(y * w + x) * channels + 3];
             let (lo, hi) = (p.iter().min().unwrap(), p.iter().max().unwrap());
             total += 1;
@@ -221,11 +307,12 @@ fn explore_report_renders_offline_in_chromium() {
             }
         }
     }
+    assert!(
+        total > 100_000,
+        "the 3-D view is not in the window: {rect:?} in {w}×{h}"
+    );
     let share = drawn_px as f64 / total as f64;
 
-    let shot = tab
-        .capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true)
-        .unwrap();
     let shot_path = run.join("report_screenshot.png");
     std::fs::write(&shot_path, shot).unwrap();
     println!(

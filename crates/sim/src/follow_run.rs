@@ -1,6 +1,7 @@
 //! The surface-following episode runner (issue 9): a [`Follower`] driven
 //! through the hardware traits, checked against the ground truth, with its
-//! outputs (`surface_model.json`/`.obj`, `steps.csv`, `path.ply`, `run.json`).
+//! outputs (`surface_model.json`/`.obj`, `steps.csv`, `path.ply`, `run.json`,
+//! and `model_snapshots.json`, the model's evolution: [`ModelSnapshots`]).
 //!
 //! * [`run_episode`] is the loop itself, for any hardware that implements
 //!   [`Arm`] and [`RangeSensors`] (a real driver can replace [`SimRig`]): per
@@ -20,6 +21,7 @@
 //! byte for byte, except for the wall-clock timing columns of `steps.csv`;
 //! with [`FollowRunOptions::timings`] off those columns are written empty.
 
+use crate::model_snapshots::ModelSnapshots;
 use crate::rig::{Arm, RangeSensors};
 use crate::safety::{min_clearance, motion_contacts, robot_contacts, smallest_link_radius};
 use crate::scan_check::{
@@ -513,6 +515,7 @@ impl FollowSetup {
             scan,
             world_from_base: self.rig.world_from_base(),
         });
+        let mut snapshots = ModelSnapshots::new();
         let episode = run_episode(
             &mut self.rig,
             &mut follower,
@@ -520,8 +523,12 @@ impl FollowSetup {
             scan.as_ref(),
             self.options.max_sets,
             stop,
-            progress,
+            &mut |row, f| {
+                snapshots.observe(row.step + 1, f.model());
+                progress(row, f);
+            },
         )?;
+        snapshots.finish(episode.rows.len() as u64, follower.model());
         let score = match world.as_scene() {
             Some(scene) => {
                 let surface = follower.model().config();
@@ -559,6 +566,7 @@ impl FollowSetup {
             options: self.options,
             episode,
             model: follower.into_model(),
+            snapshots,
             score,
             scan_score,
         })
@@ -907,6 +915,9 @@ pub struct FollowRun {
     pub episode: Episode,
     /// The surface model built.
     pub model: SurfaceModel,
+    /// The model's evolution: copies at evenly spaced set counts and at the
+    /// end ([`ModelSnapshots`]).
+    pub snapshots: ModelSnapshots,
     /// The model scored against the true scene (`None` for point-cloud worlds).
     pub score: Option<SurfaceScore>,
     /// The model's polygons against the scan points (point-cloud worlds only).
@@ -1137,14 +1148,15 @@ impl FollowRun {
     }
 
     /// The output files by name: `surface_model.json`, `surface_model.obj`,
-    /// `steps.csv`, `path.ply` and `run.json`.
-    pub fn outputs(&self) -> Result<[(&'static str, String); 5], FollowRunError> {
+    /// `steps.csv`, `path.ply`, `run.json` and `model_snapshots.json`.
+    pub fn outputs(&self) -> Result<[(&'static str, String); 6], FollowRunError> {
         Ok([
             ("surface_model.json", pretty(&self.model.to_model_json())?),
             ("surface_model.obj", self.model.to_obj()),
             ("steps.csv", self.steps_csv()),
             ("path.ply", self.path_ply()),
             ("run.json", pretty(&self.run_json())?),
+            ("model_snapshots.json", pretty(&self.snapshots)?),
         ])
     }
 }

@@ -21,6 +21,7 @@ pub mod blast;
 pub mod explore_run;
 pub mod follow_run;
 pub mod metrics;
+pub mod model_snapshots;
 pub mod range_sensors;
 pub mod rig;
 pub mod safety;

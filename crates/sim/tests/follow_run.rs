@@ -70,7 +70,8 @@ fn a_budgeted_cube_run_records_every_step_and_writes_every_output() {
             "surface_model.obj",
             "steps.csv",
             "path.ply",
-            "run.json"
+            "run.json",
+            "model_snapshots.json"
         ]
     );
     let csv = &outputs[2].1;
@@ -112,6 +113,16 @@ fn a_budgeted_cube_run_records_every_step_and_writes_every_output() {
     assert_eq!(json["score"]["faces"].as_array().unwrap().len(), 5);
     let model: serde_json::Value = serde_json::from_str(&outputs[0].1).unwrap();
     assert!(model["segments"].as_array().unwrap().len() >= 2);
+    // The evolution: evenly spaced set counts, the last one the final model.
+    let snaps: serde_json::Value = serde_json::from_str(&outputs[5].1).unwrap();
+    let snaps = snaps["snapshots"].as_array().unwrap();
+    let sets: Vec<u64> = snaps.iter().map(|s| s["sets"].as_u64().unwrap()).collect();
+    assert_eq!(*sets.last().unwrap(), rows.len() as u64, "{sets:?}");
+    assert!(
+        sets.len() >= 2 && sets.windows(2).all(|w| w[0] < w[1]),
+        "{sets:?}"
+    );
+    assert_eq!(snaps.last().unwrap()["model"], model);
 }
 
 #[test]
@@ -133,6 +144,7 @@ fn without_timings_two_runs_are_byte_identical_and_the_seed_matters() {
     let (a, b, c) = (out(7), out(7), out(8));
     assert_eq!(a[0].1, b[0].1, "surface_model.json");
     assert_eq!(a[2].1, b[2].1, "steps.csv");
+    assert_eq!(a[5].1, b[5].1, "model_snapshots.json");
     assert_ne!(a[2].1, c[2].1, "another seed, other noise, other steps");
     let row = a[2].1.lines().nth(1).unwrap();
     let f: Vec<&str> = row.split(',').collect();

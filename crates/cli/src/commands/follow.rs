@@ -19,11 +19,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 Outputs in --out: surface_model.json and surface_model.obj (the model), steps.csv (one row per \
 step: step, mode, x, y, z, q1..qn, set_size, update_us, direction_us, kinematics_us, \
 link_clearance_m, current_segment, current_edge), path.ply (the control-point path, vertices \
-and edges) and run.json (sets, steps, completed, termination, collisions, min_clearance_m, \
+and edges) run.json (sets, steps, completed, termination, collisions, min_clearance_m, \
 step_us, modes, the score against the true scene, the options; for a point-cloud world, \
 which has no true surface, min_scan_clearance_m and scan_close_poses: the links' clearance \
 from the scan points and the poses closer than δ/2, and model_to_scan_max_m, \
-model_to_scan_within_lambda and model_to_scan: the model polygons' distances to the scan).
+model_to_scan_within_lambda and model_to_scan: the model polygons' distances to the scan), model_snapshots.json (the model \
+after evenly spaced numbers of sensor sets, 3 to 6 of them, and at the end: Pudney Figs 44 and \
+46), scenario.toml (the scenario as given, paths made absolute; not for --scene) and \
+report.html (surveyor report: the model, its shared edges, the path, the evolution, the modes \
+and step times).
 
 The same inputs and --seed give the same run; only the wall-clock columns of steps.csv \
 (update_us, direction_us, kinematics_us) differ. With --no-timings they are written empty, \
@@ -169,9 +173,16 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
         bail!("--out is required");
     };
     let opts = options(a, config)?;
+    // The scenario as given (its paths made absolute), for the report's
+    // ground truth; a --scene run has none.
+    let mut scenario_toml = None;
     let setup = match (&a.scenario, &a.scene) {
         (_, Some(file)) => FollowSetup::from_scene_file(file, a.scale.unwrap_or(1.0), &opts)?,
-        (Some(name), None) => FollowSetup::from_scenario(&Scenario::load(name)?, &opts)?,
+        (Some(name), None) => {
+            let loaded = Scenario::load(name)?;
+            scenario_toml = Some(loaded.standalone().to_toml()?);
+            FollowSetup::from_scenario(&loaded, &opts)?
+        }
         (None, None) => bail!("give --scenario NAME|FILE or --scene FILE"),
     };
     let stop = Arc::new(AtomicBool::new(false));
@@ -201,7 +212,9 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     let run = run?;
     let mut staged = Staged::new();
     staged.ensure_dir(out)?;
-    for (name, text) in run.outputs()? {
+    let outputs = run.outputs()?;
+    let scenario = scenario_toml.map(|text| ("scenario.toml", text));
+    for (name, text) in outputs.into_iter().chain(scenario) {
         let path = staged.file_in(out, name)?;
         std::fs::write(&path, text)
             .with_context(|| format!("writing {}", out.join(name).display()))?;
@@ -251,6 +264,8 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
         };
         say!("scan: {clearance}; {model}")?;
     }
+    let report = report::write(out)?;
+    say!("report: {}", report.display())?;
     if let RunEnd::Error(e) = &run.episode.end {
         bail!(
             "the run stopped on an error after {} steps (the outputs of those steps are in {}): {e}",
