@@ -75,27 +75,37 @@ impl Table {
             })
     }
 
-    /// Column `name` as numbers; an empty cell is `None`.
-    pub fn optional(&self, name: &str) -> Result<Vec<Option<Real>>, ReportError> {
+    /// Column `name` parsed cell by cell (`None` for an empty cell when
+    /// `empty_ok`); a cell that does not parse is an error naming its line
+    /// and `expected`.
+    fn parsed<T: std::str::FromStr>(
+        &self,
+        name: &str,
+        empty_ok: bool,
+        expected: &str,
+    ) -> Result<Vec<Option<T>>, ReportError> {
         let c = self.index(name)?;
         self.rows
             .iter()
             .enumerate()
             .map(|(i, row)| {
                 let cell = row[c].trim();
-                if cell.is_empty() {
+                if empty_ok && cell.is_empty() {
                     return Ok(None);
                 }
-                cell.parse::<Real>()
-                    .map(Some)
-                    .map_err(|_| ReportError::Field {
-                        file: self.source.clone(),
-                        line: i + 2,
-                        field: name.to_owned(),
-                        message: format!("expected a number, found `{cell}`"),
-                    })
+                cell.parse::<T>().map(Some).map_err(|_| ReportError::Field {
+                    file: self.source.clone(),
+                    line: i + 2,
+                    field: name.to_owned(),
+                    message: format!("expected {expected}, found `{cell}`"),
+                })
             })
             .collect()
+    }
+
+    /// Column `name` as numbers; an empty cell is `None`.
+    pub fn optional(&self, name: &str) -> Result<Vec<Option<Real>>, ReportError> {
+        self.parsed(name, true, "a number")
     }
 
     /// Column `name` as numbers, every cell required.
@@ -122,20 +132,11 @@ impl Table {
 
     /// Column `name` as non-negative integers.
     pub fn indices(&self, name: &str) -> Result<Vec<usize>, ReportError> {
-        let c = self.index(name)?;
-        self.rows
-            .iter()
-            .enumerate()
-            .map(|(i, row)| {
-                let cell = row[c].trim();
-                cell.parse::<usize>().map_err(|_| ReportError::Field {
-                    file: self.source.clone(),
-                    line: i + 2,
-                    field: name.to_owned(),
-                    message: format!("expected a non-negative integer, found `{cell}`"),
-                })
-            })
-            .collect()
+        Ok(self
+            .parsed(name, false, "a non-negative integer")?
+            .into_iter()
+            .flatten()
+            .collect())
     }
 }
 

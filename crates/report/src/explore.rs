@@ -6,7 +6,7 @@
 use crate::ReportError;
 use crate::data::{Table, read_json};
 use crate::geometry::{Polylines, columns, plane_basis, simplify, stride_for};
-use crate::page::{Page, flatten, plot_of};
+use crate::page::{Page, plot_of, xy_layout};
 use geom::{Isometry3, Point3, Real, Vector3};
 use plotly::common::{Line, Marker, Mode, Title, Visible};
 use plotly::layout::{AspectMode, Axis, BarMode, LayoutScene, Legend, Margin};
@@ -78,10 +78,7 @@ pub fn page(dir: &Path) -> Result<Page, ReportError> {
         "AXBAM exploration (Paul 2010) of scenario {scenario}, run folder {}.",
         dir.display()
     ));
-    page.heading("Summary (run.json)");
-    let mut rows = Vec::new();
-    flatten(&run, "", &["reports"], 8, &mut rows);
-    page.table(&rows);
+    page.summary(&run, &["reports"]);
 
     let setup = setup(dir)?;
     view_3d(&mut page, dir, &viewpoints, setup.as_ref())?;
@@ -550,14 +547,6 @@ fn blast_traces(
             .line(Line::new().color("#d62728").width(1.5)),
     );
     Ok(())
-}
-
-fn xy_layout(title: &str, x: &str, y: &str) -> Layout {
-    Layout::new()
-        .title(Title::with_text(title))
-        .height(380)
-        .x_axis(Axis::new().title(Title::with_text(x)))
-        .y_axis(Axis::new().title(Title::with_text(y)))
 }
 
 fn information_plots(page: &mut Page, dir: &Path, vp: &Table) -> Result<(), ReportError> {

@@ -8,7 +8,7 @@ use crate::ReportError;
 use crate::data::{Table, read_json};
 use crate::explore::material_colour;
 use crate::geometry::{Polylines, columns, plane_basis, triangulate};
-use crate::page::{Page, flatten, plot_of};
+use crate::page::{Page, plot_of, xy_layout};
 use geom::{Point3, Real, Vector3};
 use plotly::common::{Line, LineShape, Marker, MarkerSymbol, Mode, Title, Visible};
 use plotly::layout::{
@@ -423,10 +423,7 @@ pub fn page(dir: &Path) -> Result<Page, ReportError> {
         "Surface following (Pudney 1994) of {scenario} with {robot}, run folder {}.",
         dir.display()
     ));
-    page.heading("Summary (run.json)");
-    let mut rows = Vec::new();
-    flatten(&run, "", &["initial_segments"], 8, &mut rows);
-    page.table(&rows);
+    page.summary(&run, &["initial_segments"]);
 
     let path = [
         steps.numbers("x")?,
@@ -553,14 +550,6 @@ fn evolution(page: &mut Page, dir: &Path, bounds: Option<Bounds>) -> Result<(), 
     }
     page.end_grid();
     Ok(())
-}
-
-fn xy_layout(title: &str, x: &str, y: &str) -> Layout {
-    Layout::new()
-        .title(Title::with_text(title))
-        .height(380)
-        .x_axis(Axis::new().title(Title::with_text(x)))
-        .y_axis(Axis::new().title(Title::with_text(y)))
 }
 
 /// The categories of the mode axis: the thesis's five, then any other name

@@ -61,6 +61,15 @@ impl Page {
         self.body.push_str("</table>\n");
     }
 
+    /// The "Summary (run.json)" section: `run` flattened into a table
+    /// (objects named in `skip` and arrays longer than 8 left out).
+    pub fn summary(&mut self, run: &serde_json::Value, skip: &[&str]) {
+        self.heading("Summary (run.json)");
+        let mut rows = Vec::new();
+        flatten(run, "", skip, 8, &mut rows);
+        self.table(&rows);
+    }
+
     /// A plot `height_px` tall, its div id `plot-<id>`; `class` lets the test
     /// and the style find the 3-D views. Returns the div id.
     pub fn plot(&mut self, id: &str, plot: &Plot, height_px: u32, class: &str) -> String {
@@ -109,6 +118,15 @@ table.summary th,table.summary td{border:1px solid #ccc;padding:2px 8px;text-ali
 table.summary th{background:#f3f3f3;font-weight:normal}\
 div.plot{width:100%;margin-bottom:1em}\
 div.grid{display:grid;grid-template-columns:repeat(auto-fill,minmax(440px,1fr));gap:8px}";
+
+/// The layout of a 2-D plot: a title and its axes' titles, 380 px tall.
+pub fn xy_layout(title: &str, x: &str, y: &str) -> Layout {
+    Layout::new()
+        .title(plotly::common::Title::with_text(title))
+        .height(380)
+        .x_axis(plotly::layout::Axis::new().title(plotly::common::Title::with_text(x)))
+        .y_axis(plotly::layout::Axis::new().title(plotly::common::Title::with_text(y)))
+}
 
 /// A plot of `traces` with `layout`.
 pub fn plot_of(traces: Vec<Box<dyn Trace>>, layout: Layout) -> Plot {
