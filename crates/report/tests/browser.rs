@@ -321,9 +321,11 @@ fn check_report_in_chromium(run: &Path, expected_ids: &[String]) {
         100.0 * share,
         shot_path.display()
     );
+    // A view with its axes but almost no data measured 3.2 %; the bridge1
+    // explore view 26.5 %, the block1 follow view 12.1 %.
     assert!(
-        share > 0.02,
-        "the WebGL view drew almost nothing: {:.2} % coloured pixels",
+        share > 0.08,
+        "the WebGL view drew little beyond its axes: {:.2} % non-background pixels",
         100.0 * share
     );
 

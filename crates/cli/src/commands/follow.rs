@@ -19,7 +19,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 Outputs in --out: surface_model.json and surface_model.obj (the model), steps.csv (one row per \
 step: step, mode, x, y, z, q1..qn, set_size, update_us, direction_us, kinematics_us, \
 link_clearance_m, current_segment, current_edge), path.ply (the control-point path, vertices \
-and edges) run.json (sets, steps, completed, termination, collisions, min_clearance_m, \
+and edges), run.json (sets, steps, completed, termination, collisions, min_clearance_m, \
 step_us, modes, the score against the true scene, the options; for a point-cloud world, \
 which has no true surface, min_scan_clearance_m and scan_close_poses: the links' clearance \
 from the scan points and the poses closer than δ/2, and model_to_scan_max_m, \
