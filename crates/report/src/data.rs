@@ -142,12 +142,17 @@ impl Table {
 
 /// Read a JSON file.
 pub fn read_json(path: &Path) -> Result<serde_json::Value, ReportError> {
+    parse_json(path)
+}
+
+/// Read a JSON file into `T`; an error names the file, line and column.
+pub fn parse_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, ReportError> {
     let source = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| ReportError::file(&source, e))?;
     serde_json::from_str(&text).map_err(|e| ReportError::Field {
         file: source,
         line: e.line(),
-        field: String::new(),
+        field: format!("column {}", e.column()),
         message: e.to_string(),
     })
 }

@@ -95,7 +95,7 @@ fn view_3d(
     let mut traces: Vec<Box<dyn Trace>> = Vec::new();
     let mut notes = Vec::new();
     if let Some(scene) = setup.and_then(|s| s.world.as_ref()) {
-        truth_traces(scene, &mut traces);
+        truth_meshes(scene, &mut traces);
     } else {
         notes.push("no ground truth to show (no scenario.toml or a point-cloud world)".to_owned());
     }
@@ -186,7 +186,9 @@ fn mesh_trace(
         .flat_shading(true)
 }
 
-fn truth_traces(scene: &scene::Scene, traces: &mut Vec<Box<dyn Trace>>) {
+/// The ground truth, one mesh per material, hidden until clicked in the
+/// legend (both kinds of report draw it).
+pub(crate) fn truth_meshes(scene: &scene::Scene, traces: &mut Vec<Box<dyn Trace>>) {
     for (m, material) in scene.materials().iter().enumerate() {
         let mut mesh = geom::TriMesh {
             vertices: Vec::new(),
@@ -321,13 +323,14 @@ fn disc_traces(discs: &Table, traces: &mut Vec<Box<dyn Trace>>) -> Result<(), Re
         };
         traces.push(mesh_trace(&mesh, &name, colour, visible));
     }
-    let segments = segment.iter().copied().max().map_or(0, |m| m + 1);
+    let mut by_segment: std::collections::BTreeMap<usize, Vec<usize>> =
+        std::collections::BTreeMap::new();
+    for (i, &s) in segment.iter().enumerate() {
+        by_segment.entry(s).or_default().push(i);
+    }
+    let segments = by_segment.len();
     let mut outlines = Polylines::default();
-    for s in 0..segments {
-        let members: Vec<usize> = (0..discs.len()).filter(|&i| segment[i] == s).collect();
-        if members.is_empty() {
-            continue;
-        }
+    for members in by_segment.values() {
         let mean_n = members.iter().map(|&i| normal(i)).sum::<Vector3>();
         let Some(mean_n) = mean_n.try_normalize(1e-9) else {
             continue;
@@ -504,11 +507,13 @@ fn blast_traces(
     path: &Path,
     traces: &mut Vec<Box<dyn Trace>>,
 ) -> Result<(), ReportError> {
-    let bad = |field: &str| ReportError::Field {
-        file: path.display().to_string(),
-        line: 0,
-        field: field.to_owned(),
-        message: "expected an array of segments with targets holding `nozzle: [x, y, z]`".into(),
+    let bad = |field: &str| {
+        ReportError::file(
+            &path.display().to_string(),
+            format!(
+                "`{field}`: expected an array of segments with targets holding `nozzle: [x, y, z]`"
+            ),
+        )
     };
     let segments = plan["segments"].as_array().ok_or_else(|| bad("segments"))?;
     let mut lines = Polylines::default();

@@ -5,8 +5,8 @@
 //! mode, the step times and what the sensors saw.
 
 use crate::ReportError;
-use crate::data::{Table, read_json};
-use crate::explore::material_colour;
+use crate::data::{Table, parse_json, read_json};
+use crate::explore::truth_meshes;
 use crate::geometry::{Polylines, columns, plane_basis, triangulate};
 use crate::page::{Page, plot_of, xy_layout};
 use geom::{Point3, Real, Vector3};
@@ -114,8 +114,8 @@ enum Initial {
 }
 
 /// The traces of a model: polygons (one colour per segment), their
-/// outlines, shared edges, corner vertices and point segments. `group`
-/// prefixes the legend groups; `legend` shows the legend entries.
+/// outlines, shared edges, corner vertices and point segments; `legend`
+/// shows their legend entries.
 fn model_traces(model: &ModelJson, initial: Initial, legend: bool) -> Vec<Box<dyn Trace>> {
     let mut traces: Vec<Box<dyn Trace>> = Vec::new();
     let mut mesh: Vec<Point3> = Vec::new();
@@ -348,21 +348,6 @@ fn sensed_points(model: &ModelJson) -> Vec<Point3> {
     out
 }
 
-fn read_model(path: &Path) -> Result<ModelJson, ReportError> {
-    parse_json(path)
-}
-
-fn parse_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, ReportError> {
-    let source = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| ReportError::file(&source, e))?;
-    serde_json::from_str(&text).map_err(|e| ReportError::Field {
-        file: source,
-        line: e.line(),
-        field: format!("column {}", e.column()),
-        message: e.to_string(),
-    })
-}
-
 /// The ground truth of the run's scenario, one mesh per material (hidden
 /// until clicked), when the folder has `scenario.toml` and its world is a
 /// mesh scene.
@@ -375,39 +360,7 @@ fn truth_traces(dir: &Path, traces: &mut Vec<Box<dyn Trace>>) -> Result<bool, Re
     let scene::World::Mesh(scene) = loaded.build_world()? else {
         return Ok(false);
     };
-    for (m, material) in scene.materials().iter().enumerate() {
-        let mut vertices = Vec::new();
-        for o in scene
-            .objects()
-            .iter()
-            .filter(|o| usize::from(o.material.0) == m)
-        {
-            for t in &scene.mesh().triangles[o.triangles.clone()] {
-                vertices.extend(t.iter().map(|&v| scene.mesh().vertices[v as usize]));
-            }
-        }
-        if vertices.is_empty() {
-            continue;
-        }
-        let [x, y, z] = columns(&vertices);
-        let n = vertices.len() / 3;
-        traces.push(
-            Mesh3D::new(
-                x,
-                y,
-                z,
-                Some((0..n).map(|t| 3 * t).collect()),
-                Some((0..n).map(|t| 3 * t + 1).collect()),
-                Some((0..n).map(|t| 3 * t + 2).collect()),
-            )
-            .name(format!("truth: {}", material.name))
-            .legend_group("truth")
-            .color(material_colour(&material.name, m))
-            .opacity(0.35)
-            .show_legend(true)
-            .visible(Visible::LegendOnly),
-        );
-    }
+    truth_meshes(&scene, traces);
     Ok(true)
 }
 
@@ -415,7 +368,7 @@ fn truth_traces(dir: &Path, traces: &mut Vec<Box<dyn Trace>>) -> Result<bool, Re
 pub fn page(dir: &Path) -> Result<Page, ReportError> {
     let run = read_json(&dir.join("run.json"))?;
     let steps = Table::read(&dir.join("steps.csv"))?;
-    let model = read_model(&dir.join("surface_model.json"))?;
+    let model: ModelJson = parse_json(&dir.join("surface_model.json"))?;
     let scenario = run["scenario"].as_str().unwrap_or("?").to_owned();
     let robot = run["robot"].as_str().unwrap_or("?").to_owned();
     let mut page = Page::new(&format!("surveyor follow: {scenario}, {robot}"));
@@ -512,12 +465,14 @@ fn evolution(page: &mut Page, dir: &Path, bounds: Option<Bounds>) -> Result<(), 
     let mut last = None;
     for (i, s) in snaps.snapshots.iter().enumerate() {
         if last.is_some_and(|l| s.sets <= l) {
-            return Err(ReportError::Field {
-                file: path.display().to_string(),
-                line: 0,
-                field: format!("snapshots[{i}].sets"),
-                message: format!("{} does not follow {}", s.sets, last.unwrap_or_default()),
-            });
+            return Err(ReportError::file(
+                &path.display().to_string(),
+                format!(
+                    "`snapshots[{i}].sets`: {} does not follow {} (expected increasing set counts)",
+                    s.sets,
+                    last.unwrap_or_default()
+                ),
+            ));
         }
         last = Some(s.sets);
     }

@@ -502,8 +502,9 @@ pub fn plan_blast_inputs(
 
 /// The discs of `inputs` in `a2` that a nozzle pose reaches when everything
 /// is known: the same pose selection as [`plan_blast_inputs`], against
-/// [`ground_truth_grid`] of `inputs.grid`. The denominator of "poses for
-/// ≥ 95 % of the discs reachable by the tool" (issue 11).
+/// [`ground_truth_grid`] of `inputs.grid`: one reading of "the discs
+/// reachable by the tool" of issue 11 (the other, a pose on the run's own
+/// map, is what its test holds to 95 %).
 pub fn reachable_discs(
     inputs: &BlastInputs,
     robot: &Robot,
@@ -538,6 +539,9 @@ const NEIGHBOUR_ROUNDS: usize = 3;
 /// first (ours, see [`NEIGHBOUR_ROUNDS`]).
 const NEIGHBOUR_STARTS: usize = 5;
 
+/// A disc's pose and its re-measurement.
+type Found = (Vec<Real>, plan::BlastMeasure);
+
 /// A valid, re-measured pose for each disc of `scope` (indices into
 /// `inputs`' discs) against `grid`, or `None`.
 ///
@@ -554,9 +558,6 @@ const NEIGHBOUR_STARTS: usize = 5;
 /// pose are those). The rules a pose must meet are unchanged. Each round
 /// reads only the previous rounds' poses, so the result does not depend on
 /// the order the discs are solved in.
-/// A disc's pose and its re-measurement.
-type Found = (Vec<Real>, plan::BlastMeasure);
-
 fn select_poses(
     poses: &BlastPoses,
     grid: &map::OccupancyGrid,

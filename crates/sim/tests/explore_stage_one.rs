@@ -324,6 +324,22 @@ fn stage_two_aims_at_discs_safely_and_lowers_the_material_information() {
 /// (6 mm) of the beam's centre plane y = ±0.75 and between the flanges
 /// (0.82 < z < 1.50). Flanges, the plate and the containment sheet bolted
 /// to the webs, the tubes, the hose, the floor and the platform are neither.
+fn roof_or_web(scene: &scene::Scene, disc: &map::Disc) -> bool {
+    let Some((_, face, p)) = scene.closest_point(&disc.centre, 0.05) else {
+        return false;
+    };
+    let Some(object) = scene.object(scene.triangle_object(face)) else {
+        return false;
+    };
+    match object.name.as_str() {
+        "roof" => true,
+        "left_beam" | "right_beam" => {
+            (p.y.abs() - 0.75).abs() <= 0.006 + 1e-6 && p.z > 0.82 && p.z < 1.50
+        }
+        _ => false,
+    }
+}
+
 /// The oracle of reachability on the run's map: the roof and web discs in
 /// A2 without a pose in the plan (`planned`), each tried by 24 LM runs from
 /// random joints within the limits. Returns (discs it finds a valid
@@ -382,22 +398,6 @@ fn oracle_misses(
     (found, misses.len())
 }
 
-fn roof_or_web(scene: &scene::Scene, disc: &map::Disc) -> bool {
-    let Some((_, face, p)) = scene.closest_point(&disc.centre, 0.05) else {
-        return false;
-    };
-    let Some(object) = scene.object(scene.triangle_object(face)) else {
-        return false;
-    };
-    match object.name.as_str() {
-        "roof" => true,
-        "left_beam" | "right_beam" => {
-            (p.y.abs() - 0.75).abs() <= 0.006 + 1e-6 && p.z > 0.82 && p.z < 1.50
-        }
-        _ => false,
-    }
-}
-
 /// Issue 11's blast plan over a run's map: poses for at least 95 % of the
 /// roof and web discs the tool can reach on that map (a pose meeting every
 /// rule exists, found by an oracle of random-start LM runs), and at least
@@ -434,8 +434,9 @@ fn check_blast_plan(loaded: &sim::LoadedScenario, run: &sim::explore_run::Explor
     );
     assert!(ga < nn);
     // Issue 11 asks for poses for 95 % of the roof and web discs the tool
-    // can reach: those with a pose when all is known (the ground truth's
-    // occupancy).
+    // can reach. One reading: those with a pose when all is known (the
+    // ground truth's occupancy); the other, held to 95 % below: those with
+    // a pose on the run's own map.
     let world = loaded.build_world().unwrap();
     let scene = world.as_scene().unwrap();
     let inputs = BlastInputs::of_run(run).unwrap();

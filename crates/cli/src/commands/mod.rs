@@ -73,7 +73,7 @@ enum Command {
 
 #[derive(Debug, Args)]
 struct ReportArgs {
-    /// A run folder written by `surveyor explore`.
+    /// A run folder written by `surveyor explore` or `surveyor follow`.
     run_dir: PathBuf,
 }
 
