@@ -1,5 +1,5 @@
 //! Issue 11, acceptance 3: a run's report in a real headless Chromium
-//! (Debian's `chromium`, driven over the DevTools protocol). The page is
+//! (Debian's `chromium`, driven over the DevTools protocol on a pipe). The page is
 //! loaded from `file://`; the test fails on any console error or uncaught
 //! exception, on any request that is not the page itself (or an in-memory
 //! `data:`/`blob:` URL), when a plot is missing, and when the WebGL 3-D view
@@ -23,12 +23,11 @@
               allow-unwrap-in-tests does not cover"
 )]
 
-use headless_chrome::protocol::cdp::types::Event;
-use headless_chrome::protocol::cdp::{Log, Network, Page, Runtime};
-use headless_chrome::{Browser, LaunchOptions};
-use std::ffi::OsStr;
+use serde_json::{Value, json};
+use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
+use std::process::{Child, ChildStdin, Command, Stdio};
+use std::sync::mpsc::{self, Receiver};
 use std::time::{Duration, Instant};
 
 /// The plots an explore report must hold.
@@ -47,14 +46,6 @@ const EXPLORE_PLOTS: [&str; 9] = [
 /// The plots every follow report holds; one `plot-evolution-<sets>` per
 /// snapshot of `model_snapshots.json` comes beside them.
 const FOLLOW_PLOTS: [&str; 4] = ["plot-view3d", "plot-modes", "plot-times", "plot-sensing"];
-
-fn eval_u64(tab: &headless_chrome::Tab, js: &str) -> u64 {
-    tab.evaluate(js, false)
-        .unwrap_or_else(|e| panic!("`{js}`: {e}"))
-        .value
-        .and_then(|v| v.as_u64())
-        .unwrap_or_else(|| panic!("`{js}` did not give a number"))
-}
 
 #[test]
 #[ignore = "needs Chromium and SURVEYOR_REPORT_RUN=<explore run folder>; run by .ci/run"]
@@ -102,6 +93,152 @@ fn run_folder(var: &str, missing: &str) -> PathBuf {
     }
 }
 
+/// Chromium driven over the DevTools protocol on a pipe
+/// (`--remote-debugging-pipe`: commands in on file descriptor 3, replies and
+/// events out on 4, each a JSON message ended by a NUL byte). `sh` hands our
+/// stdin and stdout to the browser as those two descriptors.
+struct DevTools {
+    child: Child,
+    to_browser: ChildStdin,
+    from_browser: Receiver<Value>,
+    next_id: u64,
+    /// The page's session (Target.attachToTarget, flattened).
+    session: Option<String>,
+    /// Every event received so far, in order.
+    events: Vec<Value>,
+    _profile: tempfile::TempDir,
+}
+
+impl DevTools {
+    fn launch(chrome: &Path) -> Self {
+        let profile = tempfile::tempdir().unwrap();
+        let mut child = Command::new("sh")
+            .arg("-c")
+            .arg(r#"exec "$0" "$@" 3<&0 4>&1 0</dev/null 1>/dev/null 2>/dev/null"#)
+            .arg(chrome)
+            .args([
+                "--headless",
+                "--remote-debugging-pipe",
+                "--no-sandbox",
+                // WebGL on the CPU: this machine has no GPU.
+                "--use-angle=swiftshader",
+                "--enable-unsafe-swiftshader",
+                "--disable-component-update",
+                "--disable-background-networking",
+                "--disable-sync",
+                "--disable-quic",
+                "--no-first-run",
+                "--window-size=1400,2400",
+            ])
+            .arg(format!("--user-data-dir={}", profile.path().display()))
+            .arg("about:blank")
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap_or_else(|e| panic!("cannot start {}: {e}", chrome.display()));
+        let to_browser = child.stdin.take().unwrap();
+        let mut reader = BufReader::new(child.stdout.take().unwrap());
+        let (tx, from_browser) = mpsc::channel();
+        std::thread::spawn(move || {
+            let mut message = Vec::new();
+            while reader.read_until(0, &mut message).unwrap_or(0) > 0 {
+                if message.last() == Some(&0) {
+                    message.pop();
+                }
+                let value: Value = serde_json::from_slice(&message)
+                    .unwrap_or_else(|e| panic!("DevTools sent no JSON ({e})"));
+                if tx.send(value).is_err() {
+                    break;
+                }
+                message.clear();
+            }
+        });
+        let mut devtools = Self {
+            child,
+            to_browser,
+            from_browser,
+            next_id: 0,
+            session: None,
+            events: Vec::new(),
+            _profile: profile,
+        };
+        let target = devtools.browser_call("Target.createTarget", &json!({"url": "about:blank"}));
+        let target_id = target["targetId"].as_str().unwrap().to_owned();
+        let attached = devtools.browser_call(
+            "Target.attachToTarget",
+            &json!({"targetId": target_id, "flatten": true}),
+        );
+        devtools.session = Some(attached["sessionId"].as_str().unwrap().to_owned());
+        devtools
+    }
+
+    /// A command to the browser itself.
+    fn browser_call(&mut self, method: &str, params: &Value) -> Value {
+        self.send(method, params, None)
+    }
+
+    /// A command to the page.
+    fn call(&mut self, method: &str, params: &Value) -> Value {
+        let session = self.session.clone();
+        self.send(method, params, session)
+    }
+
+    fn send(&mut self, method: &str, params: &Value, session: Option<String>) -> Value {
+        self.next_id += 1;
+        let id = self.next_id;
+        let mut message = json!({"id": id, "method": method, "params": params});
+        if let Some(session) = session {
+            message["sessionId"] = Value::String(session);
+        }
+        let mut bytes = serde_json::to_vec(&message).unwrap();
+        bytes.push(0);
+        self.to_browser.write_all(&bytes).unwrap();
+        self.to_browser.flush().unwrap();
+        let deadline = Instant::now() + Duration::from_secs(300);
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let reply = self
+                .from_browser
+                .recv_timeout(left)
+                .unwrap_or_else(|e| panic!("no reply to {method}: {e}"));
+            if reply["id"].as_u64() == Some(id) {
+                assert!(reply.get("error").is_none(), "{method}: {}", reply["error"]);
+                return reply["result"].clone();
+            }
+            if reply.get("method").is_some() {
+                self.events.push(reply);
+            }
+        }
+    }
+
+    /// The value of a JavaScript expression in the page.
+    fn eval(&mut self, js: &str) -> Value {
+        let r = self.call(
+            "Runtime.evaluate",
+            &json!({"expression": js, "returnByValue": true, "awaitPromise": true}),
+        );
+        assert!(
+            r.get("exceptionDetails").is_none(),
+            "`{js}` threw: {}",
+            r["exceptionDetails"]
+        );
+        r["result"]["value"].clone()
+    }
+
+    fn eval_u64(&mut self, js: &str) -> u64 {
+        self.eval(js)
+            .as_u64()
+            .unwrap_or_else(|| panic!("`{js}` did not give a number"))
+    }
+}
+
+impl Drop for DevTools {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
 /// Write the report of `run`, load it in headless Chromium and check it:
 /// exactly the plots `expected` (div ids) drawn, `plot-view3d` a WebGL view
 /// with coloured pixels, no console error, no request but the page; keeps
@@ -116,104 +253,20 @@ fn check_report_in_chromium(run: &Path, expected_ids: &[String]) {
         "no Chromium at {} (apt-get install chromium, or set CHROME)",
         chrome.display()
     );
-    let profile = tempfile::tempdir().unwrap();
-    let args: Vec<&OsStr> = [
-        // WebGL on the CPU: this machine has no GPU.
-        "--use-angle=swiftshader",
-        "--enable-unsafe-swiftshader",
-        "--disable-component-update",
-        "--disable-quic",
-    ]
-    .into_iter()
-    .map(OsStr::new)
-    .collect();
-    let browser = Browser::new(LaunchOptions {
-        headless: true,
-        sandbox: false,
-        enable_gpu: true,
-        window_size: Some((1400, 2400)),
-        path: Some(chrome),
-        user_data_dir: Some(profile.path().to_path_buf()),
-        args,
-        idle_browser_timeout: Duration::from_secs(300),
-        ..LaunchOptions::default()
-    })
-    .unwrap();
-    let tab = browser.new_tab().unwrap();
-    tab.set_default_timeout(Duration::from_secs(300));
-
-    let errors = Arc::new(Mutex::new(Vec::<String>::new()));
-    let requests = Arc::new(Mutex::new(Vec::<String>::new()));
-    {
-        let errors = errors.clone();
-        let requests = requests.clone();
-        tab.add_event_listener(Arc::new(move |event: &Event| match event {
-            Event::RuntimeConsoleAPICalled(e) => {
-                use Runtime::ConsoleAPICalledEventTypeOption as T;
-                if matches!(e.params.Type, T::Error | T::Assert) {
-                    let text: Vec<String> = e
-                        .params
-                        .args
-                        .iter()
-                        .map(|a| {
-                            a.value
-                                .as_ref()
-                                .map(ToString::to_string)
-                                .or_else(|| a.description.clone())
-                                .unwrap_or_default()
-                        })
-                        .collect();
-                    errors
-                        .lock()
-                        .unwrap()
-                        .push(format!("console.error: {}", text.join(" ")));
-                }
-            }
-            Event::RuntimeExceptionThrown(e) => {
-                errors
-                    .lock()
-                    .unwrap()
-                    .push(format!("exception: {}", e.params.exception_details.text));
-            }
-            Event::LogEntryAdded(e) => {
-                if matches!(e.params.entry.level, Log::LogEntryLevel::Error) {
-                    errors
-                        .lock()
-                        .unwrap()
-                        .push(format!("log: {}", e.params.entry.text));
-                }
-            }
-            Event::NetworkRequestWillBeSent(e) => {
-                requests.lock().unwrap().push(e.params.request.url.clone());
-            }
-            _ => {}
-        }))
-        .unwrap();
+    let mut tab = DevTools::launch(&chrome);
+    for domain in ["Runtime", "Log", "Network", "Page"] {
+        tab.call(&format!("{domain}.enable"), &json!({}));
     }
-    tab.enable_runtime().unwrap();
-    tab.enable_log().unwrap();
-    tab.call_method(Network::Enable {
-        max_total_buffer_size: None,
-        max_resource_buffer_size: None,
-        max_post_data_size: None,
-        report_direct_socket_traffic: None,
-        enable_durable_messages: None,
-    })
-    .unwrap();
 
     let url = format!("file://{}", std::fs::canonicalize(&html).unwrap().display());
     let t = Instant::now();
-    tab.navigate_to(&url)
-        .unwrap()
-        .wait_until_navigated()
-        .unwrap();
+    tab.call("Page.navigate", &json!({"url": url}));
     // Every plot div becomes a plotly graph once plotly.js has drawn it.
     let expected = expected_ids.len() as u64;
     let deadline = Instant::now() + Duration::from_secs(300);
     let mut drawn = 0;
     while Instant::now() < deadline {
-        drawn = eval_u64(
-            &tab,
+        drawn = tab.eval_u64(
             "document.querySelectorAll('div.plot .js-plotly-plot .main-svg').length > 0 ? document.querySelectorAll('div.plot > .js-plotly-plot').length : 0",
         );
         if drawn >= expected {
@@ -223,33 +276,24 @@ fn check_report_in_chromium(run: &Path, expected_ids: &[String]) {
     }
     let load_s = t.elapsed().as_secs_f64();
     for id in expected_ids {
-        let present = eval_u64(
-            &tab,
-            &format!("document.querySelectorAll('#{id}.js-plotly-plot .main-svg').length"),
-        );
+        let present = tab.eval_u64(&format!(
+            "document.querySelectorAll('#{id}.js-plotly-plot .main-svg').length"
+        ));
         assert!(
             present > 0,
             "plot {id} missing or not drawn ({drawn} of {expected} drawn)"
         );
     }
     assert_eq!(
-        eval_u64(&tab, "document.querySelectorAll('div.plot').length"),
+        tab.eval_u64("document.querySelectorAll('div.plot').length"),
         expected,
         "the page has other plots than the ones checked"
     );
     // The 3-D view is WebGL: a canvas exists and plotly did not fall back to
     // its "WebGL is not supported" notice.
-    assert!(
-        eval_u64(
-            &tab,
-            "document.querySelectorAll('#plot-view3d canvas').length"
-        ) > 0
-    );
+    assert!(tab.eval_u64("document.querySelectorAll('#plot-view3d canvas').length") > 0);
     assert_eq!(
-        eval_u64(
-            &tab,
-            "document.body.innerText.includes('WebGL is not supported') ? 1 : 0"
-        ),
+        tab.eval_u64("document.body.innerText.includes('WebGL is not supported') ? 1 : 0"),
         0,
         "plotly found no WebGL"
     );
@@ -259,28 +303,27 @@ fn check_report_in_chromium(run: &Path, expected_ids: &[String]) {
     // view scrolled to its top (below a long summary table it may start
     // under the window's bottom edge; an element screenshot of such an
     // element captures the wrong region).
-    tab.evaluate(
-        "document.getElementById('plot-view3d').scrollIntoView({block: 'start'})",
-        false,
-    )
-    .unwrap();
+    tab.eval("document.getElementById('plot-view3d').scrollIntoView({block: 'start'})");
     std::thread::sleep(Duration::from_secs(1));
     let rect: Vec<usize> = tab
-        .evaluate(
+        .eval(
             "(() => { const r = document.getElementById('plot-view3d').getBoundingClientRect(); \
-             return [r.left, r.top, r.width, r.height].map(v => Math.max(0, Math.round(v))).join(','); })()",
-            false,
+             return [r.left, r.top, r.width, r.height].map(v => Math.max(0, Math.round(v))); })()",
         )
+        .as_array()
         .unwrap()
-        .value
-        .and_then(|v| v.as_str().map(str::to_owned))
-        .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
+        .iter()
+        .map(|v| v.as_u64().unwrap() as usize)
         .collect();
-    let shot = tab
-        .capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true)
-        .unwrap();
+    let shot = tab.call(
+        "Page.captureScreenshot",
+        &json!({"format": "png", "fromSurface": true}),
+    );
+    let shot = base64::Engine::decode(
+        &base64::engine::general_purpose::STANDARD,
+        shot["data"].as_str().unwrap(),
+    )
+    .unwrap();
     let decoder = png::Decoder::new(std::io::Cursor::new(&shot));
     let mut reader = decoder.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
@@ -314,7 +357,7 @@ fn check_report_in_chromium(run: &Path, expected_ids: &[String]) {
     let share = drawn_px as f64 / total as f64;
 
     let shot_path = run.join("report_screenshot.png");
-    std::fs::write(&shot_path, shot).unwrap();
+    std::fs::write(&shot_path, &shot).unwrap();
     println!(
         "report {} ({size_mb:.1} MB): {drawn} plots drawn in {load_s:.2} s; 3-D view {:.1} % non-background pixels; screenshot {}",
         html.display(),
@@ -329,9 +372,44 @@ fn check_report_in_chromium(run: &Path, expected_ids: &[String]) {
         100.0 * share
     );
 
-    let errors = errors.lock().unwrap();
+    // Events still queued arrive with this last reply.
+    tab.eval("0");
+    let mut errors = Vec::new();
+    let mut requests = Vec::new();
+    for event in &tab.events {
+        let p = &event["params"];
+        match event["method"].as_str().unwrap_or_default() {
+            "Runtime.consoleAPICalled"
+                if matches!(p["type"].as_str(), Some("error" | "assert")) =>
+            {
+                let text: Vec<String> = p["args"]
+                    .as_array()
+                    .into_iter()
+                    .flatten()
+                    .map(|a| match (&a["value"], &a["description"]) {
+                        (Value::Null, Value::String(d)) => d.clone(),
+                        (v, _) => v.to_string(),
+                    })
+                    .collect();
+                errors.push(format!("console.error: {}", text.join(" ")));
+            }
+            "Runtime.exceptionThrown" => {
+                let d = &p["exceptionDetails"];
+                errors.push(format!(
+                    "exception: {} {}",
+                    d["text"], d["exception"]["description"]
+                ));
+            }
+            "Log.entryAdded" if p["entry"]["level"] == "error" => {
+                errors.push(format!("log: {}", p["entry"]["text"]));
+            }
+            "Network.requestWillBeSent" => {
+                requests.push(p["request"]["url"].as_str().unwrap_or_default().to_owned());
+            }
+            _ => {}
+        }
+    }
     assert!(errors.is_empty(), "console errors: {errors:#?}");
-    let requests = requests.lock().unwrap();
     let foreign: Vec<&String> = requests
         .iter()
         .filter(|u| **u != url && !u.starts_with("data:") && !u.starts_with("blob:"))
