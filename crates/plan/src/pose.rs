@@ -838,10 +838,13 @@ impl<'a> PoseSelector<'a> {
         // differences know which links cannot come within the bound.
         let reach = self.dist_bound + DIST_MARGIN;
         let mut link_dist = vec![reach; self.link_count];
-        for (k, d) in link_dist.iter_mut().enumerate().skip(1) {
-            *d = self
-                .safety
-                .dist_of_links(grid, &qc, k..k + 1, reach, Real::NEG_INFINITY)?;
+        for d in link_dist.iter_mut().skip(1) {
+            *d = reach.min(self.safety.cap());
+        }
+        for (k, e) in self.safety.posed_links(&qc)? {
+            if let Some(d) = link_dist.get_mut(k).filter(|_| k >= 1) {
+                *d = self.safety.ellipsoid_dist(grid, &e, *d, Real::NEG_INFINITY);
+            }
         }
         // still[k] = min over links 1..k, up to the bound (link 0 never counts).
         let mut still = vec![self.dist_bound; self.link_count + 1];
@@ -976,11 +979,16 @@ impl<'a> PoseSelector<'a> {
         let qc = self.robot().clamp_to_limits(xp);
         let first = self.first_moved_link[j].min(self.link_count);
         let mut dist = at.still[first];
-        for k in first..self.link_count {
-            if at.link_dist[k] < self.dist_bound + DIST_MARGIN {
-                dist = self
-                    .safety
-                    .dist_of_links(grid, &qc, k..k + 1, dist, Real::NEG_INFINITY)?;
+        if (first..self.link_count).any(|k| at.link_dist[k] < self.dist_bound + DIST_MARGIN) {
+            dist = dist.min(self.safety.cap());
+            for (k, e) in self.safety.posed_links(&qc)? {
+                if (first..self.link_count).contains(&k)
+                    && at.link_dist[k] < self.dist_bound + DIST_MARGIN
+                {
+                    dist = self
+                        .safety
+                        .ellipsoid_dist(grid, &e, dist, Real::NEG_INFINITY);
+                }
             }
         }
         let (_, view) = self.view(target, &qc)?;

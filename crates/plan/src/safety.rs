@@ -65,15 +65,7 @@ impl Safety {
     /// fixed to it never move and are not checked, as in eq. 3.5's
     /// `i ∈ {1, …, 6}`; see `Robot::mounted_links`) at `q`, in the world frame.
     pub fn ellipsoids(&self, q: &[Real]) -> Result<Vec<Ellipsoid>, PlanError> {
-        let frames = self.robot.forward_kinematics(q)?;
-        let mounted = self.robot.mounted_links();
-        Ok(self
-            .robot
-            .posed_ellipsoids(&frames)
-            .into_iter()
-            .filter(|(link, _)| link.index() >= mounted)
-            .map(|(_, e)| e.transformed(&self.world_from_base))
-            .collect())
+        Ok(self.posed_links(q)?.into_iter().map(|(_, e)| e).collect())
     }
 
     /// `dist(Q)` of eq. 3.5 over the voxel centres of `grid` that are occupied
@@ -96,20 +88,46 @@ impl Safety {
         bound: Real,
         stop_at: Real,
     ) -> Result<Real, PlanError> {
-        let frames = self.robot.forward_kinematics(q)?;
-        let mounted = self.robot.mounted_links();
         let mut best = bound.min(self.cap);
-        for (link, e) in self.robot.posed_ellipsoids(&frames) {
-            if link.index() < mounted || !links.contains(&link.index()) {
+        for (link, e) in self.posed_links(q)? {
+            if !links.contains(&link) {
                 continue;
             }
-            let e = e.transformed(&self.world_from_base);
             best = best.min(ellipsoid_dist(grid, &e, best, stop_at));
             if best <= stop_at {
                 break;
             }
         }
         Ok(best)
+    }
+
+    /// The bounding ellipsoids of the moving links at `q` in the world frame,
+    /// each with its link's index (as [`Safety::ellipsoids`], one forward
+    /// kinematics for callers that measure links one by one with
+    /// [`Safety::ellipsoid_dist`]).
+    pub fn posed_links(&self, q: &[Real]) -> Result<Vec<(usize, Ellipsoid)>, PlanError> {
+        let frames = self.robot.forward_kinematics(q)?;
+        let mounted = self.robot.mounted_links();
+        Ok(self
+            .robot
+            .posed_ellipsoids(&frames)
+            .into_iter()
+            .filter(|(link, _)| link.index() >= mounted)
+            .map(|(link, e)| (link.index(), e.transformed(&self.world_from_base)))
+            .collect())
+    }
+
+    /// `dist(Q)` of one posed ellipsoid `e` (from [`Safety::posed_links`]),
+    /// resolved up to `bound` (at most the cap), returned early at or below
+    /// `stop_at`: [`Safety::dist_of_links`] of that ellipsoid alone.
+    pub fn ellipsoid_dist(
+        &self,
+        grid: &OccupancyGrid,
+        e: &Ellipsoid,
+        bound: Real,
+        stop_at: Real,
+    ) -> Real {
+        ellipsoid_dist(grid, e, bound.min(self.cap), stop_at)
     }
 
     /// The smallest `dist(Q)` over the configurations checked along the
