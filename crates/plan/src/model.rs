@@ -170,9 +170,11 @@ impl CspaceModel {
         })
     }
 
-    /// Write the model to `path` (JSON; written to a temporary file first and
-    /// renamed, so an interrupted write never leaves a half file).
+    /// Write the model to `path` (JSON; written to a temporary file of its
+    /// own first and renamed, so neither an interrupted write nor two runs
+    /// writing at once leave a half file).
     pub fn save(&self, path: &Path) -> Result<(), PlanError> {
+        static SAVES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
         let err = |message: String| PlanError::Cache {
             path: path.to_path_buf(),
             message,
@@ -200,7 +202,10 @@ impl CspaceModel {
             std::fs::create_dir_all(dir)
                 .map_err(|e| err(format!("cannot create its folder: {e}")))?;
         }
-        let tmp = path.with_extension("tmp");
+        // A temporary name of this process and call: two runs sharing the
+        // default cache file must not write into one temporary file.
+        let n = SAVES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let tmp = path.with_extension(format!("tmp.{}.{n}", std::process::id()));
         std::fs::write(&tmp, text).map_err(|e| err(format!("cannot write: {e}")))?;
         std::fs::rename(&tmp, path).map_err(|e| err(format!("cannot rename into place: {e}")))
     }
