@@ -1,13 +1,14 @@
 //! `surveyor explore` through the binary: `kill -9` mid-run then `--resume`
-//! gives the outputs of an uninterrupted run (issue 10 acceptance 5), and bad
-//! input gets a clear message.
+//! gives the outputs of an uninterrupted run (issue 10 acceptance 5), bad
+//! input gets a clear message, and `surveyor plan-blast` on a run's folder
+//! gives the plan the run wrote (issue 11; it shares the Stage Two test's
+//! run).
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers may panic
 
-#[allow(dead_code)] // not every helper is used here
 mod support;
 
 use std::path::Path;
-use support::{fails, ok};
+use support::{fails, fails_with, ok};
 
 /// The viewpoints recorded in `dir`'s checkpoint, by stage.
 fn checkpointed(dir: &Path) -> (usize, usize) {
@@ -25,38 +26,80 @@ fn checkpointed(dir: &Path) -> (usize, usize) {
     )
 }
 
-/// Run `surveyor explore <args> --no-timings --out DIR` whole, and again
-/// killed with `kill -9` once `kill_when` holds of its checkpoint, then
-/// resumed: every output must equal the whole run's.
+/// The arguments of `surveyor explore <args> --no-timings --cspace-cache
+/// CACHE --out OUT`.
+fn explore_args(args: &[&str], cache: &Path, out: &Path) -> Vec<String> {
+    std::iter::once("explore")
+        .chain(args.iter().copied())
+        .chain(["--no-timings", "--cspace-cache", cache.to_str().unwrap()])
+        .chain(["--out", out.to_str().unwrap()])
+        .map(String::from)
+        .collect()
+}
+
+fn ok_owned(args: &[String]) -> String {
+    ok(&args.iter().map(String::as_str).collect::<Vec<_>>())
+}
+
+/// A bridge1 run through both stages (budget of 3 Stage Two viewpoints, seed
+/// 4), made once for the tests that need one (the kill -9 test of Stage Two
+/// and plan-blast's): its arguments, C-space cache and folder.
+struct StageTwoRun {
+    args: Vec<String>,
+    cache: std::path::PathBuf,
+    whole: std::path::PathBuf,
+}
+
+fn stage_two_run() -> &'static StageTwoRun {
+    static RUN: std::sync::OnceLock<StageTwoRun> = std::sync::OnceLock::new();
+    RUN.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("explore-stage-two");
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let scenario = dir.join("b.toml");
+        let text = ok(&["scenario", "show", "bridge1"]).replace(
+            "stage_two_max_viewpoints = 20",
+            "stage_two_max_viewpoints = 3",
+        );
+        assert!(text.contains("stage_two_max_viewpoints = 3"));
+        std::fs::write(&scenario, text).unwrap();
+        let args = vec![
+            "--scenario".to_owned(),
+            scenario.to_str().unwrap().to_owned(),
+            "--seed".to_owned(),
+            "4".to_owned(),
+        ];
+        let cache = dir.join("cspace.json");
+        let whole = dir.join("whole");
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        ok_owned(&explore_args(&a, &cache, &whole));
+        StageTwoRun { args, cache, whole }
+    })
+}
+
+/// Run `surveyor explore <args> --no-timings --out DIR` killed with `kill -9`
+/// once `kill_when` holds of its checkpoint, then resumed: every output must
+/// equal the uninterrupted run's in `whole` (same arguments and `cache`).
 #[cfg(unix)]
-fn kill_9_then_resume(args: &[&str], kill_when: impl Fn((usize, usize)) -> bool) {
+fn kill_9_then_resume(
+    args: &[&str],
+    cache: &Path,
+    whole: &Path,
+    kill_when: impl Fn((usize, usize)) -> bool,
+) {
     use std::process::{Command, Stdio};
     let dir = tempfile::tempdir().unwrap();
-    let cache = dir.path().join("cspace.json");
-    let all = |out: &Path| -> Vec<String> {
-        let mut a: Vec<String> = std::iter::once("explore")
-            .chain(args.iter().copied())
-            .map(String::from)
-            .collect();
-        for s in ["--no-timings", "--cspace-cache", cache.to_str().unwrap()] {
-            a.push(s.into());
-        }
-        a.push("--out".into());
-        a.push(out.to_str().unwrap().into());
-        a
-    };
-    let whole = dir.path().join("whole");
-    ok(&all(&whole).iter().map(String::as_str).collect::<Vec<_>>());
-
     let cut = dir.path().join("cut");
     let mut child = Command::new(env!("CARGO_BIN_EXE_surveyor"))
-        .args(all(&cut))
+        .args(explore_args(args, cache, &cut))
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
-    for _ in 0..2400 {
-        if kill_when(checkpointed(&cut)) {
+    // Up to 10 minutes (a slow or busy machine): the loop ends as soon as
+    // the checkpoint shows the viewpoints to kill at.
+    for _ in 0..24_000 {
+        if kill_when(checkpointed(&cut)) || child.try_wait().unwrap().is_some() {
             break;
         }
         std::thread::sleep(std::time::Duration::from_millis(25));
@@ -71,9 +114,9 @@ fn kill_9_then_resume(args: &[&str], kill_when: impl Fn((usize, usize)) -> bool)
     assert!(kill_when(killed_at), "killed at {killed_at:?} viewpoints");
     assert!(!cut.join("run.json").exists(), "the killed run finished");
 
-    let mut resume = all(&cut);
+    let mut resume = explore_args(args, cache, &cut);
     resume.insert(1, "--resume".into());
-    ok(&resume.iter().map(String::as_str).collect::<Vec<_>>());
+    ok_owned(&resume);
     for name in [
         "viewpoints.csv",
         "run.json",
@@ -99,37 +142,86 @@ fn kill_9_then_resume(args: &[&str], kill_when: impl Fn((usize, usize)) -> bool)
 #[test]
 #[ignore = "three exploration runs: seconds in release; run by .ci/run"]
 fn kill_9_in_stage_one_then_resume_gives_the_uninterrupted_outputs() {
-    kill_9_then_resume(
-        &[
-            "--scenario",
-            "bridge1",
-            "--stages",
-            "one",
-            "--max-viewpoints",
-            "5",
-            "--seed",
-            "4",
-        ],
-        |(one, _)| (2..5).contains(&one),
-    );
+    let args = [
+        "--scenario",
+        "bridge1",
+        "--stages",
+        "one",
+        "--max-viewpoints",
+        "5",
+        "--seed",
+        "4",
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let (cache, whole) = (dir.path().join("cspace.json"), dir.path().join("whole"));
+    ok_owned(&explore_args(&args, &cache, &whole));
+    kill_9_then_resume(&args, &cache, &whole, |(one, _)| (2..5).contains(&one));
 }
 
 #[cfg(unix)]
 #[test]
-#[ignore = "three exploration runs: a minute in release; run by .ci/run"]
+#[ignore = "exploration runs: a minute in release; run by .ci/run"]
 fn kill_9_in_stage_two_then_resume_gives_the_uninterrupted_outputs() {
-    // bridge1 with a Stage Two budget of 3 viewpoints.
+    let run = stage_two_run();
+    let args: Vec<&str> = run.args.iter().map(String::as_str).collect();
+    kill_9_then_resume(&args, &run.cache, &run.whole, |(_, two)| {
+        (1..3).contains(&two)
+    });
+}
+
+/// `surveyor plan-blast` (issue 11) on the folder of an explore run plans
+/// exactly the blast plan the run wrote; a tool file changes the limits it
+/// records; a damaged inputs file is named.
+#[test]
+#[ignore = "an exploration run (shared with the kill -9 test): run by .ci/run"]
+fn plan_blast_on_an_explore_run_gives_the_plan_explore_wrote() {
+    let run = stage_two_run();
     let dir = tempfile::tempdir().unwrap();
-    let scenario = dir.path().join("b.toml");
-    let text = ok(&["scenario", "show", "bridge1"]).replace(
-        "stage_two_max_viewpoints = 20",
-        "stage_two_max_viewpoints = 3",
+    let r = run.whole.to_str().unwrap();
+    let read = |p: std::path::PathBuf| std::fs::read_to_string(p).unwrap();
+    let explored = read(run.whole.join("blast_plan.json"));
+    let plan: serde_json::Value = serde_json::from_str(&explored).unwrap();
+    assert!(plan["discs_with_pose"].as_u64().unwrap() > 0);
+    let out = dir.path().join("plan");
+    let o = out.to_str().unwrap();
+    let said = ok(&["plan-blast", "--run", r, "--out", o]);
+    assert!(said.contains("blast plan"), "{said}");
+    assert_eq!(read(out.join("blast_plan.json")), explored);
+    assert_eq!(
+        read(out.join("blast_plan.csv")),
+        read(run.whole.join("blast_plan.csv"))
     );
-    assert!(text.contains("stage_two_max_viewpoints = 3"));
-    std::fs::write(&scenario, text).unwrap();
-    kill_9_then_resume(
-        &["--scenario", scenario.to_str().unwrap(), "--seed", "4"],
-        |(_, two)| (1..3).contains(&two),
+    // A tool file changes the limits the plan records; --seed is taken
+    // (determinism per seed is checked on the library, sim's blast test).
+    let tool = dir.path().join("tool.toml");
+    std::fs::write(&tool, "phi_max_deg = 25.0\n").unwrap();
+    let a = dir.path().join("a");
+    ok(&[
+        "plan-blast",
+        "--run",
+        r,
+        "--tool",
+        tool.to_str().unwrap(),
+        "--seed",
+        "5",
+        "--out",
+        a.to_str().unwrap(),
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&read(a.join("blast_plan.json"))).unwrap();
+    assert_eq!(v["tool"]["phi_max_deg"].as_f64(), Some(25.0));
+    // A damaged inputs file (beside the run's scenario, in a copy: the run
+    // is shared) is named, not a panic.
+    let damaged = dir.path().join("damaged");
+    std::fs::create_dir_all(&damaged).unwrap();
+    std::fs::copy(
+        run.whole.join("scenario.toml"),
+        damaged.join("scenario.toml"),
+    )
+    .unwrap();
+    std::fs::write(damaged.join("blast_inputs.json"), "{\"format\": 1").unwrap();
+    fails_with(
+        &["plan-blast", "--run", damaged.to_str().unwrap(), "--out", o],
+        &["blast_inputs.json"],
     );
 }
 

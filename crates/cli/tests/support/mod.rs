@@ -1,5 +1,6 @@
 //! Helpers shared by the binary's integration tests (`mod support;` in each):
 //! run the built `surveyor`, expect success or failure, find `data/` files.
+#![allow(dead_code, reason = "each test file uses some of these helpers")]
 
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -28,6 +29,16 @@ pub fn fails(args: &[&str]) -> String {
     let out = surveyor(args);
     assert!(!out.status.success(), "{args:?} should fail");
     String::from_utf8(out.stderr).unwrap()
+}
+
+/// `args` must fail with a message holding every one of `needles`, and
+/// without a panic.
+pub fn fails_with(args: &[&str], needles: &[&str]) {
+    let e = fails(args);
+    assert!(!e.contains("panicked"), "{e}");
+    for n in needles {
+        assert!(e.contains(n), "`{n}` not in: {e}");
+    }
 }
 
 /// The path of `rel` below the repository's `data/` folder.
