@@ -106,7 +106,8 @@ struct DevTools {
     session: Option<String>,
     /// Every event received so far, in order.
     events: Vec<Value>,
-    _profile: tempfile::TempDir,
+    /// Chromium's profile folder; its log is `chromium.log` there.
+    profile: tempfile::TempDir,
 }
 
 impl DevTools {
@@ -114,7 +115,7 @@ impl DevTools {
         let profile = tempfile::tempdir().unwrap();
         let mut child = Command::new("sh")
             .arg("-c")
-            .arg(r#"exec "$0" "$@" 3<&0 4>&1 0</dev/null 1>/dev/null 2>/dev/null"#)
+            .arg(r#"exec "$0" "$@" 3<&0 4>&1 0</dev/null 1>/dev/null"#)
             .arg(chrome)
             .args([
                 "--headless",
@@ -134,6 +135,7 @@ impl DevTools {
             .arg("about:blank")
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
+            .stderr(std::fs::File::create(profile.path().join("chromium.log")).unwrap())
             .spawn()
             .unwrap_or_else(|e| panic!("cannot start {}: {e}", chrome.display()));
         let to_browser = child.stdin.take().unwrap();
@@ -160,7 +162,7 @@ impl DevTools {
             next_id: 0,
             session: None,
             events: Vec::new(),
-            _profile: profile,
+            profile,
         };
         let target = devtools.browser_call("Target.createTarget", &json!({"url": "about:blank"}));
         let target_id = target["targetId"].as_str().unwrap().to_owned();
@@ -197,10 +199,15 @@ impl DevTools {
         let deadline = Instant::now() + Duration::from_secs(300);
         loop {
             let left = deadline.saturating_duration_since(Instant::now());
-            let reply = self
-                .from_browser
-                .recv_timeout(left)
-                .unwrap_or_else(|e| panic!("no reply to {method}: {e}"));
+            let reply = self.from_browser.recv_timeout(left).unwrap_or_else(|e| {
+                let log = std::fs::read_to_string(self.profile.path().join("chromium.log"))
+                    .unwrap_or_default();
+                let tail: Vec<&str> = log.lines().rev().take(20).collect();
+                panic!(
+                    "no reply to {method}: {e}; Chromium's last words:\n{}",
+                    tail.into_iter().rev().collect::<Vec<_>>().join("\n")
+                )
+            });
             if reply["id"].as_u64() == Some(id) {
                 assert!(reply.get("error").is_none(), "{method}: {}", reply["error"]);
                 return reply["result"].clone();
