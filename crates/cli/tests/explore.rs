@@ -97,7 +97,7 @@ fn kill_9_then_resume(
         .spawn()
         .unwrap();
     // Up to 10 minutes (a slow or busy machine): the loop ends as soon as
-    // the checkpoint shows the viewpoints to kill at.
+    // the checkpoint shows the viewpoints to kill at, or the run has ended.
     for _ in 0..24_000 {
         if kill_when(checkpointed(&cut)) || child.try_wait().unwrap().is_some() {
             break;
@@ -105,11 +105,9 @@ fn kill_9_then_resume(
         std::thread::sleep(std::time::Duration::from_millis(25));
     }
     let killed_at = checkpointed(&cut);
-    let status = Command::new("kill")
-        .args(["-9", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
+    // SIGKILL (kill -9) through the child handle: no signal to a process id
+    // that may already have been reaped and reused.
+    child.kill().unwrap();
     let _ = child.wait();
     assert!(kill_when(killed_at), "killed at {killed_at:?} viewpoints");
     assert!(!cut.join("run.json").exists(), "the killed run finished");

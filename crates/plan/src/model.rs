@@ -206,8 +206,17 @@ impl CspaceModel {
         // default cache file must not write into one temporary file.
         let n = SAVES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let tmp = path.with_extension(format!("tmp.{}.{n}", std::process::id()));
-        std::fs::write(&tmp, text).map_err(|e| err(format!("cannot write: {e}")))?;
-        std::fs::rename(&tmp, path).map_err(|e| err(format!("cannot rename into place: {e}")))
+        let written = std::fs::write(&tmp, text)
+            .map_err(|e| err(format!("cannot write: {e}")))
+            .and_then(|()| {
+                std::fs::rename(&tmp, path)
+                    .map_err(|e| err(format!("cannot rename into place: {e}")))
+            });
+        if written.is_err() {
+            // No temporary file of this call is left behind.
+            let _ = std::fs::remove_file(&tmp);
+        }
+        written
     }
 
     /// Give every voxel of `grid` that some node interferes with its

@@ -194,20 +194,20 @@ impl DevTools {
         }
         let mut bytes = serde_json::to_vec(&message).unwrap();
         bytes.push(0);
-        self.to_browser.write_all(&bytes).unwrap();
-        self.to_browser.flush().unwrap();
+        if let Err(e) = self
+            .to_browser
+            .write_all(&bytes)
+            .and_then(|()| self.to_browser.flush())
+        {
+            panic!("cannot send {method}: {e}; {}", self.last_words());
+        }
         let deadline = Instant::now() + Duration::from_secs(300);
         loop {
             let left = deadline.saturating_duration_since(Instant::now());
-            let reply = self.from_browser.recv_timeout(left).unwrap_or_else(|e| {
-                let log = std::fs::read_to_string(self.profile.path().join("chromium.log"))
-                    .unwrap_or_default();
-                let tail: Vec<&str> = log.lines().rev().take(20).collect();
-                panic!(
-                    "no reply to {method}: {e}; Chromium's last words:\n{}",
-                    tail.into_iter().rev().collect::<Vec<_>>().join("\n")
-                )
-            });
+            let reply = self
+                .from_browser
+                .recv_timeout(left)
+                .unwrap_or_else(|e| panic!("no reply to {method}: {e}; {}", self.last_words()));
             if reply["id"].as_u64() == Some(id) {
                 assert!(reply.get("error").is_none(), "{method}: {}", reply["error"]);
                 return reply["result"].clone();
@@ -216,6 +216,15 @@ impl DevTools {
                 self.events.push(reply);
             }
         }
+    }
+
+    /// The last lines of Chromium's log, for a failure message.
+    fn last_words(&self) -> String {
+        let log =
+            std::fs::read_to_string(self.profile.path().join("chromium.log")).unwrap_or_default();
+        let tail: Vec<&str> = log.lines().rev().take(20).collect();
+        let tail: Vec<&str> = tail.into_iter().rev().collect();
+        format!("Chromium's last words:\n{}", tail.join("\n"))
     }
 
     /// The value of a JavaScript expression in the page.
