@@ -728,9 +728,10 @@ impl StageOneSetup {
     }
 }
 
-/// Run Stage One of AXBAM on a scenario. `progress` sees each viewpoint's
-/// record as it completes.
-pub fn run_stage_one(
+/// Run AXBAM on a scenario: Stage One, then Stage Two when
+/// `options.stage_two`, then the map products. `progress` sees each
+/// viewpoint's record as it completes.
+pub fn run_exploration(
     loaded: &LoadedScenario,
     options: &ExploreOptions,
     progress: &mut dyn FnMut(&ViewpointRecord),

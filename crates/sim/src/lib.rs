@@ -14,7 +14,7 @@
 //! | [`surface_score`] | [`surface_score::score_surface_model`]: a surface model against the true faces, edges and corners |
 //! | [`table_fit`] | [`table_fit::fit_table`]: a table plane fitted to scan points, as world frame and initial segment |
 //! | [`scan_job`] | the `surveyor scan` job as library calls |
-//! | [`explore_run`] | [`explore_run::run_stage_one`]: AXBAM Stage One through the hardware traits, every motion audited against the map and the ground truth; [`explore_run::ExploreRun::write`] (the `surveyor explore` files) |
+//! | [`explore_run`] | [`explore_run::run_exploration`]: AXBAM (both stages) through the hardware traits, every motion audited against the map and the ground truth; [`explore_run::ExploreRun::write`] (the `surveyor explore` files) |
 //! | [`follow_run`] | [`follow_run::run_episode`]: a `follow::Follower` through the hardware traits with ground-truth safety; [`follow_run::FollowSetup`] (scenario or scene file → rig + follower), [`follow_run::FollowRun::outputs`] (the `surveyor follow` files) |
 
 pub mod blast;

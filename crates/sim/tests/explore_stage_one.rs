@@ -10,7 +10,7 @@
 //! `cargo test --release -p sim --test explore_stage_one -- --ignored --nocapture`.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may panic
 
-use sim::explore_run::{ExploreOptions, StageOneSetup, run_stage_one};
+use sim::explore_run::{ExploreOptions, StageOneSetup, run_exploration};
 use sim::{Arm, Scenario, SimRig, tilt_sweep};
 use std::sync::Arc;
 
@@ -115,7 +115,7 @@ fn run(seed: u64) -> sim::explore_run::ExploreRun {
         max_viewpoints: Some(8),
         ..ExploreOptions::default()
     };
-    run_stage_one(&loaded, &options, &mut |_| {}).unwrap()
+    run_exploration(&loaded, &options, &mut |_| {}).unwrap()
 }
 
 #[test]
@@ -239,7 +239,7 @@ fn a_urdf_ur5_explores_a_bridge_sized_to_its_reach_safely() {
         max_viewpoints: Some(30),
         ..ExploreOptions::default()
     };
-    let run = run_stage_one(&loaded, &options, &mut |_| {}).unwrap();
+    let run = run_exploration(&loaded, &options, &mut |_| {}).unwrap();
     println!(
         "UR5: {} viewpoints, {}; A1 coverage {:.1} %",
         run.viewpoints.len(),
@@ -268,7 +268,7 @@ fn stage_two_aims_at_discs_safely_and_lowers_the_material_information() {
         stage_two: true,
         ..ExploreOptions::default()
     };
-    let run = run_stage_one(&loaded, &options, &mut |_| {}).unwrap();
+    let run = run_exploration(&loaded, &options, &mut |_| {}).unwrap();
     let two: Vec<_> = run.viewpoints.iter().filter(|r| r.stage == 2).collect();
     println!(
         "stage two: {} viewpoints ({:?}); H3 {:?}; accuracy {:?}",

@@ -4,7 +4,7 @@
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use sim::Scenario;
-use sim::explore_run::{ExploreOptions, run_stage_one};
+use sim::explore_run::{ExploreOptions, run_exploration};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -138,7 +138,7 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let t = std::time::Instant::now();
-    let run = run_stage_one(&loaded, &options, &mut |r| {
+    let run = run_exploration(&loaded, &options, &mut |r| {
         eprintln!(
             "stage {}, viewpoint {:>2}: H1 {:>9.1} (weighted {:>8.1}), H2 {:>7.3}, H3 {}, revealed {:>6}, A1 covered {}, {} candidates, decision {:>6.0} ms",
             r.stage,
