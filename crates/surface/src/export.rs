@@ -2,8 +2,7 @@
 
 use crate::model::SurfaceModel;
 use crate::segment::{Polygon, SegmentKind};
-use geom::polygon2::orient2d;
-use geom::{Point2, Real};
+use geom::Real;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 
@@ -259,47 +258,12 @@ impl SurfaceModel {
     }
 }
 
-/// Ear-clipping triangulation of a simple anticlockwise polygon (vertex indices).
-pub(crate) fn triangulate(p: &Polygon) -> Vec<[usize; 3]> {
-    let frame = p.frame();
-    let pts: Vec<Point2> = p.points_2d(&frame);
-    let mut idx: Vec<usize> = (0..pts.len()).collect();
-    let mut tris = Vec::new();
-    let mut guard = 0;
-    while idx.len() > 3 && guard < 10_000 {
-        guard += 1;
-        let m = idx.len();
-        let mut clipped = false;
-        for k in 0..m {
-            let (a, b, c) = (idx[(k + m - 1) % m], idx[k], idx[(k + 1) % m]);
-            if orient2d(&pts[a], &pts[b], &pts[c]) <= 0.0 {
-                continue;
-            }
-            let inside = idx.iter().any(|&o| {
-                o != a && o != b && o != c && {
-                    let q = &pts[o];
-                    orient2d(&pts[a], &pts[b], q) >= 0.0
-                        && orient2d(&pts[b], &pts[c], q) >= 0.0
-                        && orient2d(&pts[c], &pts[a], q) >= 0.0
-                }
-            });
-            if !inside {
-                tris.push([a, b, c]);
-                idx.remove(k);
-                clipped = true;
-                break;
-            }
-        }
-        if !clipped {
-            // Numerically degenerate remainder: fan it.
-            for k in 1..idx.len() - 1 {
-                tris.push([idx[0], idx[k], idx[k + 1]]);
-            }
-            return tris;
-        }
-    }
-    if idx.len() == 3 {
-        tris.push([idx[0], idx[1], idx[2]]);
-    }
-    tris
+/// Triangles of a polygon (vertex indices, anticlockwise in the polygon's
+/// frame): `geom`'s ear clipping on its 2-D points.
+fn triangulate(p: &Polygon) -> Vec<[usize; 3]> {
+    let pts = p.points_2d(&p.frame());
+    geom::primitives::triangulate(&pts)
+        .into_iter()
+        .map(|t| t.map(|k| k as usize))
+        .collect()
 }
