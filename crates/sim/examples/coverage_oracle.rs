@@ -40,10 +40,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let sweeps: usize = args.get(1).map_or(Ok(12), |s| s.parse())?;
     let extra: usize = args.get(2).map_or(Ok(0), |s| s.parse())?;
     let loaded = sim::Scenario::load(name)?;
+    // One cache file per scenario, named after it (a path's separators too).
+    let stem: String = name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
     let setup = StageOneSetup::new(
         &loaded,
         &ExploreOptions {
-            cspace_cache: Some(std::env::temp_dir().join(format!("surveyor-oracle-{name}.json"))),
+            cspace_cache: Some(std::env::temp_dir().join(format!("surveyor-oracle-{stem}.json"))),
             ..ExploreOptions::default()
         },
     )?;
@@ -109,7 +114,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     .all(|k| !occupied.contains(k));
             }
             let mut bits = vec![0u64; words];
-            if contact || ellipsoid {
+            // The start's sweep is taken whatever the rules say (a run takes it).
+            if i == 0 || contact || ellipsoid {
                 let points = simulated_sweep(&setup, robot, &world_from_base, &scanner, q, i)?;
                 for p in points {
                     for n in tree.within_unsorted::<SquaredEuclidean>(&[p.x, p.y, p.z], r2) {
@@ -139,13 +145,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 }
             })
             .collect();
-        let mut all = vec![0u64; words];
+        let mut all = per_pose[0].2.clone();
         for &i in &clear {
             or_into(&mut all, &per_pose[i].2);
         }
         println!(
-            "\n{rule} rule: {} poses clear with their sweep; all of their sweeps together cover {:.1} %",
+            "\n{rule} rule: {} poses clear with their sweep{}; all of their sweeps and the start's together cover {:.1} %",
             clear.len(),
+            if clear.first() == Some(&0) {
+                ""
+            } else {
+                " (the start pose is not)"
+            },
             pct(count(&all))
         );
         let mut have = per_pose[0].2.clone();
@@ -165,12 +176,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             print!(" {:.1}", pct(count(&have)));
         }
         println!(" %");
-        // No `sweeps` poses of the pool cover more than the greedy set plus
-        // the `sweeps` largest gains over it (coverage is submodular), nor
-        // more than all of them together.
+        // No start sweep plus `sweeps - 1` poses of the pool cover more than
+        // the greedy set plus the `sweeps - 1` largest gains over it
+        // (coverage is submodular), nor more than all of them together.
         let mut gains: Vec<usize> = clear.iter().map(|&i| gain(&per_pose[i].2, &have)).collect();
         gains.sort_unstable_by(|a, b| b.cmp(a));
-        let bound = (count(&have) + gains.iter().take(sweeps).sum::<usize>()).min(count(&all));
+        let bound = (count(&have) + gains.iter().take(sweeps.saturating_sub(1)).sum::<usize>())
+            .min(count(&all));
         println!(
             "no {sweeps} sweeps of these poses cover more than {:.1} %",
             pct(bound)

@@ -128,6 +128,34 @@ fn outputs_have_the_contract_layout() {
     let obj = m.to_obj();
     assert_eq!(obj.lines().filter(|l| l.starts_with("g ")).count(), m.len());
     assert!(obj.lines().any(|l| l.starts_with("f ")));
+    // The triangles cover each polygon: their areas sum to its own.
+    let mut verts: Vec<Point3> = Vec::new();
+    let mut tri_area = 0.0;
+    for line in obj.lines() {
+        let mut f = line.split_whitespace();
+        match f.next() {
+            Some("v") => {
+                let c: Vec<f64> = f.map(|x| x.parse().unwrap()).collect();
+                verts.push(Point3::new(c[0], c[1], c[2]));
+            }
+            Some("f") => {
+                let [a, b, c] =
+                    [0, 1, 2].map(|_| verts[f.next().unwrap().parse::<usize>().unwrap() - 1]);
+                tri_area += 0.5 * (b - a).cross(&(c - a)).norm();
+            }
+            _ => {}
+        }
+    }
+    let poly_area: f64 = m
+        .segments()
+        .filter_map(|s| s.as_polygon())
+        .map(|p| p.area().abs())
+        .sum();
+    assert!(poly_area > 0.0);
+    assert!(
+        (tri_area - poly_area).abs() < 1e-9 * poly_area.max(1.0),
+        "{tri_area} vs {poly_area}"
+    );
     // Stats.
     let st = m.stats();
     assert_eq!(st.segments, m.len());
