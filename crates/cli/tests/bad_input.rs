@@ -323,3 +323,204 @@ fn stage_configs_come_from_the_library_and_toml_files() {
     ]);
     assert!(e.contains("lambda"), "{e}");
 }
+
+#[test]
+fn raycast_repeat_is_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let fx = dir.path().join("fx");
+    ok(&[
+        "raycast-fixture",
+        "--out",
+        fx.to_str().unwrap(),
+        "--rays",
+        "100",
+    ]);
+    for repeat in ["0", "1001", "18446744073709551615"] {
+        let e = fails(&[
+            "raycast",
+            "--scene",
+            fx.join("structure.ply").to_str().unwrap(),
+            "--rays",
+            fx.join("rays.bin").to_str().unwrap(),
+            "--out",
+            dir.path().join("d.bin").to_str().unwrap(),
+            "--repeat",
+            repeat,
+        ]);
+        assert!(e.contains("--repeat") && e.contains("1 to 1000"), "{e}");
+        clean(&e);
+    }
+    assert!(!dir.path().join("d.bin").exists());
+}
+
+/// An output path that is a symbolic link writes the link's target (the
+/// link stays); a FIFO is written into, not replaced by a file; a folder
+/// is an error.
+#[cfg(unix)]
+#[test]
+fn outputs_follow_links_and_write_into_fifos() {
+    let dir = tempfile::tempdir().unwrap();
+    let fx = dir.path().join("fx");
+    ok(&[
+        "raycast-fixture",
+        "--out",
+        fx.to_str().unwrap(),
+        "--rays",
+        "100",
+    ]);
+    let raycast = |out: &Path| {
+        vec![
+            "raycast".to_owned(),
+            "--scene".to_owned(),
+            fx.join("structure.ply").display().to_string(),
+            "--rays".to_owned(),
+            fx.join("rays.bin").display().to_string(),
+            "--out".to_owned(),
+            out.display().to_string(),
+            "--repeat".to_owned(),
+            "1".to_owned(),
+        ]
+    };
+    let run_ok = |v: Vec<String>| ok(&v.iter().map(String::as_str).collect::<Vec<_>>());
+    // A link, also one whose target does not exist yet.
+    let target = dir.path().join("target.bin");
+    let link = dir.path().join("link.bin");
+    std::os::unix::fs::symlink("target.bin", &link).unwrap();
+    run_ok(raycast(&link));
+    assert!(
+        std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert_eq!(std::fs::metadata(&target).unwrap().len(), 400);
+    // A FIFO: a reader gets the 100 distances, the FIFO stays one.
+    let fifo = dir.path().join("fifo");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if made.is_ok_and(|s| s.success()) {
+        let f = fifo.clone();
+        let reader = std::thread::spawn(move || std::fs::read(f).unwrap());
+        run_ok(raycast(&fifo));
+        assert_eq!(reader.join().unwrap().len(), 400);
+        assert!(std::os::unix::fs::FileTypeExt::is_fifo(
+            &std::fs::metadata(&fifo).unwrap().file_type()
+        ));
+    }
+    // A folder.
+    let folder = dir.path().join("folder");
+    std::fs::create_dir(&folder).unwrap();
+    let v = raycast(&folder);
+    let e = fails(&v.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(e.contains("is a folder"), "{e}");
+    assert!(listing(&folder).is_empty());
+}
+
+#[test]
+fn out_folders_that_are_files_fail_before_the_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("afile");
+    std::fs::write(&file, "keep").unwrap();
+    let f = file.to_str().unwrap();
+    for args in [
+        vec!["explore", "--scenario", "bridge1", "--out", f],
+        vec!["plan-blast", "--run", "nowhere", "--out", f],
+    ] {
+        let e = fails(&args);
+        assert!(e.contains("exists and is not a folder"), "{e}");
+    }
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "keep");
+}
+
+#[test]
+fn degrees_convert_revolute_joints_only() {
+    // point3's three joints are prismatic: --deg leaves them in metres.
+    let out = ok(&[
+        "fk", "--robot", "point3", "--deg", "--joints", "1,2,3", "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let tip = &v["tip"];
+    for (row, want) in [(0, 1.0), (1, 2.0), (2, 3.0)] {
+        let got = tip[row][3].as_f64().unwrap();
+        assert!(
+            (got - want).abs() < 1e-9,
+            "tip row {row}: {got}, want {want}"
+        );
+    }
+    // A URDF with one of each: the revolute joint is converted.
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = dir.path().join("rp.urdf");
+    std::fs::write(
+        &urdf,
+        r#"<robot name="rp"><link name="a"/><link name="b"/><link name="c"/>
+<joint name="r" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/>
+<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+<joint name="p" type="prismatic"><parent link="b"/><child link="c"/><axis xyz="1 0 0"/>
+<limit lower="0" upper="2" effort="1" velocity="1"/></joint></robot>"#,
+    )
+    .unwrap();
+    let out = ok(&[
+        "fk",
+        "--robot",
+        urdf.to_str().unwrap(),
+        "--deg",
+        "--joints",
+        "90,1.5",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    // 90° about z, then 1.5 m along the rotated x: (0, 1.5, 0).
+    let (x, y) = (
+        v["tip"][0][3].as_f64().unwrap(),
+        v["tip"][1][3].as_f64().unwrap(),
+    );
+    assert!(
+        x.abs() < 1e-9 && (y - 1.5).abs() < 1e-9,
+        "tip at ({x}, {y})"
+    );
+}
+
+#[test]
+fn model_reads_sets_with_the_configured_limit_and_rejects_no_sets() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).display().to_string();
+    // One set of 5000 points on the plane z = 0, seen from above.
+    let pts: Vec<String> = (0..5000)
+        .map(|i| {
+            format!(
+                "[{}, {}, 0]",
+                f64::from(i % 100) * 0.002,
+                f64::from(i / 100) * 0.002
+            )
+        })
+        .collect();
+    let axes = vec!["[0, 0, -1]"; 5000];
+    std::fs::write(
+        p("big.jsonl"),
+        format!(
+            "{{\"points\": [{}], \"axes\": [{}]}}\n",
+            pts.join(", "),
+            axes.join(", ")
+        ),
+    )
+    .unwrap();
+    let e = fails(&["model", "--sets", &p("big.jsonl"), "--out", &p("m0")]);
+    assert!(e.contains("max_set_points"), "{e}");
+    std::fs::write(p("m.toml"), "max_set_points = 10000\n").unwrap();
+    ok(&[
+        "model",
+        "--sets",
+        &p("big.jsonl"),
+        "--config",
+        &p("m.toml"),
+        "--out",
+        &p("m1"),
+    ]);
+    assert!(dir.path().join("m1").is_dir());
+    std::fs::write(p("empty.jsonl"), "\n").unwrap();
+    let e = fails(&["model", "--sets", &p("empty.jsonl"), "--out", &p("m2")]);
+    assert!(
+        e.contains("empty.jsonl") && e.contains("no sensor sets"),
+        "{e}"
+    );
+    assert!(!dir.path().join("m2").exists());
+}

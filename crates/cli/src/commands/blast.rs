@@ -57,6 +57,7 @@ fn load_tool(path: &Path) -> Result<sim::blast::BlastTool> {
 }
 
 pub fn plan_blast(args: &PlanBlastArgs) -> Result<()> {
+    super::output::check_out_dir(&args.out)?;
     let mut config = BlastConfig::default();
     if let Some(path) = &args.tool {
         config.tool = load_tool(path)?;
@@ -89,8 +90,7 @@ pub fn plan_blast(args: &PlanBlastArgs) -> Result<()> {
         &config,
     )?;
     let seconds = t.elapsed().as_secs_f64();
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
+    super::output::create_out_dir(&args.out)?;
     plan.write(&args.out)?;
     say!(
         "{}; {seconds:.1} s; outputs in {}",

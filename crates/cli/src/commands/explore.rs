@@ -135,8 +135,7 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         stage_two,
         ..ExploreOptions::default()
     };
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
+    super::output::create_out_dir(&args.out)?;
     let t = std::time::Instant::now();
     let run = run_exploration(&loaded, &options, &mut |r| {
         eprintln!(

@@ -94,20 +94,38 @@ struct JointArgs {
     /// Joint values, comma separated: radians (metres for prismatic joints).
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true, num_args = 1)]
     joints: Option<Vec<Real>>,
-    /// Read --joints as degrees (revolute joints).
+    /// Read --joints as degrees (revolute joints; prismatic joints stay in metres).
     #[arg(long)]
     deg: bool,
 }
 
 impl JointArgs {
-    fn values(&self) -> Option<Vec<Real>> {
-        self.joints.as_ref().map(|q| {
-            if self.deg {
-                q.iter().map(|v| v.to_radians()).collect()
-            } else {
-                q.clone()
-            }
-        })
+    /// The joint values in radians and metres: with `--deg`, the values of
+    /// `robot`'s revolute joints are converted, its prismatic joints' kept
+    /// (`robot` is built only then).
+    fn values(&self, robot: impl FnOnce() -> Result<robot::Robot>) -> Result<Option<Vec<Real>>> {
+        let Some(q) = &self.joints else {
+            return Ok(None);
+        };
+        if !self.deg {
+            return Ok(Some(q.clone()));
+        }
+        let robot = robot()?;
+        let kinds: Vec<robot::JointKind> = robot
+            .joints
+            .iter()
+            .filter(|j| j.is_actuated())
+            .map(|j| j.kind)
+            .collect();
+        Ok(Some(
+            q.iter()
+                .enumerate()
+                .map(|(i, v)| match kinds.get(i) {
+                    Some(robot::JointKind::Prismatic) => *v,
+                    _ => v.to_radians(),
+                })
+                .collect(),
+        ))
     }
 }
 
@@ -182,7 +200,8 @@ struct RaycastArgs {
     #[arg(long)]
     threads: Option<usize>,
     /// Casts of the whole batch; the median time is reported (the protocol of
-    /// `../shared/bench/raycast_embree_dump.cpp`: median of 5 after the build).
+    /// `../shared/bench/raycast_embree_dump.cpp`: median of 5 after the build),
+    /// 1 to 1000.
     #[arg(long, default_value_t = 5)]
     repeat: usize,
 }
@@ -202,6 +221,8 @@ struct FixtureArgs {
 
 /// Most worker threads `raycast` starts.
 const MAX_THREADS: usize = 256;
+/// Most casts `raycast --repeat` takes.
+const MAX_REPEAT: usize = 1000;
 
 /// Run a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
@@ -268,7 +289,7 @@ fn fk(a: &FkArgs) -> Result<()> {
     let robot = robot_by_name_or_urdf(&a.robot, a.tip.as_deref())?;
     let q = a
         .joints
-        .values()
+        .values(|| Ok(robot.clone()))?
         .ok_or_else(|| anyhow!("--joints is required ({} values)", robot.dof()))?;
     let frames = robot.forward_kinematics(&q)?;
     let out = FkOutput {
@@ -347,11 +368,11 @@ fn scan(a: &ScanArgs) -> Result<()> {
     let t0 = Instant::now();
     let setup = match (&a.scenario, &a.scene) {
         (_, Some(file)) => {
+            let robot = a.robot.as_deref().unwrap_or("denso-vm6083");
             let q = a
                 .joints
-                .values()
+                .values(|| Ok(robot_by_name_or_urdf(robot, a.tip.as_deref())?))?
                 .ok_or_else(|| anyhow!("--joints is required with --scene"))?;
-            let robot = a.robot.as_deref().unwrap_or("denso-vm6083");
             let base = scene::PoseSpec {
                 translation: three(a.base_xyz.as_deref(), "--base-xyz", "metres", 1e6)?,
                 rpy_deg: three(a.base_rpy_deg.as_deref(), "--base-rpy-deg", "degrees", 1e6)?,
@@ -382,7 +403,8 @@ fn scan(a: &ScanArgs) -> Result<()> {
                     loaded.scenario.robot.preset.as_deref().unwrap_or("")
                 );
             }
-            ScanSetup::from_scenario(&loaded, a.joints.values(), a.tilt_deg, a.seed)?
+            let q = a.joints.values(|| Ok(loaded.build_robot()?))?;
+            ScanSetup::from_scenario(&loaded, q, a.tilt_deg, a.seed)?
         }
         (None, None) => bail!("give --scenario NAME|FILE or --scene FILE"),
     };
@@ -526,8 +548,11 @@ fn raycast(a: &RaycastArgs) -> Result<()> {
         .num_threads(threads)
         .build()
         .context("starting the thread pool")?;
-    let mut times = Vec::with_capacity(a.repeat.max(1));
-    for _ in 0..a.repeat.max(1) {
+    if !(1..=MAX_REPEAT).contains(&a.repeat) {
+        bail!("--repeat {}: expected 1 to {MAX_REPEAT}", a.repeat);
+    }
+    let mut times = Vec::with_capacity(a.repeat);
+    for _ in 0..a.repeat {
         let t2 = Instant::now();
         pool.install(|| scene.cast_rays_f32(&rays, f32::INFINITY, &mut out));
         times.push(t2.elapsed().as_secs_f64());

@@ -9,7 +9,7 @@ use std::fs::File;
 use std::io::BufReader;
 use std::path::PathBuf;
 use surface::{
-    ReplayError, ReplayOptions, SurfaceConfig, read_initial_segments_json, read_sets_jsonl,
+    ReplayError, ReplayOptions, SurfaceConfig, read_initial_segments_json, read_sets_jsonl_limited,
 };
 
 #[derive(Debug, Args)]
@@ -71,7 +71,17 @@ pub fn model(a: &ModelArgs) -> Result<()> {
     };
     config.validate()?;
     let file = File::open(sets_path).with_context(|| format!("opening {}", sets_path.display()))?;
-    let sets = read_sets_jsonl(BufReader::new(file), &sets_path.display().to_string())?;
+    let sets = read_sets_jsonl_limited(
+        BufReader::new(file),
+        &sets_path.display().to_string(),
+        config.max_set_points,
+    )?;
+    if sets.is_empty() {
+        bail!(
+            "{}: no sensor sets (expected one JSON object per line)",
+            sets_path.display()
+        );
+    }
     let initial = match &a.initial {
         Some(path) => {
             let text = std::fs::read_to_string(path)

@@ -37,14 +37,27 @@ impl Staged {
             missing.push(p.to_owned());
             d = p.parent();
         }
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        create_out_dir(dir)?;
         self.created.extend(missing.into_iter().rev());
         Ok(())
     }
 
     /// The temporary path to write `dest` under (its folder is created if
-    /// missing). The file appears at `dest` on [`Staged::commit`].
+    /// missing). The file appears at `dest` on [`Staged::commit`]. A symbolic
+    /// link is followed (its target is written); a device, FIFO or socket is
+    /// written in place, not replaced; a folder is an error.
     pub fn file(&mut self, dest: &Path) -> Result<PathBuf> {
+        let dest = follow_link(dest)?;
+        match std::fs::metadata(&dest) {
+            Ok(m) if m.is_dir() => {
+                anyhow::bail!("{}: is a folder, expected a file path", dest.display())
+            }
+            Ok(m) if !m.is_file() => {
+                self.files.push((dest.clone(), dest.clone()));
+                return Ok(dest);
+            }
+            _ => {}
+        }
         if let Some(parent) = dest.parent() {
             self.ensure_dir(parent)?;
         }
@@ -54,7 +67,7 @@ impl Staged {
             .unwrap_or_default();
         // Keep the extension last: writers choose the format by it.
         let tmp = dest.with_file_name(format!(".{}-{name}", tag()));
-        self.files.push((tmp.clone(), dest.to_owned()));
+        self.files.push((tmp.clone(), dest));
         Ok(tmp)
     }
 
@@ -66,12 +79,50 @@ impl Staged {
     /// Move every staged file into place.
     pub fn commit(mut self) -> Result<()> {
         for (tmp, dest) in &self.files {
+            if tmp == dest {
+                continue;
+            }
             std::fs::rename(tmp, dest)
                 .with_context(|| format!("moving the output into place at {}", dest.display()))?;
         }
         self.committed = true;
         Ok(())
     }
+}
+
+/// An error when `dir` exists and is not a folder (checked before the work
+/// whose outputs go there).
+pub fn check_out_dir(dir: &Path) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        anyhow::bail!("{}: exists and is not a folder", dir.display());
+    }
+    Ok(())
+}
+
+/// Create the output folder `dir` (and missing parents) unless it exists.
+pub fn create_out_dir(dir: &Path) -> Result<()> {
+    check_out_dir(dir)?;
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))
+}
+
+/// `path`, or the file a symbolic link at `path` points to (followed to the
+/// end; a dangling link's last target, to be created).
+fn follow_link(path: &Path) -> Result<PathBuf> {
+    let mut p = path.to_owned();
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let target = std::fs::read_link(&p)
+                    .with_context(|| format!("reading the link {}", p.display()))?;
+                p = match p.parent() {
+                    Some(dir) if target.is_relative() => dir.join(target),
+                    _ => target,
+                };
+            }
+            _ => return Ok(p),
+        }
+    }
+    anyhow::bail!("{}: too many levels of symbolic links", path.display())
 }
 
 /// A name part unique to this process.
@@ -84,7 +135,10 @@ impl Drop for Staged {
         if self.committed {
             return;
         }
-        for (tmp, _) in &self.files {
+        for (tmp, dest) in &self.files {
+            if tmp == dest {
+                continue;
+            }
             let _ = std::fs::remove_file(tmp);
         }
         // Only folders that are empty again (remove_dir refuses others).
