@@ -524,3 +524,22 @@ fn model_reads_sets_with_the_configured_limit_and_rejects_no_sets() {
     );
     assert!(!dir.path().join("m2").exists());
 }
+
+#[test]
+fn urdf_warnings_reach_the_user() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = dir.path().join("nl.urdf");
+    std::fs::write(
+        &urdf,
+        r#"<robot name="t"><link name="a"/><link name="b"/>
+<joint name="j1" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint></robot>"#,
+    )
+    .unwrap();
+    let out = support::surveyor(&["fk", "--robot", urdf.to_str().unwrap(), "--joints", "1"]);
+    assert!(out.status.success());
+    let e = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        e.contains("warning: ") && e.contains("nl.urdf:2") && e.contains("'j1' has no <limit"),
+        "{e}"
+    );
+}

@@ -158,6 +158,59 @@ impl ScannerConfig {
             "a finite fraction of the range >= 0",
             n.relative_far,
         )?;
+        let r = &self.reflection;
+        for (ok, field, expected, v) in [
+            (
+                r.peak_intensity > 0.0,
+                "reflection.peak_intensity",
+                "a finite intensity > 0",
+                r.peak_intensity,
+            ),
+            (
+                r.diffuse_weight >= 0.0,
+                "reflection.diffuse_weight",
+                "a finite weight >= 0",
+                r.diffuse_weight,
+            ),
+            (
+                r.lobe_min_rad > 0.0,
+                "reflection.lobe_min_rad",
+                "a finite angle > 0 (radians)",
+                r.lobe_min_rad,
+            ),
+            (
+                r.lobe_per_roughness_rad >= 0.0,
+                "reflection.lobe_per_roughness_rad",
+                "a finite angle >= 0 (radians)",
+                r.lobe_per_roughness_rad,
+            ),
+            (
+                r.reference_range_m > 0.0,
+                "reflection.reference_range_m",
+                "a finite distance > 0",
+                r.reference_range_m,
+            ),
+            (
+                (0.0..1.0).contains(&r.intensity_noise_rel),
+                "reflection.intensity_noise_rel",
+                "a relative standard deviation in [0, 1)",
+                r.intensity_noise_rel,
+            ),
+            (
+                (0.0..1.0).contains(&r.specular_range_bias_m),
+                "reflection.specular_range_bias_m",
+                "a range bias in [0, 1) m",
+                r.specular_range_bias_m,
+            ),
+            (
+                (0.0..1.0).contains(&r.roughness_range_bias_m),
+                "reflection.roughness_range_bias_m",
+                "a range bias in [0, 1) m",
+                r.roughness_range_bias_m,
+            ),
+        ] {
+            check(ok && v.is_finite(), field, expected, v)?;
+        }
         let rays = self.ray_count();
         if rays > MAX_RAYS_PER_SCAN {
             return Err(SensorError::Budget {
@@ -466,5 +519,46 @@ mod tests {
             .validate()
             .is_ok()
         );
+    }
+
+    type Spoil = fn(&mut ReflectionModel);
+
+    #[test]
+    fn reflection_settings_are_checked() {
+        let base = ReflectionModel::default();
+        let cases: [(Spoil, &str); 9] = [
+            (|r| r.peak_intensity = Real::NAN, "peak_intensity"),
+            (|r| r.peak_intensity = -4000.0, "peak_intensity"),
+            (|r| r.diffuse_weight = Real::NAN, "diffuse_weight"),
+            (|r| r.lobe_min_rad = 0.0, "lobe_min_rad"),
+            (
+                |r| r.lobe_per_roughness_rad = Real::INFINITY,
+                "lobe_per_roughness_rad",
+            ),
+            (|r| r.reference_range_m = Real::NAN, "reference_range_m"),
+            (|r| r.intensity_noise_rel = -1.0, "intensity_noise_rel"),
+            (
+                |r| r.specular_range_bias_m = Real::NAN,
+                "specular_range_bias_m",
+            ),
+            (
+                |r| r.roughness_range_bias_m = Real::INFINITY,
+                "roughness_range_bias_m",
+            ),
+        ];
+        for (spoil, field) in cases {
+            let mut reflection = base;
+            spoil(&mut reflection);
+            let cfg = ScannerConfig {
+                reflection,
+                ..ScannerConfig::default()
+            };
+            let err = cfg.validate().unwrap_err().to_string();
+            assert!(
+                err.starts_with(&format!("sensor config `reflection.{field}`")),
+                "{err}"
+            );
+        }
+        assert!(ScannerConfig::default().validate().is_ok());
     }
 }

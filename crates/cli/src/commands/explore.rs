@@ -110,6 +110,9 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
             );
         }
     }
+    if loaded.scenario.robot.urdf.is_some() {
+        super::warn_about(&loaded.build_robot()?);
+    }
     // One cache file per robot (a URDF by its file name), so runs that
     // alternate robots do not rebuild each other's model.
     let spec = &loaded.scenario.robot;

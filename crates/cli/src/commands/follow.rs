@@ -185,6 +185,7 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
         }
         (None, None) => bail!("give --scenario NAME|FILE or --scene FILE"),
     };
+    super::warn_about(setup.rig.robot());
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = Arc::clone(&stop);

@@ -285,8 +285,17 @@ struct LimitViolation {
     message: String,
 }
 
+/// Print what reading the robot's URDF noted (a joint without limits, a
+/// mesh not read) to stderr.
+fn warn_about(robot: &robot::Robot) {
+    for w in &robot.warnings {
+        eprintln!("warning: {w}");
+    }
+}
+
 fn fk(a: &FkArgs) -> Result<()> {
     let robot = robot_by_name_or_urdf(&a.robot, a.tip.as_deref())?;
+    warn_about(&robot);
     let q = a
         .joints
         .values(|| Ok(robot.clone()))?
@@ -408,6 +417,7 @@ fn scan(a: &ScanArgs) -> Result<()> {
         }
         (None, None) => bail!("give --scenario NAME|FILE or --scene FILE"),
     };
+    warn_about(&setup.robot);
     let t_setup = t0.elapsed();
     let pb = progress_bar(setup.sweep.scan_count() as u64, "sweeping");
     let t1 = Instant::now();
