@@ -543,3 +543,39 @@ fn urdf_warnings_reach_the_user() {
         "{e}"
     );
 }
+
+/// Fields the scan itself does not use are still checked when the scenario
+/// is read (a Stage Two setting, the scanner's reflection model).
+#[test]
+fn scenario_files_are_checked_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let shown = ok(&["scenario", "show", "bridge1"]);
+    for (from, to, field) in [
+        ("d_max_m = 0.8", "d_max_m = -5.0", "pose.d_max_m"),
+        (
+            "specular_range_bias_m = 0.006",
+            "specular_range_bias_m = nan",
+            "reflection.specular_range_bias_m",
+        ),
+        (
+            "peak_intensity = 4000.0",
+            "peak_intensity = -4000.0",
+            "reflection.peak_intensity",
+        ),
+    ] {
+        assert!(shown.contains(from), "`{from}` not in the shown scenario");
+        let path = dir.path().join("s.toml");
+        std::fs::write(&path, shown.replacen(from, to, 1)).unwrap();
+        let out = dir.path().join("s.ply");
+        let e = fails(&[
+            "scan",
+            "--scenario",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(e.contains("s.toml") && e.contains(field), "{e}");
+        clean(&e);
+        assert!(!out.exists());
+    }
+}

@@ -194,6 +194,7 @@ impl ExploreConfig {
         if self.max_viewpoints == 0 {
             return Err(bad("explore.max_viewpoints", "at least 1", "0".into()));
         }
+        self.pose.validate().map_err(ExploreError::Plan)?;
         self.mapping.sld.validate()?;
         self.mapping.segment.validate()?;
         if self.link_k == 0 || self.max_plan_attempts == 0 {

@@ -106,6 +106,11 @@ pub struct TsdfConfig {
     pub mesh_min_weight: Real,
 }
 
+/// The longest truncation band, in voxels each side of a surface (voxblox
+/// uses 2–4): every voxel of the band is stored, so a finer voxel at the same
+/// truncation multiplies the memory by the cube of the ratio.
+pub const MAX_TRUNCATION_VOXELS: Real = 64.0;
+
 impl Default for TsdfConfig {
     fn default() -> Self {
         Self {
@@ -143,10 +148,13 @@ impl TsdfConfig {
                 self.voxel_m,
             ));
         }
-        if !(self.truncation_m.is_finite() && self.truncation_m >= self.voxel_m) {
+        if !(self.truncation_m.is_finite()
+            && self.truncation_m >= self.voxel_m
+            && self.truncation_m <= MAX_TRUNCATION_VOXELS * self.voxel_m)
+        {
             return Err(MapError::config(
                 "tsdf.truncation_m",
-                "a length of at least one voxel",
+                "a length of 1 to 64 voxels (tsdf.voxel_m)",
                 self.truncation_m,
             ));
         }

@@ -260,6 +260,12 @@ fn bad_input_and_config_are_errors() {
             block_size: 1,
             ..TsdfConfig::default()
         },
+        // A band of 200 voxels each side (an audit's voxel_m = 0.0002 with
+        // the default truncation took 8 GB and aborted).
+        TsdfConfig {
+            voxel_m: 0.0002,
+            ..TsdfConfig::default()
+        },
         TsdfConfig {
             max_range_m: 0.0,
             ..TsdfConfig::default()

@@ -228,8 +228,8 @@ pub fn map(a: &MapArgs) -> Result<()> {
         } else if summary.occupancy.rays_outside == sweep.len() {
             let b = mapper.occupancy().geometry().aabb();
             eprintln!(
-                "warning: {}: all {} rays lie outside the map (A3 = [{:.2}, {:.2}] × [{:.2}, {:.2}] × [{:.2}, {:.2}] m): \
-                 nothing was integrated; check the scan's frame or pass --scenario with its regions",
+                "warning: {}: all {} rays lie outside the occupancy map (A3 = [{:.2}, {:.2}] × [{:.2}, {:.2}] × [{:.2}, {:.2}] m): \
+                 nothing was integrated into it (the TSDF mesh is not bounded by A3); check the scan's frame or pass --scenario with its regions",
                 path.display(),
                 sweep.len(),
                 b.min.x,
