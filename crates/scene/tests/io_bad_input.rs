@@ -885,6 +885,7 @@ fn stl_kinds() {
 
 #[test]
 fn obj_inputs_that_trip_tobj() {
+    use std::fmt::Write as _;
     let dir = tempfile::tempdir().unwrap();
     // `f 1/0/1` makes tobj compute usize::MAX * 2 (a panic in debug builds);
     // texture and normal references are not used, so this loads.
@@ -915,6 +916,57 @@ fn obj_inputs_that_trip_tobj() {
         &message(io::load_mesh(&path, 1.0)),
         &["w0.obj:1:", "weight w = 0"],
     );
+    // A face of more vertices than MAX_FACE_VERTICES (one of 200 000 took
+    // minutes to triangulate); one at the limit loads.
+    for (n, ok) in [
+        (io::MAX_FACE_VERTICES, true),
+        (io::MAX_FACE_VERTICES + 1, false),
+    ] {
+        let mut text = String::new();
+        for i in 0..n {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            writeln!(text, "v {} {} 0", a.cos(), a.sin()).unwrap();
+        }
+        text.push('f');
+        for i in 1..=n {
+            write!(text, " {i}").unwrap();
+        }
+        text.push('\n');
+        let path = write(dir.path(), "disc.obj", text.as_bytes());
+        let got = io::load_mesh(&path, 1.0);
+        if ok {
+            assert_eq!(got.unwrap().triangles.len(), n - 2);
+        } else {
+            assert_mentions(
+                &message(got),
+                &["disc.obj:", "face has 4097 vertices", "4096"],
+            );
+        }
+        // The same face in an ASCII PLY.
+        let mut ply = format!(
+            "ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\nproperty float y\n\
+             property float z\nelement face 1\nproperty list ushort int vertex_indices\nend_header\n"
+        );
+        for i in 0..n {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            writeln!(ply, "{} {} 0", a.cos(), a.sin()).unwrap();
+        }
+        ply.push_str(&n.to_string());
+        for i in 0..n {
+            write!(ply, " {i}").unwrap();
+        }
+        ply.push('\n');
+        let path = write(dir.path(), "disc.ply", ply.as_bytes());
+        let got = io::load_mesh(&path, 1.0);
+        if ok {
+            assert_eq!(got.unwrap().triangles.len(), n - 2);
+        } else {
+            assert_mentions(
+                &message(got),
+                &["disc.ply", "face 0 has 4097 vertices", "4096"],
+            );
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------

@@ -6,7 +6,7 @@
 //! hands `tobj` only positions and position indices: no `vt`/`vn` data, no
 //! materials, no groups. `tobj` then parses and triangulates.
 
-use super::{Precision, check_mesh_for_writing, finish_mesh, write_file};
+use super::{MAX_FACE_VERTICES, Precision, check_mesh_for_writing, finish_mesh, write_file};
 use crate::{SceneError, TriMesh};
 use geom::{Point3, Real};
 use std::fmt::Write as _;
@@ -126,6 +126,16 @@ fn sanitize(path: &Path, bytes: &[u8]) -> Result<String, SceneError> {
                 return Err(err(
                     line_no,
                     format!("face has {} vertices; a face needs at least 3", words.len()),
+                ));
+            }
+            if words.len() > MAX_FACE_VERTICES {
+                return Err(err(
+                    line_no,
+                    format!(
+                        "face has {} vertices, more than {MAX_FACE_VERTICES} (the triangulation \
+                         grows faster than linearly with them; split the face)",
+                        words.len()
+                    ),
                 ));
             }
             out.push('f');

@@ -1,7 +1,7 @@
 //! PLY (Stanford polygon file format): header, the three encodings, vertex
 //! tables, meshes, clouds and the binary writers.
 
-use super::{Fields, NonFinite, build_cloud, read_file};
+use super::{Fields, MAX_FACE_VERTICES, NonFinite, build_cloud, read_file};
 use crate::{PointCloud, SceneError, TriMesh};
 use geom::{Point3, Real};
 use std::io::{self, Write};
@@ -778,6 +778,16 @@ struct Reader<'a> {
     out: &'a mut Parsed,
 }
 
+/// What is wrong with face `row` of `n` vertices (fewer than 3, or more than
+/// [`MAX_FACE_VERTICES`]: its fan's slivers defeat the scene's BVH).
+fn face_size(row: usize, n: usize) -> String {
+    if n < 3 {
+        format!("face {row} has {n} vertices; a face needs at least 3")
+    } else {
+        format!("face {row} has {n} vertices, more than {MAX_FACE_VERTICES}; split the face")
+    }
+}
+
 impl Reader<'_> {
     fn start_vertex_table(&mut self, element: &Element, capacity: usize) {
         let scalars: Vec<&Property> = element
@@ -918,12 +928,8 @@ impl Reader<'_> {
                                 ));
                             };
                             pos += need;
-                            if n < 3 {
-                                return Err(SceneError::parse(
-                                    path,
-                                    None,
-                                    format!("face {row} has {n} vertices; a face needs at least 3"),
-                                ));
+                            if !(3..=MAX_FACE_VERTICES).contains(&n) {
+                                return Err(SceneError::parse(path, None, face_size(row, n)));
                             }
                             face_buf.clear();
                             for c in items.chunks_exact(item.size()) {
@@ -1080,10 +1086,8 @@ impl Reader<'_> {
                             };
                             t += n;
                             let is_faces = plan.role == Role::Face(j);
-                            if is_faces && n < 3 {
-                                return Err(err(format!(
-                                    "face {row} has {n} vertices; a face needs at least 3"
-                                )));
+                            if is_faces && !(3..=MAX_FACE_VERTICES).contains(&n) {
+                                return Err(err(face_size(row, n)));
                             }
                             face_buf.clear();
                             for token in items {
