@@ -339,6 +339,16 @@ impl Scene {
                     "has no triangles",
                 ));
             }
+            let area = m.area();
+            if area.is_nan() || area <= 0.0 {
+                return Err(SceneError::invalid(
+                    format!("object `{name}`"),
+                    format!(
+                        "has no area: all {} triangles are degenerate",
+                        m.triangles.len()
+                    ),
+                ));
+            }
             let start = mesh.triangles.len();
             let closed = m.boundary_edge_count() == 0;
             mesh.append(&m);

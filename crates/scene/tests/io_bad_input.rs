@@ -751,7 +751,14 @@ fn corrupt_lzf_payloads() {
         b[stream + k * len / 300] ^= 0xFF;
         let path = write(dir.path(), "flip.pcd", &b);
         if let Err(e) = io::load_cloud(&path) {
-            assert_mentions(&e.to_string(), &["flip.pcd", "binary_compressed"]);
+            // A flip that decodes to an absurd coordinate is caught by the
+            // coordinate limit instead.
+            let e = e.to_string();
+            if e.contains("beyond") {
+                assert_mentions(&e, &["flip.pcd", "point"]);
+            } else {
+                assert_mentions(&e, &["flip.pcd", "binary_compressed"]);
+            }
             caught += 1;
         }
     }
@@ -1160,5 +1167,57 @@ fn absurd_header_numbers_do_not_hang_or_overflow() {
             "list 'vertex_indices' of 4294967295 indices",
             "needs 17179869180 bytes, only 0 left",
         ],
+    );
+}
+
+/// Coordinates beyond ±MAX_COORDINATE_M (as scenario shapes) and scenes of
+/// no area are errors, not scenes of 0 samples.
+#[test]
+fn far_coordinates_and_arealess_meshes_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let far = write(
+        dir.path(),
+        "far.obj",
+        b"v 1e30 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    );
+    assert_mentions(
+        &message(io::load_mesh(&far, 1.0)),
+        &["far.obj", "vertex 0", "beyond", "1e7"],
+    );
+    // The limit applies after scaling.
+    let unit = write(
+        dir.path(),
+        "unit.obj",
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    );
+    assert!(io::load_mesh(&unit, 1e6).is_ok());
+    assert_mentions(
+        &message(io::load_mesh(&unit, 1e12)),
+        &["unit.obj", "beyond"],
+    );
+    // A scene of no area: the file reads, the scene is refused.
+    let flat = write(
+        dir.path(),
+        "flat.obj",
+        b"v 0 0 0\nv 0 0 0\nv 0 0 0\nf 1 2 3\n",
+    );
+    for (mesh, what) in [
+        (io::load_mesh(&unit, 1e-300).unwrap(), "scaled to nothing"),
+        (io::load_mesh(&flat, 1.0).unwrap(), "three equal vertices"),
+    ] {
+        let e = scene::Scene::from_mesh(
+            "flat",
+            mesh,
+            scene::default_materials(),
+            scene::MaterialId(0),
+        )
+        .map(|_| ())
+        .expect_err(what);
+        assert_mentions(&e.to_string(), &["flat", "no area", "degenerate"]);
+    }
+    let cloud = write(dir.path(), "far.txt", b"1 0 0\n1e300 0 0\n0 1 0\n");
+    assert_mentions(
+        &message(io::load_cloud(&cloud)),
+        &["far.txt", "point 1", "beyond"],
     );
 }

@@ -282,17 +282,21 @@ fn pcd_encodings_agree_and_drop_nan_pixels() {
 
 #[test]
 fn pcd_double_coordinates_signed_labels_and_nan_normals() {
-    // F8 coordinates, I2 labels, one finite point with a NaN normal: the
-    // normals are dropped rather than carrying NaN.
+    // F8 coordinates (one no f32 holds: 1234567.891 would read 1234567.875),
+    // I2 labels, one finite point with a NaN normal: the normals are dropped
+    // rather than carrying NaN.
     let dir = tempfile::tempdir().unwrap();
     let text = "VERSION .7\nFIELDS x y z label normal_x normal_y normal_z\nSIZE 8 8 8 2 4 4 4\n\
                 TYPE F F F I F F F\nWIDTH 3\nPOINTS 3\nDATA ascii\n\
-                0.1 0.2 0.3 -5 0 0 1\nnan nan nan 0 nan nan nan\n1e300 -2 3 7 nan nan nan\n";
+                0.1 0.2 0.3 -5 0 0 1\nnan nan nan 0 nan nan nan\n1234567.891 -2 3 7 nan nan nan\n";
     let path = write(dir.path(), "d.pcd", text.as_bytes());
     let c = io::load_cloud(&path).unwrap();
     assert_eq!(
         c.points,
-        [Point3::new(0.1, 0.2, 0.3), Point3::new(1e300, -2.0, 3.0)]
+        [
+            Point3::new(0.1, 0.2, 0.3),
+            Point3::new(1_234_567.891, -2.0, 3.0)
+        ]
     );
     assert_eq!(c.labels, Some(vec![-5, 7]));
     assert_eq!(c.normals, None);

@@ -304,11 +304,25 @@ fn finish_mesh(
             ),
         ));
     }
-    Ok(TriMesh::new(
-        vertices,
-        triangles,
-        &path.display().to_string(),
-    )?)
+    let mesh = TriMesh::new(vertices, triangles, &path.display().to_string())?;
+    if let Some((i, v)) = mesh
+        .vertices
+        .iter()
+        .enumerate()
+        .find(|(_, v)| v.iter().any(|c| c.abs() > crate::spec::MAX_COORDINATE_M))
+    {
+        return Err(SceneError::invalid(
+            path.display().to_string(),
+            format!(
+                "vertex {i} at ({:.3e}, {:.3e}, {:.3e}) m (after scaling) is beyond ±{:e} m",
+                v.x,
+                v.y,
+                v.z,
+                crate::spec::MAX_COORDINATE_M
+            ),
+        ));
+    }
+    Ok(mesh)
 }
 
 /// Per-point columns decoded from a file, all of one length.
@@ -355,6 +369,18 @@ fn build_cloud(
                     ));
                 }
             }
+        }
+        if p.iter().any(|c| c.abs() > crate::spec::MAX_COORDINATE_M) {
+            return Err(err(
+                i,
+                format!(
+                    "coordinates ({:.3e}, {:.3e}, {:.3e}) are beyond ±{:e} m",
+                    p.x,
+                    p.y,
+                    p.z,
+                    crate::spec::MAX_COORDINATE_M
+                ),
+            ));
         }
         points.push(p);
         if let (Some(out), Some([a, b, c])) = (normals.as_mut(), fields.normals) {
