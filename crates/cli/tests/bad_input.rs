@@ -579,3 +579,53 @@ fn scenario_files_are_checked_whole() {
         assert!(!out.exists());
     }
 }
+
+/// Inputs with nothing in them are errors, not empty outputs.
+#[test]
+fn empty_inputs_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).display().to_string();
+    // A discs CSV of its header only.
+    ok(&[
+        "sld",
+        "--input",
+        &data("meshes/cinder_block_meters.obj"),
+        "--out",
+        &p("discs.csv"),
+    ]);
+    let text = std::fs::read_to_string(p("discs.csv")).unwrap();
+    let header = text.lines().next().unwrap();
+    std::fs::write(p("header.csv"), format!("{header}\n")).unwrap();
+    let e = fails(&[
+        "segment",
+        "--discs",
+        &p("header.csv"),
+        "--out",
+        &p("s.json"),
+    ]);
+    assert!(e.contains("header.csv") && e.contains("no discs"), "{e}");
+    // A PLY of no vertices.
+    std::fs::write(
+        p("none.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n",
+    )
+    .unwrap();
+    let e = fails(&["sld", "--input", &p("none.ply"), "--out", &p("d.csv")]);
+    assert!(e.contains("none.ply") && e.contains("no points"), "{e}");
+    // No rays.
+    ok(&["raycast-fixture", "--out", &p("fx"), "--rays", "10"]);
+    std::fs::write(p("rays.bin"), b"").unwrap();
+    let e = fails(&[
+        "raycast",
+        "--scene",
+        &p("fx/structure.ply"),
+        "--rays",
+        &p("rays.bin"),
+        "--out",
+        &p("d.bin"),
+    ]);
+    assert!(e.contains("rays.bin") && e.contains("no rays"), "{e}");
+    for f in ["s.json", "d.csv", "d.bin"] {
+        assert!(!dir.path().join(f).exists(), "{f} was written");
+    }
+}

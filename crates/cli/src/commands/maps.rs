@@ -61,6 +61,9 @@ pub fn sld(a: &SldArgs) -> Result<()> {
     };
     cfg.validate()?;
     let loaded = load_points(input)?;
+    if loaded.points.is_empty() {
+        bail!("{}: no points", input.display());
+    }
     let t0 = Instant::now();
     let result = generate_discs(&loaded.points, loaded.orientation(), &cfg, a.seed)?;
     let elapsed = t0.elapsed().as_secs_f64();
@@ -140,6 +143,9 @@ pub fn segment(a: &SegmentArgs) -> Result<()> {
     };
     cfg.validate()?;
     let discs = load_discs_csv(discs_path)?;
+    if discs.is_empty() {
+        bail!("{}: no discs (the file has no rows)", discs_path.display());
+    }
     let poses = a.poses.as_deref().map(load_poses_csv).transpose()?;
     let t0 = Instant::now();
     let segments = segment_discs(&discs, poses.as_deref(), &cfg)?;

@@ -548,6 +548,9 @@ fn raycast(a: &RaycastArgs) -> Result<()> {
     )?;
     let t_build = t1.elapsed();
     let rays = read_rays(&a.rays)?;
+    if rays.is_empty() {
+        bail!("{}: no rays", a.rays.display());
+    }
     let mut out = vec![0f32; rays.len()];
     let threads = match a.threads {
         None => rayon::current_num_threads().max(1),
