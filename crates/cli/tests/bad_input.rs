@@ -545,7 +545,8 @@ fn urdf_warnings_reach_the_user() {
 }
 
 /// Fields the scan itself does not use are still checked when the scenario
-/// is read (a Stage Two setting, the scanner's reflection model).
+/// is read (a Stage Two setting, the scanner's reflection model, the
+/// regions).
 #[test]
 fn scenario_files_are_checked_whole() {
     let dir = tempfile::tempdir().unwrap();
@@ -561,6 +562,12 @@ fn scenario_files_are_checked_whole() {
             "peak_intensity = 4000.0",
             "peak_intensity = -4000.0",
             "reflection.peak_intensity",
+        ),
+        // A1's max below its min on x.
+        (
+            "max = [1.1, 1.1, 1.5750000000000002]",
+            "max = [-2.0, 1.1, 1.575]",
+            "regions.a1",
         ),
     ] {
         assert!(shown.contains(from), "`{from}` not in the shown scenario");

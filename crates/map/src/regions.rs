@@ -56,6 +56,15 @@ pub struct RegionBox {
     pub max: [Real; 3],
 }
 
+impl std::fmt::Display for RegionBox {
+    /// `min [x, y, z], max [x, y, z]` (metres).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [a, b, c] = self.min;
+        let [x, y, z] = self.max;
+        write!(f, "min [{a}, {b}, {c}], max [{x}, {y}, {z}]")
+    }
+}
+
 impl RegionBox {
     /// A cube of half-size `half_m` around `centre`.
     pub fn around(centre: [Real; 3], half_m: Real) -> Self {
@@ -136,7 +145,7 @@ impl RegionsConfig {
                 return Err(MapError::config(
                     field,
                     "a box with finite corners and min < max on every axis",
-                    format!("{b:?}"),
+                    b.to_string(),
                 ));
             }
         }
@@ -144,14 +153,14 @@ impl RegionsConfig {
             return Err(MapError::config(
                 "regions.a1",
                 "a box inside regions.a2",
-                format!("{:?}", self.a1),
+                self.a1.to_string(),
             ));
         }
         if !self.a3.contains_box(&self.a2) {
             return Err(MapError::config(
                 "regions.a2",
                 "a box inside regions.a3",
-                format!("{:?}", self.a2),
+                self.a2.to_string(),
             ));
         }
         Ok(())

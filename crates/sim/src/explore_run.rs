@@ -57,7 +57,14 @@ pub struct ExploreOptions {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 struct Checkpoint {
     format: u32,
+    /// FNV-1a 64 of the checkpoint's JSON with this field 0: a checkpoint
+    /// edited by hand is refused (its records are replayed without audit).
+    checksum: u64,
     scenario: String,
+    /// The scenario as run (`scenario.toml`'s text, the robot included).
+    scenario_toml: String,
+    /// Whether Stage Two follows Stage One.
+    stage_two: bool,
     seed: u64,
     config: ExploreConfig,
     sweep: sensor::SweepConfig,
@@ -70,16 +77,36 @@ struct Checkpoint {
     stage_two_tried: Vec<usize>,
 }
 
-/// Version of the checkpoint format.
-const CHECKPOINT_FORMAT: u32 = 1;
+/// Version of the checkpoint format (2: checksum, scenario text, stages).
+const CHECKPOINT_FORMAT: u32 = 2;
+
+/// FNV-1a, 64 bits: a checksum that is the same on every platform.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
 
 impl Checkpoint {
+    /// The checksum of `self` (its own `checksum` field taken as 0).
+    fn digest(&self) -> Result<u64, serde_json::Error> {
+        let text = serde_json::to_string(&Self {
+            checksum: 0,
+            ..self.clone()
+        })?;
+        Ok(fnv1a(text.as_bytes()))
+    }
+
     fn write(&self, path: &Path) -> Result<(), SimError> {
         let err = |e: &dyn std::fmt::Display| SimError::InvalidArgument {
             what: path.display().to_string(),
             message: format!("cannot write the checkpoint: {e}"),
         };
-        let text = serde_json::to_string(self).map_err(|e| err(&e))?;
+        let sealed = Self {
+            checksum: self.digest().map_err(|e| err(&e))?,
+            ..self.clone()
+        };
+        let text = serde_json::to_string(&sealed).map_err(|e| err(&e))?;
         let tmp = path.with_extension("tmp");
         std::fs::write(&tmp, text).map_err(|e| err(&e))?;
         std::fs::rename(&tmp, path).map_err(|e| err(&e))
@@ -92,15 +119,27 @@ impl Checkpoint {
         };
         let text = std::fs::read(path)
             .map_err(|e| err(format!("cannot read the checkpoint to resume from: {e}")))?;
-        let c: Self = serde_json::from_slice(&text)
-            .map_err(|e| err(format!("not a checkpoint of `surveyor explore`: {e}")))?;
-        if c.format != CHECKPOINT_FORMAT {
+        let rerun = "; run again without --resume";
+        // The format first: an older checkpoint lacks today's fields.
+        let format = serde_json::from_slice::<serde_json::Value>(&text)
+            .ok()
+            .and_then(|v| v.get("format").and_then(serde_json::Value::as_u64));
+        if let Some(f) = format.filter(|f| *f != u64::from(CHECKPOINT_FORMAT)) {
             return Err(err(format!(
-                "checkpoint format {} (this version reads {CHECKPOINT_FORMAT})",
-                c.format
+                "checkpoint format {f} (this version reads {CHECKPOINT_FORMAT}){rerun}"
             )));
         }
-        Ok(c)
+        let c: Self = serde_json::from_slice(&text).map_err(|e| {
+            err(format!(
+                "not a checkpoint of `surveyor explore` ({e}){rerun}"
+            ))
+        })?;
+        match c.digest() {
+            Ok(d) if d == c.checksum => Ok(c),
+            _ => Err(err(format!(
+                "the checkpoint was changed after it was written (its checksum does not match){rerun}"
+            ))),
+        }
     }
 }
 
@@ -750,6 +789,7 @@ pub fn run_exploration(
         mut rig,
         cspace,
     } = StageOneSetup::new(loaded, options)?;
+    let scenario_toml = loaded.standalone().to_toml()?;
     let mut replay = std::collections::VecDeque::<ViewpointRecord>::default();
     let mut replay_two = std::collections::VecDeque::<ViewpointRecord>::default();
     let mut tried_before = Vec::new();
@@ -765,16 +805,36 @@ pub fn run_exploration(
         let c = Checkpoint::read(path)?;
         let mut mine = config.clone();
         mine.sweep = c.config.sweep;
-        if c.scenario != s.name
-            || c.seed != options.seed
-            || c.config != mine
-            || c.sweep != config.sweep
-        {
+        let stages = |two: bool| if two { "both" } else { "one" };
+        let differs = if c.scenario != s.name {
+            Some(format!(
+                "the scenario ({} then, {} now)",
+                c.scenario, s.name
+            ))
+        } else if c.seed != options.seed {
+            Some(format!("--seed ({} then, {} now)", c.seed, options.seed))
+        } else if c.stage_two != options.stage_two {
+            Some(format!(
+                "--stages ({} then, {} now)",
+                stages(c.stage_two),
+                stages(options.stage_two)
+            ))
+        } else if c.scenario_toml != scenario_toml {
+            Some(
+                "the scenario's content (the file, or --robot, changed since the checkpoint)"
+                    .to_owned(),
+            )
+        } else if c.config != mine || c.sweep != config.sweep {
+            Some("the exploration parameters ([explore], --max-viewpoints)".to_owned())
+        } else {
+            None
+        };
+        if let Some(what) = differs {
             return Err(SimError::InvalidArgument {
                 what: path.display().to_string(),
                 message: format!(
-                    "the checkpoint is of another run (scenario {}, seed {}, or other parameters); resume with the same scenario, --seed and parameters",
-                    c.scenario, c.seed
+                    "the checkpoint is of another run: {what} differs; resume with the same \
+                     scenario, robot, --seed, --stages and parameters, or run again without --resume"
                 ),
             });
         }
@@ -852,7 +912,10 @@ pub fn run_exploration(
         match &options.checkpoint {
             Some(path) => Checkpoint {
                 format: CHECKPOINT_FORMAT,
+                checksum: 0,
                 scenario: s.name.clone(),
+                scenario_toml: scenario_toml.clone(),
+                stage_two: options.stage_two,
                 seed: options.seed,
                 config: config.clone(),
                 sweep: config.sweep,

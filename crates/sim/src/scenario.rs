@@ -261,7 +261,8 @@ impl Scenario {
     /// Check the numbers a TOML file can get wrong before anything is built or
     /// allocated: poses (finite, within ±[`scene::MAX_COORDINATE_M`]), start
     /// joints, the `[range_sensors]` table, initial segments, the scanner and
-    /// its sweep (within the sensor budgets), and the metrics settings. Errors name the field by its TOML
+    /// its sweep (within the sensor budgets), the regions (nested boxes), the
+    /// exploration settings and the metrics settings. Errors name the field by its TOML
     /// path (`robot.base_pose: translation[0]: ...`).
     pub fn validate(&self) -> Result<(), SimError> {
         let fail = |message: String| SimError::Scenario {
@@ -316,6 +317,9 @@ impl Scenario {
             .and_then(|c| c.pose.as_ref())
         {
             pose(p, "scene.point_cloud.pose")?;
+        }
+        if let Some(r) = &self.regions {
+            r.validate().map_err(|e| fail(e.to_string()))?;
         }
         if let Some(e) = &self.explore {
             e.validate().map_err(|e| fail(e.to_string()))?;

@@ -138,6 +138,12 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         stage_two,
         ..ExploreOptions::default()
     };
+    if args.resume && !args.out.join("checkpoint.json").is_file() {
+        bail!(
+            "--resume: {} holds no checkpoint.json (no run to continue there; run without --resume)",
+            args.out.display()
+        );
+    }
     super::output::create_out_dir(&args.out)?;
     let t = std::time::Instant::now();
     let run = run_exploration(&loaded, &options, &mut |r| {
