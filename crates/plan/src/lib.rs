@@ -54,7 +54,7 @@ pub use blast::{BlastMeasure, BlastPoses, BlastTool};
 pub use config::PlanConfig;
 pub use error::PlanError;
 pub use interference::{Interference, interfering_voxels};
-pub use model::{CacheOutcome, CspaceModel};
+pub use model::{CacheOutcome, CspaceModel, MAX_INTERFERENCE_PAIRS};
 pub use pose::{
     Constraints, PlaneHit, PoseConfig, PoseEvaluation, PoseRun, PoseSelector, PoseSolution,
     PoseTermination, Target, ViewGeometry, view_geometry,

@@ -53,6 +53,45 @@ struct CacheFile {
     voxels_per_node: Vec<u32>,
 }
 
+/// Most voxel–node interference pairs the offline search may visit (about
+/// 480 times the VM-6083's 1.4e5 at the 0.1 m planning voxel: a voxel of
+/// 13 mm or more): the search's time grows
+/// with them, and one node's voxel list with `1/voxel³` (a 1 mm voxel asked
+/// for 1.6 GB for one node and exhausted the memory).
+pub const MAX_INTERFERENCE_PAIRS: Real = 67_108_864.0;
+
+/// Refuse a voxel size whose interference search would exceed
+/// [`MAX_INTERFERENCE_PAIRS`]: the links' ellipsoid volume over a voxel's,
+/// times `n_Q`, estimated before anything is built.
+fn check_interference_budget(
+    robot: &Robot,
+    world_from_base: &Isometry3,
+    voxel_m: Real,
+    config: &PlanConfig,
+) -> Result<(), PlanError> {
+    let probe = Safety::new(
+        robot.clone(),
+        *world_from_base,
+        config,
+        vec![1.0; robot.dof()],
+    )?;
+    let volume: Real = probe
+        .ellipsoids(&vec![0.0; robot.dof()])?
+        .iter()
+        .map(geom::Ellipsoid::volume)
+        .sum();
+    let pairs = volume / voxel_m.powi(3) * config.n_q as Real;
+    if pairs > MAX_INTERFERENCE_PAIRS {
+        return Err(PlanError::config(
+            "explore.planning_voxel_m",
+            "a voxel size for which n_Q × the voxels in the links' ellipsoids stays within \
+             MAX_INTERFERENCE_PAIRS (6.7e7; 0.1 m gives 1.4e5 with the VM-6083)",
+            format!("{voxel_m} m, about {pairs:.1e} pairs"),
+        ));
+    }
+    Ok(())
+}
+
 impl CspaceModel {
     /// Build the model: sample and connect the roadmap, plan between all
     /// pairs of nodes for `L(cᵢ)`, search each node's interfering voxels at
@@ -66,6 +105,7 @@ impl CspaceModel {
         if !(voxel_m.is_finite() && voxel_m > 0.0) {
             return Err(PlanError::config("voxel_m", "a positive length", voxel_m));
         }
+        check_interference_budget(robot, world_from_base, voxel_m, config)?;
         let roadmap = Roadmap::build(robot, config)?;
         let safety = Safety::new(
             robot.clone(),

@@ -276,3 +276,43 @@ fn planned_paths_pass_only_through_known_free_space() {
     assert!(planned >= 6, "{planned}");
     assert!(refused_direct >= 1, "no pair needed the roadmap");
 }
+
+/// A voxel size whose interference search would not fit is refused before
+/// the roadmap is built, with the estimate checked against the voxels a
+/// node really interferes with.
+#[test]
+fn too_fine_a_planning_voxel_is_refused_up_front() {
+    let robot = vm6083();
+    let config = PlanConfig::default();
+    let e = CspaceModel::build(&robot, &Isometry3::identity(), 0.001, &config).unwrap_err();
+    let text = e.to_string();
+    assert!(
+        text.contains("planning_voxel_m") && text.contains("pairs"),
+        "{text}"
+    );
+    // The estimate (ellipsoid volume over voxel volume) against the count
+    // at 0.1 m, where the pairs are 1571 × the voxels a node interferes
+    // with: within a factor of two.
+    let safety = Safety::new(
+        robot.clone(),
+        Isometry3::identity(),
+        &config,
+        vec![1.0; robot.dof()],
+    )
+    .unwrap();
+    let q = vec![0.0; robot.dof()];
+    let volume: Real = safety
+        .ellipsoids(&q)
+        .unwrap()
+        .iter()
+        .map(geom::Ellipsoid::volume)
+        .sum();
+    let counted = interfering_voxels(&safety, &q, VOXEL).unwrap().len() as Real;
+    let estimated = volume / VOXEL.powi(3);
+    assert!(
+        (0.5..2.0).contains(&(counted / estimated)),
+        "{counted} voxels counted, {estimated} estimated"
+    );
+    // The default voxel is well inside the budget.
+    assert!(estimated * 1571.0 < plan::MAX_INTERFERENCE_PAIRS / 100.0);
+}
