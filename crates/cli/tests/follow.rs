@@ -145,7 +145,7 @@ fn no_timings_reruns_are_byte_identical() {
         out
     };
     let (a, b) = (run("a"), run("b"));
-    for name in ["steps.csv", "surface_model.json"] {
+    for name in ["steps.csv", "surface_model.json", "run.json"] {
         assert_eq!(read(&a, name), read(&b, name), "{name}");
     }
     for row in rows(&a, 3) {
@@ -326,6 +326,37 @@ fn bad_input_names_the_flag_and_writes_nothing() {
         }
         assert!(!out.exists(), "{extra:?} left {}", out.display());
     }
+    // An out folder that is a file, or holds another command's run, is
+    // refused before the run; the files there are untouched.
+    let file = dir.path().join("afile");
+    std::fs::write(&file, "keep").unwrap();
+    let e = fails(&[
+        "follow",
+        "--scenario",
+        "cube",
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    assert!(e.contains("not a folder"), "{e}");
+    let explored = dir.path().join("explored");
+    std::fs::create_dir_all(&explored).unwrap();
+    std::fs::write(explored.join("viewpoints.csv"), "k\n").unwrap();
+    let x = explored.to_str().unwrap();
+    let e = fails(&["follow", "--scenario", "cube", "--out", x]);
+    assert!(e.contains("surveyor explore"), "{e}");
+    assert_eq!(
+        std::fs::read_dir(&explored).unwrap().count(),
+        1,
+        "files were added"
+    );
+    let followed = dir.path().join("followed");
+    std::fs::create_dir_all(&followed).unwrap();
+    std::fs::write(followed.join("steps.csv"), "step\n").unwrap();
+    let f = followed.to_str().unwrap();
+    let e = fails(&["explore", "--scenario", "bridge1", "--out", f]);
+    assert!(e.contains("surveyor follow"), "{e}");
+    assert_eq!(std::fs::read_dir(&followed).unwrap().count(), 1);
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "keep");
 }
 
 #[cfg(unix)]

@@ -18,8 +18,9 @@
 //!
 //! Determinism: the rig's noise is seeded and the follower is deterministic, so
 //! the same inputs and seed give the same `steps.csv` and `surface_model.json`
-//! byte for byte, except for the wall-clock timing columns of `steps.csv`;
-//! with [`FollowRunOptions::timings`] off those columns are written empty.
+//! byte for byte, except for the wall-clock timing columns of `steps.csv` and
+//! the step times of `run.json`; with [`FollowRunOptions::timings`] off those
+//! columns are written empty and those times are 0, so every file repeats.
 
 use crate::model_snapshots::ModelSnapshots;
 use crate::rig::{Arm, RangeSensors};
@@ -102,8 +103,9 @@ pub struct FollowRunOptions {
     pub start: Option<StartPose>,
     /// Initial segments (world frame) instead of the scenario's.
     pub initial_segments: Option<Vec<Vec<[Real; 3]>>>,
-    /// Record wall-clock step times in `steps.csv` (off: those columns are
-    /// empty, so the file is the same byte for byte for the same inputs).
+    /// Record wall-clock step times in `steps.csv` and `run.json` (off: those
+    /// columns are empty and those times 0, so the files are the same byte
+    /// for byte for the same inputs).
     pub timings: bool,
     /// Parameters of following and of the model.
     pub config: FollowRunConfig,
@@ -1046,6 +1048,13 @@ impl FollowRun {
         parts.update_us /= n;
         parts.direction_us /= n;
         parts.kinematics_us /= n;
+        // Timings off: 0, so run.json is the same byte for byte per seed.
+        let micros = if self.options.timings {
+            self.step_micros()
+        } else {
+            parts = StepTimes::default();
+            vec![0.0; rows.len()]
+        };
         RunJson {
             scenario: &self.source,
             robot: &self.robot,
@@ -1072,7 +1081,7 @@ impl FollowRun {
             model_to_scan_max_m: self.scan_score.as_ref().and_then(|s| s.max_m),
             model_to_scan_within_lambda: self.scan_score.as_ref().map(|s| s.within_lambda_fraction),
             motion_checks: self.episode.motion_checks,
-            step_us: StepTimeStats::from_micros(&self.step_micros()),
+            step_us: StepTimeStats::from_micros(&micros),
             part_mean_us: parts,
             modes,
             start_joints: &self.start_joints,

@@ -138,6 +138,14 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         stage_two,
         ..ExploreOptions::default()
     };
+    for foreign in ["steps.csv", "surface_model.json"] {
+        if args.out.join(foreign).exists() {
+            bail!(
+                "{}: holds a `surveyor follow` run ({foreign}); give another --out",
+                args.out.display()
+            );
+        }
+    }
     if args.resume && !args.out.join("checkpoint.json").is_file() {
         bail!(
             "--resume: {} holds no checkpoint.json (no run to continue there; run without --resume)",

@@ -30,8 +30,9 @@ report.html (surveyor report: the model, its shared edges, the path, the evoluti
 and step times).
 
 The same inputs and --seed give the same run; only the wall-clock columns of steps.csv \
-(update_us, direction_us, kinematics_us) differ. With --no-timings they are written empty, \
-and steps.csv and surface_model.json are then byte-identical from run to run.
+(update_us, direction_us, kinematics_us) and run.json's step times differ. With --no-timings \
+those columns are written empty and those times 0, and steps.csv, surface_model.json and \
+run.json are then byte-identical from run to run.
 
 Ctrl-C stops the run after the current step and writes the outputs of the steps so far \
 (termination \"interrupted\").")]
@@ -86,7 +87,8 @@ pub struct FollowArgs {
     /// Print the configuration in effect as TOML and exit.
     #[arg(long)]
     print_config: bool,
-    /// Write the timing columns of steps.csv empty (byte-identical reruns).
+    /// Write the timing columns of steps.csv empty and run.json's step times
+    /// as 0 (byte-identical reruns).
     #[arg(long)]
     no_timings: bool,
     /// Output folder (created if missing).
@@ -172,6 +174,17 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     let Some(out) = &a.out else {
         bail!("--out is required");
     };
+    super::output::check_out_dir(out)?;
+    // Another command's run folder is not overwritten (its files would be
+    // a mix the report cannot read).
+    for foreign in ["viewpoints.csv", "checkpoint.json", "blast_inputs.json"] {
+        if out.join(foreign).exists() {
+            bail!(
+                "{}: holds a `surveyor explore` run ({foreign}); give another --out",
+                out.display()
+            );
+        }
+    }
     let opts = options(a, config)?;
     // The scenario as given (its paths made absolute), for the report's
     // ground truth; a --scene run has none.
