@@ -315,6 +315,18 @@ fn bad_input_names_the_flag_and_writes_nothing() {
         ),
         (vec!["--scene", "/nonexistent/box.obj"], "box.obj"),
         (vec!["--max-sets", "5"], "--scenario"),
+        // Inside the block (a run from there only counted collisions).
+        (
+            vec![
+                "--scenario",
+                "block1",
+                "--robot",
+                "arm4",
+                "--start",
+                "0,0,0.1",
+            ],
+            "into the scene (object block1)",
+        ),
     ];
     for (extra, expect) in cases {
         let mut args = vec!["follow", "--out", o];

@@ -306,10 +306,37 @@ fn start_what(start: Option<&StartPose>) -> &'static str {
     }
 }
 
-fn check_start(robot: &Robot, q: &[Real], what: &str) -> Result<(), FollowRunError> {
+/// The start must be within the joint limits and, on a mesh scene, clear of
+/// it: a run from inside an object only counts collisions.
+fn check_start(
+    robot: &Robot,
+    q: &[Real],
+    what: &str,
+    world: &World,
+    world_from_base: &Isometry3,
+) -> Result<(), FollowRunError> {
     robot
         .check_within_limits(q)
-        .map_err(|e| bad(what, e.to_string()))
+        .map_err(|e| bad(what, e.to_string()))?;
+    if let Some(scene) = world.as_scene() {
+        let frames = robot
+            .forward_kinematics(q)
+            .map_err(|e| bad(what, e.to_string()))?;
+        if let Some(c) =
+            crate::safety::robot_contacts(robot, &frames, world_from_base, scene).first()
+        {
+            return Err(bad(
+                what,
+                format!(
+                    "the start puts link {} ({}) into the scene (object {}); start clear of it",
+                    c.link.index(),
+                    robot.links[c.link.index()].name,
+                    scene.object(c.object).map_or("?", |o| o.name.as_str())
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 impl FollowSetup {
@@ -369,7 +396,13 @@ impl FollowSetup {
                 joints_for(&robot, &world_from_base, &target, None)?
             }
         };
-        check_start(&robot, &start_joints, start_what(options.start.as_ref()))?;
+        check_start(
+            &robot,
+            &start_joints,
+            start_what(options.start.as_ref()),
+            &world,
+            &world_from_base,
+        )?;
         let initial_segments = match &options.initial_segments {
             Some(v) => to_points(v),
             None => to_points(&s.initial_segments),
@@ -454,7 +487,13 @@ impl FollowSetup {
                 None,
             )?,
         };
-        check_start(&robot, &start_joints, start_what(options.start.as_ref()))?;
+        check_start(
+            &robot,
+            &start_joints,
+            start_what(options.start.as_ref()),
+            &world,
+            &world_from_base,
+        )?;
         let initial_segments = match &options.initial_segments {
             Some(v) => to_points(v),
             None => vec![table_under(&bounds)],
