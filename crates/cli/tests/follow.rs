@@ -278,7 +278,19 @@ fn bad_input_names_the_flag_and_writes_nothing() {
     let out = dir.path().join("never");
     let o = out.to_str().unwrap();
     let missing = dir.path().join("missing.json");
+    // The table clockwise seen from above: its normal points away from the
+    // robot.
+    let cw = dir.path().join("cw.json");
+    std::fs::write(
+        &cw,
+        r#"{"segments": [[[-2, -2, 0], [-2, 2, 0], [2, 2, 0], [2, -2, 0]]]}"#,
+    )
+    .unwrap();
     let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["--scenario", "cube", "--initial", cw.to_str().unwrap()],
+            "segment 0 faces away from the robot",
+        ),
         (
             vec!["--scenario", "cube", "--robot", "robby"],
             "unknown robot",

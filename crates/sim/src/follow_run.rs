@@ -407,6 +407,7 @@ impl FollowSetup {
             Some(v) => to_points(v),
             None => to_points(&s.initial_segments),
         };
+        check_initial_facing(&initial_segments, &robot, &start_joints, &world_from_base)?;
         let mut rig = SimRig::new(
             robot,
             world,
@@ -498,6 +499,7 @@ impl FollowSetup {
             Some(v) => to_points(v),
             None => vec![table_under(&bounds)],
         };
+        check_initial_facing(&initial_segments, &robot, &start_joints, &world_from_base)?;
         let mut rig = SimRig::new(
             robot,
             Arc::new(world),
@@ -612,6 +614,39 @@ impl FollowSetup {
             scan_score,
         })
     }
+}
+
+/// Each initial segment must face the robot: its vertices anticlockwise
+/// about the normal pointing to the start's control point (the model's
+/// convention: the robot is on the positive side of every segment).
+fn check_initial_facing(
+    segments: &[Vec<Point3>],
+    robot: &Robot,
+    q: &[Real],
+    world_from_base: &Isometry3,
+) -> Result<(), FollowRunError> {
+    let tool = robot
+        .tool_pose(q)
+        .map_err(|e| bad("start", e.to_string()))?;
+    let control = world_from_base * Point3::from(tool.translation.vector);
+    for (i, seg) in segments.iter().enumerate() {
+        let n = geom::polygon3::newell_normal(seg);
+        if seg.is_empty() || n.norm() == 0.0 {
+            continue; // the model reports degenerate segments itself
+        }
+        let centroid = seg.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / seg.len() as Real;
+        if (control.coords - centroid).dot(&n) < 0.0 {
+            return Err(bad(
+                "initial segments",
+                format!(
+                    "segment {i} faces away from the robot: its vertices are clockwise seen from \
+                     the start's control point ({:.3}, {:.3}, {:.3}); list them anticlockwise",
+                    control.x, control.y, control.z
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn to_points(v: &[Vec<[Real; 3]>]) -> Vec<Vec<Point3>> {
