@@ -103,9 +103,22 @@ impl Table {
             .collect()
     }
 
-    /// Column `name` as numbers; an empty cell is `None`.
+    /// Column `name` as finite numbers; an empty cell is `None`.
     pub fn optional(&self, name: &str) -> Result<Vec<Option<Real>>, ReportError> {
-        self.parsed(name, true, "a number")
+        let values = self.parsed::<Real>(name, true, "a number")?;
+        if let Some((i, v)) = values
+            .iter()
+            .enumerate()
+            .find_map(|(i, v)| v.filter(|v| !v.is_finite()).map(|v| (i, v)))
+        {
+            return Err(ReportError::Field {
+                file: self.source.clone(),
+                line: i + 2,
+                field: name.to_owned(),
+                message: format!("expected a finite number, found `{v}`"),
+            });
+        }
+        Ok(values)
     }
 
     /// Column `name` as numbers, every cell required.
@@ -145,14 +158,22 @@ pub fn read_json(path: &Path) -> Result<serde_json::Value, ReportError> {
     parse_json(path)
 }
 
+/// Read a run's `run.json`: a JSON object naming its `scenario`.
+pub fn read_run_json(path: &Path) -> Result<serde_json::Value, ReportError> {
+    let run = read_json(path)?;
+    if !run.is_object() || !run["scenario"].is_string() {
+        return Err(ReportError::file(
+            &path.display().to_string(),
+            "expected a JSON object with a `scenario` string, as surveyor writes run.json",
+        ));
+    }
+    Ok(run)
+}
+
 /// Read a JSON file into `T`; an error names the file, line and column.
 pub fn parse_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, ReportError> {
     let source = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| ReportError::file(&source, e))?;
-    serde_json::from_str(&text).map_err(|e| ReportError::Field {
-        file: source,
-        line: e.line(),
-        field: format!("column {}", e.column()),
-        message: e.to_string(),
-    })
+    // serde_json's message ends with "at line L column C".
+    serde_json::from_str(&text).map_err(|e| ReportError::file(&source, e))
 }

@@ -4,7 +4,7 @@
 //! 4.10, coverage and timings.
 
 use crate::ReportError;
-use crate::data::{Table, read_json};
+use crate::data::{Table, read_json, read_run_json};
 use crate::geometry::{Polylines, columns, plane_basis, simplify, stride_for};
 use crate::page::{Page, plot_of, xy_layout};
 use geom::{Isometry3, Point3, Real, Vector3};
@@ -70,7 +70,7 @@ fn setup(dir: &Path) -> Result<Option<Setup>, ReportError> {
 
 /// Build the page of the explore run in `dir`.
 pub fn page(dir: &Path) -> Result<Page, ReportError> {
-    let run = read_json(&dir.join("run.json"))?;
+    let run = read_run_json(&dir.join("run.json"))?;
     let viewpoints = Table::read(&dir.join("viewpoints.csv"))?;
     let scenario = run["scenario"].as_str().unwrap_or("?").to_owned();
     let mut page = Page::new(&format!("surveyor explore: {scenario}"));
@@ -379,7 +379,7 @@ fn viewpoint_traces(
     traces: &mut Vec<Box<dyn Trace>>,
     notes: &mut Vec<String>,
 ) -> Result<(), ReportError> {
-    let joints = joint_rows(viewpoints, "q")?;
+    let joints = joint_rows(viewpoints, "q", s.robot.dof())?;
     let stage = viewpoints.indices("stage")?;
     let scanner = |q: &[Real]| -> Result<Option<Isometry3>, ReportError> {
         Ok(s.robot.scanner_pose(q)?.map(|p| s.world_from_base * p))
@@ -438,7 +438,7 @@ fn viewpoint_traces(
     let path = Table::read(&path_csv)?;
     let k = path.indices("k")?;
     let pstage = path.indices("stage")?;
-    let q = joint_rows(&path, "q")?;
+    let q = joint_rows(&path, "q", s.robot.dof())?;
     for st in [1, 2] {
         let mut lines = Polylines::default();
         let mut i = 0;
@@ -486,16 +486,11 @@ fn viewpoint_traces(
     Ok(())
 }
 
-/// Rows of the columns `q1`, `q2`, ... of `table`.
-fn joint_rows(table: &Table, prefix: &str) -> Result<Vec<Vec<Real>>, ReportError> {
-    let mut cols = Vec::new();
-    for j in 1.. {
-        let name = format!("{prefix}{j}");
-        if !table.has(&name) {
-            break;
-        }
-        cols.push(table.numbers(&name)?);
-    }
+/// Rows of the columns `q1` … `q{dof}` of `table` (each one required).
+fn joint_rows(table: &Table, prefix: &str, dof: usize) -> Result<Vec<Vec<Real>>, ReportError> {
+    let cols = (1..=dof)
+        .map(|j| table.numbers(&format!("{prefix}{j}")))
+        .collect::<Result<Vec<_>, _>>()?;
     Ok((0..table.len())
         .map(|i| cols.iter().map(|c| c[i]).collect())
         .collect())

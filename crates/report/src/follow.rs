@@ -5,7 +5,7 @@
 //! mode, the step times and what the sensors saw.
 
 use crate::ReportError;
-use crate::data::{Table, parse_json, read_json};
+use crate::data::{Table, parse_json, read_run_json};
 use crate::explore::truth_meshes;
 use crate::geometry::{Polylines, columns, plane_basis, triangulate};
 use crate::page::{Page, plot_of, xy_layout};
@@ -366,7 +366,7 @@ fn truth_traces(dir: &Path, traces: &mut Vec<Box<dyn Trace>>) -> Result<bool, Re
 
 /// Build the page of the follow run in `dir`.
 pub fn page(dir: &Path) -> Result<Page, ReportError> {
-    let run = read_json(&dir.join("run.json"))?;
+    let run = read_run_json(&dir.join("run.json"))?;
     let steps = Table::read(&dir.join("steps.csv"))?;
     let model: ModelJson = parse_json(&dir.join("surface_model.json"))?;
     let scenario = run["scenario"].as_str().unwrap_or("?").to_owned();

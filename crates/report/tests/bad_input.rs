@@ -54,3 +54,40 @@ fn malformed_files_are_named() {
     assert!(e.contains("viewpoints.csv"), "{e}");
     assert!(!d.join("report.html").exists());
 }
+
+#[test]
+fn non_finite_numbers_and_a_run_json_of_another_shape_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(d, "run.json", "{\"scenario\": \"x\"}");
+    let header = "k,stage,q1,h1,h1_weighted,h2,h3,predicted_h1_weighted,coverage_a1,joint_travel,decision_ms,plan_ms,sweep_ms,integrate_ms\n";
+    for bad in ["NaN", "inf", "-inf"] {
+        write(
+            d,
+            "viewpoints.csv",
+            &format!("{header}0,1,0,5,4,3,,,0.1,0,0,0,0,0\n1,1,0,5,{bad},3,,,0.1,0,0,0,0,0\n"),
+        );
+        let e = report::write(d).unwrap_err().to_string();
+        assert!(
+            e.contains("viewpoints.csv")
+                && e.contains("line 3")
+                && e.contains("h1_weighted")
+                && e.contains("finite"),
+            "{bad}: {e}"
+        );
+    }
+    write(
+        d,
+        "viewpoints.csv",
+        &format!("{header}0,1,0,5,4,3,,,0.1,0,0,0,0,0\n"),
+    );
+    for run in ["[1, 2, 3]", "{}", "{\"scenario\": 7}"] {
+        write(d, "run.json", run);
+        let e = report::write(d).unwrap_err().to_string();
+        assert!(
+            e.contains("run.json") && e.contains("`scenario`"),
+            "{run}: {e}"
+        );
+    }
+    assert!(!d.join("report.html").exists());
+}
