@@ -275,6 +275,20 @@ fn plan_blast_on_an_explore_run_gives_the_plan_explore_wrote() {
         &["plan-blast", "--run", damaged.to_str().unwrap(), "--out", o],
         &["blast_inputs.json"],
     );
+    // Segments that leave discs out (here: none at all) are refused; the plan
+    // was of 0 segments with every disc posed.
+    let mut inputs: serde_json::Value =
+        serde_json::from_str(&read(run.whole.join("blast_inputs.json"))).unwrap();
+    inputs["segments"] = serde_json::json!([]);
+    std::fs::write(
+        damaged.join("blast_inputs.json"),
+        serde_json::to_string(&inputs).unwrap(),
+    )
+    .unwrap();
+    fails_with(
+        &["plan-blast", "--run", damaged.to_str().unwrap(), "--out", o],
+        &["blast_inputs.json", "disc 0 is in no segment"],
+    );
 }
 
 #[test]

@@ -36,6 +36,11 @@ fn broken_tool_files_and_missing_run_files_are_named() {
             "nozzle_radius_m = -0.01\n",
             &["tool.toml", "nozzle_radius_m"],
         ),
+        // As thick as the shortest stream: no pose could clear the surface.
+        (
+            "nozzle_radius_m = 1.0\n",
+            &["tool.toml", "nozzle_radius_m", "less than tool.d_min_m"],
+        ),
     ] {
         std::fs::write(&tool, text).unwrap();
         fails_with(

@@ -131,8 +131,8 @@ impl BlastInputs {
         Ok(inputs)
     }
 
-    /// Check that the parts agree: one start per disc, every segment member
-    /// a disc. `source` names them in the error.
+    /// Check that the parts agree: one start per disc, and the segments a
+    /// partition of the discs (each disc in exactly one). `source` names them in the error.
     pub fn check(&self, source: &str) -> Result<(), SimError> {
         let fail = |message: String| SimError::InvalidArgument {
             what: source.to_owned(),
@@ -145,14 +145,29 @@ impl BlastInputs {
                 self.start_joints.len()
             )));
         }
+        // The segments partition the discs (as segmentation makes them).
+        let mut segment_of: Vec<Option<usize>> = vec![None; self.discs.len()];
         for (s, members) in self.segments.iter().enumerate() {
-            if let Some(m) = members.iter().find(|m| m.0 >= self.discs.len()) {
-                return Err(fail(format!(
-                    "segment {s} names disc {}, but there are {} discs",
-                    m.0,
-                    self.discs.len()
-                )));
+            for m in members {
+                let Some(slot) = segment_of.get_mut(m.0) else {
+                    return Err(fail(format!(
+                        "segment {s} names disc {}, but there are {} discs",
+                        m.0,
+                        self.discs.len()
+                    )));
+                };
+                if let Some(first) = slot.replace(s) {
+                    return Err(fail(format!(
+                        "disc {} is in segments {first} and {s}; each disc is in one segment",
+                        m.0
+                    )));
+                }
             }
+        }
+        if let Some(d) = segment_of.iter().position(Option::is_none) {
+            return Err(fail(format!(
+                "disc {d} is in no segment; the segments must hold every disc"
+            )));
         }
         Ok(())
     }
