@@ -636,3 +636,24 @@ fn empty_inputs_are_errors() {
         assert!(!dir.path().join(f).exists(), "{f} was written");
     }
 }
+
+#[test]
+fn messages_name_things_once_and_plainly() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("x.obj");
+    std::fs::write(&obj, "v 0 0 0\n").unwrap();
+    let o = obj.to_str().unwrap();
+    // A robot given as a file that is not a URDF.
+    let e = fails(&["fk", "--robot", o, "--joints", "1"]);
+    assert!(
+        e.contains("not a URDF") && e.contains("denso-vm6083"),
+        "{e}"
+    );
+    // The file named once.
+    let out = dir.path().join("d.csv");
+    let e = fails(&["sld", "--input", o, "--out", out.to_str().unwrap()]);
+    assert_eq!(e.matches("x.obj").count(), 1, "{e}");
+    // A report of a folder that does not exist.
+    let e = fails(&["report", dir.path().join("nowhere").to_str().unwrap()]);
+    assert!(e.contains("no such folder"), "{e}");
+}

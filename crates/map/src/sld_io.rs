@@ -237,8 +237,13 @@ impl LoadedPoints {
 /// reads: PLY, PCD, text, OBJ/STL vertices) and, for a PLY file with `ox`,
 /// `oy`, `oz` vertex properties, the per-point sensor origins.
 pub fn load_points(path: &Path) -> Result<LoadedPoints, MapError> {
-    let scene_err =
-        |e: scene::SceneError| MapError::parse(path.display().to_string(), None, e.to_string());
+    // The scene reader's messages name the file already.
+    let scene_err = |e: scene::SceneError| {
+        let text = e.to_string();
+        let named = format!("{}: ", path.display());
+        let message = text.strip_prefix(&named).unwrap_or(&text).to_owned();
+        MapError::parse(path.display().to_string(), None, message)
+    };
     let is_ply = path
         .extension()
         .and_then(|e| e.to_str())

@@ -25,9 +25,13 @@ pub fn render(dir: &Path) -> Result<String, ReportError> {
     } else {
         return Err(ReportError::NotARun {
             dir: dir.display().to_string(),
-            message: "not a run folder: expected viewpoints.csv (surveyor explore) or steps.csv \
-                      (surveyor follow)"
-                .into(),
+            message: if dir.is_dir() {
+                "not a run folder: expected viewpoints.csv (surveyor explore) or steps.csv \
+                 (surveyor follow)"
+            } else {
+                "no such folder"
+            }
+            .into(),
         });
     };
     Ok(page.finish())

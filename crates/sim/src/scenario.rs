@@ -493,6 +493,15 @@ pub fn robot_by_name_or_urdf(name_or_path: &str, tip: Option<&str>) -> Result<Ro
                 "a tip link (`{tip}`) applies to URDF robots only; `{name_or_path}` is a built-in robot"
             ),
         })
+    } else if Path::new(name_or_path).exists() && robot::builtin(name_or_path).is_err() {
+        Err(SimError::Scenario {
+            source_name: "robot".into(),
+            message: format!(
+                "`{name_or_path}` is a file but not a URDF (a robot file's name ends in .urdf), \
+                 nor a built-in robot ({})",
+                robot::builtin_names().join(", ")
+            ),
+        })
     } else {
         build_robot(Some(name_or_path), None, None)
     }
