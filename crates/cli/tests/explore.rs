@@ -298,6 +298,8 @@ fn bad_explore_input_is_a_clear_error() {
     let o = out.to_str().unwrap();
     let e = fails(&["explore", "--stages", "three", "--out", o]);
     assert!(e.contains("--stages three") && e.contains("`both`"), "{e}");
+    let e = fails(&["explore", "--max-viewpoints", "0", "--out", o]);
+    assert!(e.contains("--max-viewpoints 0"), "{e}");
     let e = fails(&["explore", "--resume", "--out", o]);
     assert!(
         e.contains("checkpoint.json") && e.contains("no run to continue"),

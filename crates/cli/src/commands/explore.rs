@@ -77,6 +77,9 @@ pub struct ExploreArgs {
 }
 
 pub fn explore(args: &ExploreArgs) -> Result<()> {
+    if args.max_viewpoints == Some(0) {
+        bail!("--max-viewpoints 0: expected at least 1 (the start pose's sweep is one)");
+    }
     let stage_two = match args.stages.as_str() {
         "one" => false,
         "both" => true,
