@@ -395,7 +395,7 @@ fn map_applies_occlusion_weights_over_the_scan_grid() {
     .unwrap();
     let (_, err) = map_of(&far, "far");
     assert!(
-        err.contains("far.ply") && err.contains("all 12 rays lie outside the map"),
+        err.contains("far.ply") && err.contains("all 12 rays lie outside the occupancy map"),
         "{err}"
     );
 }

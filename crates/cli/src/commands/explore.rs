@@ -28,7 +28,8 @@ not), path.csv (the executed motions' waypoints), report.html (`surveyor report`
 opens offline, a WebGL 3-D view of the run and its plots), \
 checkpoint.json, rewritten after every viewpoint of either stage: after an interruption \
 (Ctrl-C, kill, power), the same command with --resume continues the run, and with --no-timings \
-its outputs are byte-identical to an uninterrupted run's.
+its outputs are byte-identical to an uninterrupted run's. --resume refuses a checkpoint that was \
+edited, or written for another scenario content, robot, seed, --stages or parameters.
 
 Stage Two (the default --stages both) follows Stage One: the scanner is aimed (LM pose \
 selection) at the disc with the most material information left that a valid, reachable pose \
