@@ -324,10 +324,9 @@ fn stage_configs_come_from_the_library_and_toml_files() {
     assert!(e.contains("lambda"), "{e}");
 }
 
-#[test]
-fn raycast_repeat_is_bounded() {
-    let dir = tempfile::tempdir().unwrap();
-    let fx = dir.path().join("fx");
+/// A 100-ray fixture in `dir/fx`.
+fn fixture(dir: &Path) -> PathBuf {
+    let fx = dir.join("fx");
     ok(&[
         "raycast-fixture",
         "--out",
@@ -335,22 +334,43 @@ fn raycast_repeat_is_bounded() {
         "--rays",
         "100",
     ]);
+    fx
+}
+
+/// `surveyor raycast` of the fixture in `fx` into `out`, `--repeat repeat`.
+fn raycast(fx: &Path, out: &Path, repeat: &str) -> Vec<String> {
+    let scene = fx.join("structure.ply");
+    let rays = fx.join("rays.bin");
+    [
+        "raycast",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--rays",
+        rays.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--repeat",
+        repeat,
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+fn strs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
+
+#[test]
+fn raycast_repeat_is_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let fx = fixture(dir.path());
+    let out = dir.path().join("d.bin");
     for repeat in ["0", "1001", "18446744073709551615"] {
-        let e = fails(&[
-            "raycast",
-            "--scene",
-            fx.join("structure.ply").to_str().unwrap(),
-            "--rays",
-            fx.join("rays.bin").to_str().unwrap(),
-            "--out",
-            dir.path().join("d.bin").to_str().unwrap(),
-            "--repeat",
-            repeat,
-        ]);
+        let e = fails(&strs(&raycast(&fx, &out, repeat)));
         assert!(e.contains("--repeat") && e.contains("1 to 1000"), "{e}");
         clean(&e);
     }
-    assert!(!dir.path().join("d.bin").exists());
+    assert!(!out.exists());
 }
 
 /// An output path that is a symbolic link writes the link's target (the
@@ -360,33 +380,12 @@ fn raycast_repeat_is_bounded() {
 #[test]
 fn outputs_follow_links_and_write_into_fifos() {
     let dir = tempfile::tempdir().unwrap();
-    let fx = dir.path().join("fx");
-    ok(&[
-        "raycast-fixture",
-        "--out",
-        fx.to_str().unwrap(),
-        "--rays",
-        "100",
-    ]);
-    let raycast = |out: &Path| {
-        vec![
-            "raycast".to_owned(),
-            "--scene".to_owned(),
-            fx.join("structure.ply").display().to_string(),
-            "--rays".to_owned(),
-            fx.join("rays.bin").display().to_string(),
-            "--out".to_owned(),
-            out.display().to_string(),
-            "--repeat".to_owned(),
-            "1".to_owned(),
-        ]
-    };
-    let run_ok = |v: Vec<String>| ok(&v.iter().map(String::as_str).collect::<Vec<_>>());
+    let fx = fixture(dir.path());
     // A link, also one whose target does not exist yet.
     let target = dir.path().join("target.bin");
     let link = dir.path().join("link.bin");
     std::os::unix::fs::symlink("target.bin", &link).unwrap();
-    run_ok(raycast(&link));
+    ok(&strs(&raycast(&fx, &link, "1")));
     assert!(
         std::fs::symlink_metadata(&link)
             .unwrap()
@@ -400,7 +399,7 @@ fn outputs_follow_links_and_write_into_fifos() {
     if made.is_ok_and(|s| s.success()) {
         let f = fifo.clone();
         let reader = std::thread::spawn(move || std::fs::read(f).unwrap());
-        run_ok(raycast(&fifo));
+        ok(&strs(&raycast(&fx, &fifo, "1")));
         assert_eq!(reader.join().unwrap().len(), 400);
         assert!(std::os::unix::fs::FileTypeExt::is_fifo(
             &std::fs::metadata(&fifo).unwrap().file_type()
@@ -409,8 +408,7 @@ fn outputs_follow_links_and_write_into_fifos() {
     // A folder.
     let folder = dir.path().join("folder");
     std::fs::create_dir(&folder).unwrap();
-    let v = raycast(&folder);
-    let e = fails(&v.iter().map(String::as_str).collect::<Vec<_>>());
+    let e = fails(&strs(&raycast(&fx, &folder, "1")));
     assert!(e.contains("is a folder"), "{e}");
     assert!(listing(&folder).is_empty());
 }
@@ -620,17 +618,9 @@ fn empty_inputs_are_errors() {
     let e = fails(&["sld", "--input", &p("none.ply"), "--out", &p("d.csv")]);
     assert!(e.contains("none.ply") && e.contains("no points"), "{e}");
     // No rays.
-    ok(&["raycast-fixture", "--out", &p("fx"), "--rays", "10"]);
-    std::fs::write(p("rays.bin"), b"").unwrap();
-    let e = fails(&[
-        "raycast",
-        "--scene",
-        &p("fx/structure.ply"),
-        "--rays",
-        &p("rays.bin"),
-        "--out",
-        &p("d.bin"),
-    ]);
+    let fx = fixture(dir.path());
+    std::fs::write(fx.join("rays.bin"), b"").unwrap();
+    let e = fails(&strs(&raycast(&fx, &dir.path().join("d.bin"), "1")));
     assert!(e.contains("rays.bin") && e.contains("no rays"), "{e}");
     for f in ["s.json", "d.csv", "d.bin"] {
         assert!(!dir.path().join(f).exists(), "{f} was written");

@@ -924,54 +924,41 @@ fn obj_inputs_that_trip_tobj() {
         &["w0.obj:1:", "weight w = 0"],
     );
     // A face of more vertices than MAX_FACE_VERTICES (one of 200 000 took
-    // minutes to triangulate); one at the limit loads.
+    // minutes to triangulate); one at the limit loads. The same disc as an
+    // OBJ and as an ASCII PLY: vertex lines, then the face's indices.
     for (n, ok) in [
         (io::MAX_FACE_VERTICES, true),
         (io::MAX_FACE_VERTICES + 1, false),
     ] {
-        let mut text = String::new();
-        for i in 0..n {
-            let a = std::f64::consts::TAU * i as f64 / n as f64;
-            writeln!(text, "v {} {} 0", a.cos(), a.sin()).unwrap();
-        }
-        text.push('f');
-        for i in 1..=n {
-            write!(text, " {i}").unwrap();
-        }
-        text.push('\n');
-        let path = write(dir.path(), "disc.obj", text.as_bytes());
-        let got = io::load_mesh(&path, 1.0);
-        if ok {
-            assert_eq!(got.unwrap().triangles.len(), n - 2);
-        } else {
-            assert_mentions(
-                &message(got),
-                &["disc.obj:", "face has 4097 vertices", "4096"],
-            );
-        }
-        // The same face in an ASCII PLY.
-        let mut ply = format!(
+        let disc = |vertex: &str, first: usize, face: String| {
+            let mut text = String::new();
+            for i in 0..n {
+                let a = std::f64::consts::TAU * i as f64 / n as f64;
+                writeln!(text, "{vertex}{} {} 0", a.cos(), a.sin()).unwrap();
+            }
+            text.push_str(&face);
+            for i in first..first + n {
+                write!(text, " {i}").unwrap();
+            }
+            text.push('\n');
+            text
+        };
+        let obj = disc("v ", 1, "f".into());
+        let ply = format!(
             "ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\nproperty float y\n\
-             property float z\nelement face 1\nproperty list ushort int vertex_indices\nend_header\n"
+             property float z\nelement face 1\nproperty list ushort int vertex_indices\nend_header\n{}",
+            disc("", 0, n.to_string())
         );
-        for i in 0..n {
-            let a = std::f64::consts::TAU * i as f64 / n as f64;
-            writeln!(ply, "{} {} 0", a.cos(), a.sin()).unwrap();
-        }
-        ply.push_str(&n.to_string());
-        for i in 0..n {
-            write!(ply, " {i}").unwrap();
-        }
-        ply.push('\n');
-        let path = write(dir.path(), "disc.ply", ply.as_bytes());
-        let got = io::load_mesh(&path, 1.0);
-        if ok {
-            assert_eq!(got.unwrap().triangles.len(), n - 2);
-        } else {
-            assert_mentions(
-                &message(got),
-                &["disc.ply", "face 0 has 4097 vertices", "4096"],
-            );
+        for (name, text, says) in [
+            ("disc.obj", obj, "face has 4097 vertices"),
+            ("disc.ply", ply, "face 0 has 4097 vertices"),
+        ] {
+            let got = io::load_mesh(&write(dir.path(), name, text.as_bytes()), 1.0);
+            if ok {
+                assert_eq!(got.unwrap().triangles.len(), n - 2, "{name}");
+            } else {
+                assert_mentions(&message(got), &[name, says, "4096"]);
+            }
         }
     }
 }

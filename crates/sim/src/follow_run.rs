@@ -307,13 +307,14 @@ fn start_what(start: Option<&StartPose>) -> &'static str {
 }
 
 /// The start must be within the joint limits and, on a mesh scene, clear of
-/// it: a run from inside an object only counts collisions.
+/// it (a run from inside an object only counts collisions), and every
+/// initial segment must face it ([`check_initial_facing`]).
 fn check_start(
     robot: &Robot,
     q: &[Real],
     what: &str,
-    world: &World,
-    world_from_base: &Isometry3,
+    (world, world_from_base): (&World, &Isometry3),
+    initial_segments: &[Vec<Point3>],
 ) -> Result<(), FollowRunError> {
     robot
         .check_within_limits(q)
@@ -336,7 +337,7 @@ fn check_start(
             ));
         }
     }
-    Ok(())
+    check_initial_facing(initial_segments, robot, q, world_from_base)
 }
 
 impl FollowSetup {
@@ -396,18 +397,17 @@ impl FollowSetup {
                 joints_for(&robot, &world_from_base, &target, None)?
             }
         };
-        check_start(
-            &robot,
-            &start_joints,
-            start_what(options.start.as_ref()),
-            &world,
-            &world_from_base,
-        )?;
         let initial_segments = match &options.initial_segments {
             Some(v) => to_points(v),
             None => to_points(&s.initial_segments),
         };
-        check_initial_facing(&initial_segments, &robot, &start_joints, &world_from_base)?;
+        check_start(
+            &robot,
+            &start_joints,
+            start_what(options.start.as_ref()),
+            (&world, &world_from_base),
+            &initial_segments,
+        )?;
         let mut rig = SimRig::new(
             robot,
             world,
@@ -488,18 +488,17 @@ impl FollowSetup {
                 None,
             )?,
         };
-        check_start(
-            &robot,
-            &start_joints,
-            start_what(options.start.as_ref()),
-            &world,
-            &world_from_base,
-        )?;
         let initial_segments = match &options.initial_segments {
             Some(v) => to_points(v),
             None => vec![table_under(&bounds)],
         };
-        check_initial_facing(&initial_segments, &robot, &start_joints, &world_from_base)?;
+        check_start(
+            &robot,
+            &start_joints,
+            start_what(options.start.as_ref()),
+            (&world, &world_from_base),
+            &initial_segments,
+        )?;
         let mut rig = SimRig::new(
             robot,
             Arc::new(world),
