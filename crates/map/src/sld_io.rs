@@ -190,6 +190,19 @@ pub fn parse_discs_csv(text: &str, source_name: &str) -> Result<Vec<Disc>, MapEr
                 ),
             ));
         }
+        for k in [0, 1, 2, 6] {
+            if v[k].abs() > geom::MAX_COORDINATE_M {
+                return Err(err(
+                    Some(line_no),
+                    format!(
+                        "field `{}`: {} is beyond ±{:e} m",
+                        DISC_CSV_HEADER[k],
+                        v[k],
+                        geom::MAX_COORDINATE_M
+                    ),
+                ));
+            }
+        }
         discs.push(Disc {
             centre: Point3::new(v[0], v[1], v[2]),
             normal,

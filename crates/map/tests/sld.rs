@@ -489,6 +489,16 @@ fn csv_round_trip_and_errors() {
     )
     .unwrap_err();
     assert!(e.to_string().contains("points"), "{e}");
+    // A centre beyond ±1e7 m (geom::MAX_COORDINATE_M) is refused.
+    let e = parse_discs_csv(
+        "cx,cy,cz,nx,ny,nz,radius,points\n1e30,0,0,0,0,1,0.04,3\n",
+        "f.csv",
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string().starts_with("f.csv:2") && e.to_string().contains("`cx`"),
+        "{e}"
+    );
     assert!(parse_discs_csv("", "e.csv").is_err());
     let missing = dir.path().join("missing.csv");
     let e = load_discs_csv(&missing).unwrap_err();

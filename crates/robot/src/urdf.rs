@@ -250,6 +250,14 @@ impl<'a, 'input> Parser<'a, 'input> {
             None => Ok(Isometry3::identity()),
             Some(o) => {
                 let xyz = self.reals::<3>(o, "xyz", Some([0.0; 3]))?;
+                if xyz.iter().any(|v| v.abs() > geom::MAX_COORDINATE_M) {
+                    return Err(self.bad_value(
+                        o,
+                        "xyz",
+                        o.attribute("xyz").unwrap_or(""),
+                        "3 numbers within ±1e7 m (geom::MAX_COORDINATE_M)",
+                    ));
+                }
                 let rpy = self.reals::<3>(o, "rpy", Some([0.0; 3]))?;
                 Ok(isometry_from_xyz_rpy(xyz, rpy))
             }

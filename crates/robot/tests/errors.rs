@@ -331,3 +331,12 @@ fn missing_and_broken_mesh_files() {
         .to_string();
     assert_contains(&e, &["nope.urdf", "cannot read"]);
 }
+
+#[test]
+fn origins_beyond_the_coordinate_limit_are_errors() {
+    let xml = one_joint("fixed", r#"    <origin xyz="1e300 0 0"/>"#);
+    assert_contains(&err(&xml, None), &["test.urdf:7", "xyz", "1e300", "1e7"]);
+    // At the limit it reads.
+    let xml = one_joint("fixed", r#"    <origin xyz="1e7 0 0"/>"#);
+    assert!(parse(&xml, None).is_ok());
+}

@@ -21,11 +21,7 @@ use std::path::{Path, PathBuf};
 /// within 3·10⁻⁷ × radius of the true cylinder. Larger values are refused before any mesh is allocated.
 pub const MAX_PRIMITIVE_SEGMENTS: u32 = 4096;
 
-/// Largest accepted magnitude of a coordinate or translation in a scene file,
-/// metres (10 000 km, more than UTM northings). Beyond it, squared distances
-/// lose the precision surveyor's tolerances need, and `1e308` would overflow
-/// to infinity in the first squared norm.
-pub const MAX_COORDINATE_M: Real = 1e7;
+pub use geom::MAX_COORDINATE_M;
 
 /// The ground truth of a scenario: objects with materials, or a point cloud.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -76,10 +76,19 @@ impl SensorSet {
             });
         }
         for (i, p) in self.points.iter().enumerate() {
-            if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
+            if !p
+                .iter()
+                .all(|c| c.is_finite() && c.abs() <= geom::MAX_COORDINATE_M)
+            {
                 return Err(SurfaceError::SensorSet {
                     field: format!("points[{i}]"),
-                    message: format!("not finite: [{}, {}, {}]", p.x, p.y, p.z),
+                    message: format!(
+                        "not finite or beyond ±{:e} m: [{}, {}, {}]",
+                        geom::MAX_COORDINATE_M,
+                        p.x,
+                        p.y,
+                        p.z
+                    ),
                 });
             }
         }
@@ -231,12 +240,15 @@ pub fn read_initial_segments_json(
         }
         let mut pts = Vec::with_capacity(verts.len());
         for (v, p) in verts.iter().enumerate() {
-            if !p.iter().all(|c| c.is_finite()) {
+            if !p
+                .iter()
+                .all(|c| c.is_finite() && c.abs() <= geom::MAX_COORDINATE_M)
+            {
                 return Err(parse_error(
                     source_name,
                     1,
                     &format!("segments[{s}][{v}]"),
-                    "not finite".into(),
+                    format!("not finite or beyond ±{:e} m", geom::MAX_COORDINATE_M),
                 ));
             }
             pts.push(Point3::from(*p));

@@ -189,6 +189,13 @@ fn bad_input_is_refused_and_leaves_the_model_unchanged() {
         m.update(&nan),
         Err(SurfaceError::SensorSet { .. })
     ));
+    // Beyond ±1e7 m (geom::MAX_COORDINATE_M).
+    let far = SensorSet {
+        points: vec![Point3::new(1e30, 0.0, 0.0)],
+        axes: vec![down()],
+    };
+    let err = m.update(&far).unwrap_err();
+    assert!(err.to_string().contains("points[0]"), "{err}");
     let mismatch = SensorSet {
         points: vec![Point3::origin(); 2],
         axes: vec![down()],
@@ -256,12 +263,13 @@ fn degenerate_input_is_handled() {
         .collect();
     m.update(&SensorSet::new(far, vec![down(); 26]).unwrap())
         .unwrap();
+    // Near the ±1e7 m limit of input coordinates (geom::MAX_COORDINATE_M).
     let huge: Vec<Point3> = (0..26)
         .map(|k| {
             Point3::new(
-                1e7 + 0.01 * f64::from(k % 5),
-                1e7 + 0.01 * f64::from(k / 5),
-                -1e7,
+                9.99e6 + 0.01 * f64::from(k % 5),
+                9.99e6 + 0.01 * f64::from(k / 5),
+                -9.99e6,
             )
         })
         .collect();
