@@ -647,3 +647,40 @@ fn messages_name_things_once_and_plainly() {
     let e = fails(&["report", dir.path().join("nowhere").to_str().unwrap()]);
     assert!(e.contains("no such folder"), "{e}");
 }
+
+/// A point-cloud world's ε (derived from the cloud when the file gives
+/// none) is printed: a two-point cloud gets an ε of metres, which the user
+/// must be able to see.
+#[test]
+fn scan_of_a_point_cloud_prints_its_epsilon() {
+    use std::fmt::Write as _;
+    let dir = tempfile::tempdir().unwrap();
+    let cloud = dir.path().join("roof.txt");
+    let mut text = String::new();
+    for i in 0..21 {
+        for j in 0..21 {
+            writeln!(
+                text,
+                "{} {} 1.5",
+                -0.5 + 0.05 * f64::from(i),
+                -0.5 + 0.05 * f64::from(j)
+            )
+            .unwrap();
+        }
+    }
+    std::fs::write(&cloud, text).unwrap();
+    let out = ok(&[
+        "scan",
+        "--scene",
+        cloud.to_str().unwrap(),
+        "--deg",
+        "--joints",
+        "0,-55,165,0,-110,0",
+        "--out",
+        dir.path().join("s.ply").to_str().unwrap(),
+    ]);
+    assert!(
+        out.contains("point cloud of 441 points") && out.contains("ε = "),
+        "{out}"
+    );
+}

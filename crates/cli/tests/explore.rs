@@ -323,6 +323,19 @@ fn bad_explore_input_is_a_clear_error() {
     std::fs::write(&bad, text).unwrap();
     let e = fails(&["explore", "--scenario", bad.to_str().unwrap(), "--out", o]);
     assert!(e.contains("radius_m") && e.contains("-0.04"), "{e}");
+    // A start pose outside the joint limits names the scenario's key (the
+    // scenario by its `name`, not the file's path).
+    let text = ok(&["scenario", "show", "bridge1"]).replace(
+        "start_joints = [0.0, -0.9599310885968813",
+        "start_joints = [10.0, -0.9599310885968813",
+    );
+    assert!(text.contains("start_joints = [10.0,"));
+    std::fs::write(&bad, text).unwrap();
+    let e = fails(&["explore", "--scenario", bad.to_str().unwrap(), "--out", o]);
+    assert!(
+        e.contains("robot.start_joints") && e.contains("outside its limits"),
+        "{e}"
+    );
     // A checkpoint of another run is refused, not continued.
     std::fs::create_dir_all(&out).unwrap();
     for (text, says) in [

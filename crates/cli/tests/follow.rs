@@ -286,10 +286,21 @@ fn bad_input_names_the_flag_and_writes_nothing() {
         r#"{"segments": [[[-2, -2, 0], [-2, 2, 0], [2, 2, 0], [2, -2, 0]]]}"#,
     )
     .unwrap();
+    // A second segment of three points on a line: no area.
+    let flat = dir.path().join("flat.json");
+    std::fs::write(
+        &flat,
+        r#"{"segments": [[[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]], [[0, 0, 0], [1, 0, 0], [2, 0, 0]]]}"#,
+    )
+    .unwrap();
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (
             vec!["--scenario", "cube", "--initial", cw.to_str().unwrap()],
             "segment 0 faces away from the robot",
+        ),
+        (
+            vec!["--scenario", "cube", "--initial", flat.to_str().unwrap()],
+            "segment 1: ",
         ),
         (
             vec!["--scenario", "cube", "--robot", "robby"],

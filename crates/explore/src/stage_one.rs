@@ -155,7 +155,7 @@ impl StageOne {
             .checked_sub(1)
             .filter(|j| *j < dof)
             .ok_or_else(|| ExploreError::Config {
-                field: "explore.sweep.joint",
+                field: "scanner.sweep.joint",
                 expected: "a joint of the robot (1-based)",
                 got: format!("{} for a robot with {dof} joints", config.sweep.joint),
             })?;

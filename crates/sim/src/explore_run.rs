@@ -701,7 +701,12 @@ impl StageOneSetup {
             ..map::OccupancyConfig::default()
         };
         let start = s.robot.start_joints.clone();
-        robot.check_within_limits(&start)?;
+        robot
+            .check_within_limits(&start)
+            .map_err(|e| SimError::Scenario {
+                source_name: s.name.clone(),
+                message: format!("robot.start_joints: {e}"),
+            })?;
         // Exploration assumes only that the start pose is safe (A§6.1); one
         // that touches the scene is a mistake in the scenario.
         if let Some(scene) = world.as_scene() {

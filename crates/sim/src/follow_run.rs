@@ -421,14 +421,17 @@ impl FollowSetup {
                 .noise_sigma_m
                 .unwrap_or(s.range_sensors.noise_sigma_m),
         )?;
-        Ok(Self {
+        let setup = Self {
             source: s.name.clone(),
             rig,
             start_joints,
             initial_segments,
             support_z: 0.0,
             options: options.clone(),
-        })
+        };
+        // The initial segments are checked now, not when the run starts.
+        setup.follower()?;
+        Ok(setup)
     }
 
     /// A run over a scene file placed as-is in the world frame: a mesh (OBJ,
@@ -508,21 +511,28 @@ impl FollowSetup {
             options.seed,
         )?;
         rig.set_range_noise_sigma_m(options.noise_sigma_m.unwrap_or(0.0))?;
-        Ok(Self {
+        let setup = Self {
             source: path.display().to_string(),
             rig,
             start_joints,
             initial_segments,
             support_z: bounds.min.z,
             options: options.clone(),
-        })
+        };
+        setup.follower()?;
+        Ok(setup)
     }
 
     /// The follower for this run: a new model with the initial segments.
     pub fn follower(&self) -> Result<Follower, FollowRunError> {
         let mut model = SurfaceModel::new(self.options.config.surface)?;
-        for seg in &self.initial_segments {
-            model.add_initial_segment(seg)?;
+        for (i, seg) in self.initial_segments.iter().enumerate() {
+            model.add_initial_segment(seg).map_err(|e| match e {
+                SurfaceError::InitialSegment { message } => {
+                    bad("initial segments", format!("segment {i}: {message}"))
+                }
+                e => e.into(),
+            })?;
         }
         Ok(Follower::new(
             self.rig.robot().clone(),

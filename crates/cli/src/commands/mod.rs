@@ -442,6 +442,13 @@ fn scan(a: &ScanArgs) -> Result<()> {
         setup.sweep.tilt_deg,
         a.out.display()
     )?;
+    if let scene::World::Cloud(c) = setup.world.as_ref() {
+        say!(
+            "the world is a point cloud of {} points, hit by the ε rule with ε = {:.4} m (P§4.2)",
+            c.cloud().points.len(),
+            c.epsilon()
+        )?;
+    }
     for c in &outcome.contacts {
         let object = setup
             .world
