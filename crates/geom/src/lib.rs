@@ -36,12 +36,6 @@ pub mod ray;
 pub mod triangle;
 
 pub use aabb::Aabb;
-
-/// Largest accepted magnitude of a coordinate or translation read from a
-/// user's file, metres (10 000 km, more than UTM northings). Beyond it,
-/// squared distances lose the precision surveyor's tolerances need, and
-/// `1e308` would overflow to infinity in the first squared norm.
-pub const MAX_COORDINATE_M: Real = 1e7;
 pub use capsule::Capsule;
 pub use ellipsoid::Ellipsoid;
 pub use line::{Line3, Segment3};
@@ -55,6 +49,12 @@ pub use plane::Plane;
 pub use polygon3::PlaneFrame;
 pub use ray::Ray;
 pub use triangle::Triangle;
+
+/// Largest accepted magnitude of a coordinate or translation read from a
+/// user's file, metres (10 000 km, more than UTM northings). Beyond it,
+/// squared distances lose the precision surveyor's tolerances need, and
+/// `1e308` would overflow to infinity in the first squared norm.
+pub const MAX_COORDINATE_M: Real = 1e7;
 
 /// A structure's invariant that does not hold, as found by its
 /// `check_invariants` (the BVH, the occupancy grid, the TSDF, ...).

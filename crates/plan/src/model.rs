@@ -55,9 +55,9 @@ struct CacheFile {
 
 /// Most voxel–node interference pairs the offline search may visit (about
 /// 480 times the VM-6083's 1.4e5 at the 0.1 m planning voxel: a voxel of
-/// 13 mm or more): the search's time grows
-/// with them, and one node's voxel list with `1/voxel³` (a 1 mm voxel asked
-/// for 1.6 GB for one node and exhausted the memory).
+/// 13 mm or more). The search's time grows with them, and one node's voxel
+/// list with `1/voxel³` (a 1 mm voxel asked for 1.6 GB for one node and
+/// exhausted the memory).
 pub const MAX_INTERFERENCE_PAIRS: Real = 67_108_864.0;
 
 /// Refuse a voxel size whose interference search would exceed

@@ -132,7 +132,8 @@ impl BlastInputs {
     }
 
     /// Check that the parts agree: one start per disc, and the segments a
-    /// partition of the discs (each disc in exactly one). `source` names them in the error.
+    /// partition of the discs (each disc in exactly one). `source` names
+    /// them in the error.
     pub fn check(&self, source: &str) -> Result<(), SimError> {
         let fail = |message: String| SimError::InvalidArgument {
             what: source.to_owned(),

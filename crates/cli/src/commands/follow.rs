@@ -238,13 +238,18 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     let collisions = summary
         .collisions
         .map_or_else(|| "no ground truth for".to_owned(), |n| n.to_string());
+    let times = if a.no_timings {
+        "step times not recorded (--no-timings)".to_owned()
+    } else {
+        format!(
+            "mean step {:.1} µs (median {:.1}, 95th percentile {:.1})",
+            summary.step_us.mean, summary.step_us.median, summary.step_us.p95
+        )
+    };
     say!(
-        "{} sets, termination {}, {collisions} collisions, mean step {:.1} µs (median {:.1}, 95th percentile {:.1}) → {}",
+        "{} sets, termination {}, {collisions} collisions, {times} → {}",
         summary.sets,
         summary.termination,
-        summary.step_us.mean,
-        summary.step_us.median,
-        summary.step_us.p95,
         out.display()
     )?;
     if let Some(score) = &run.score {

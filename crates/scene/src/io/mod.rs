@@ -113,15 +113,15 @@ mod stl;
 mod text;
 
 pub use obj::write_mesh_obj;
+pub use pcd::{PcdData, PcdField, PcdHeader, PcdType, read_pcd_header};
+pub use ply::{
+    PlyTable, read_ply_vertices, write_mesh_ply, write_ply_vertices, write_ply_vertices_file,
+};
 
 /// Most vertices of one polygon face in an OBJ or PLY file: a 200 000-vertex
 /// OBJ face took minutes to triangulate, and a PLY face's fan of slivers
 /// defeats the scene's BVH (40 000 vertices: 23 s to score one scan).
 pub const MAX_FACE_VERTICES: usize = 4096;
-pub use pcd::{PcdData, PcdField, PcdHeader, PcdType, read_pcd_header};
-pub use ply::{
-    PlyTable, read_ply_vertices, write_mesh_ply, write_ply_vertices, write_ply_vertices_file,
-};
 
 use crate::{PointCloud, SceneError, TriMesh};
 use geom::{Point3, Real, Vector3};
