@@ -10,6 +10,14 @@ macro_rules! say {
     }};
 }
 
+/// `print!` that returns the write error, as [`say!`] does.
+macro_rules! put {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout(), $($arg)*)
+    }};
+}
+
 mod commands;
 
 use clap::Parser;

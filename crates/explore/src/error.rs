@@ -36,4 +36,28 @@ pub enum ExploreError {
     /// The sensor configuration is invalid.
     #[error(transparent)]
     Sensor(#[from] sensor::SensorError),
+    /// The hardware refused or failed.
+    #[error(transparent)]
+    Hw(#[from] hw::HwError),
+    /// A run-folder file could not be written or read (the checkpoint).
+    #[error(transparent)]
+    Record(#[from] record::RecordError),
+    /// The mapped surface could not be made a world to predict sweeps in.
+    #[error(transparent)]
+    Scene(#[from] scene::SceneError),
+    /// The material classifier could not be trained.
+    #[error("material classifier: {0}")]
+    Classifier(String),
+    /// A run cannot be resumed from its checkpoint (another run's, or
+    /// inconsistent).
+    #[error("{what}: {message}")]
+    Resume {
+        /// The checkpoint, or what is inconsistent.
+        what: String,
+        /// Why.
+        message: String,
+    },
+    /// A judge failed to judge.
+    #[error("judge: {0}")]
+    Judge(String),
 }

@@ -15,6 +15,9 @@ pub enum FollowError {
     /// Kinematics failed (a wrong joint vector, a link out of range).
     #[error(transparent)]
     Kinematics(#[from] robot::RobotError),
+    /// A judge could not check a pose or motion.
+    #[error("{0}")]
+    Judge(String),
     /// The surface model refused an update.
     #[error(transparent)]
     Surface(#[from] surface::SurfaceError),

@@ -82,16 +82,7 @@ impl Termination {
     }
 }
 
-/// Time spent in one step, microseconds.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct StepTimes {
-    /// Surface-model update.
-    pub update_us: Real,
-    /// Change tracking and the direction algorithm.
-    pub direction_us: Real,
-    /// Control-point motion, link proximities and actuator changes.
-    pub kinematics_us: Real,
-}
+pub use record::StepTimes;
 
 /// What one step decided.
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -2,6 +2,7 @@
 
 pub mod actuator;
 pub mod config;
+pub mod episode;
 pub mod error;
 pub mod follower;
 pub mod motion;
@@ -10,6 +11,7 @@ pub mod query;
 pub mod reach;
 
 pub use config::{FollowConfig, Objective};
+pub use episode::{Episode, EpisodeOptions, Judge, NoJudge, RunEnd, run_episode};
 pub use error::FollowError;
 pub use follower::{Follower, Mode, ModeCounts, Step, StepTimes, Termination};
 pub use motion::control_point_motion;

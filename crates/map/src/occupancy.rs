@@ -80,7 +80,7 @@ use crate::regions::{Region, RegionsConfig};
 use crate::stats::{OccupancyReport, RegionReport};
 use crate::sweep::{check_point_list, list_range_jumps, range_jumps};
 use crate::traverse::Walk;
-use geom::{Aabb, Point3, Real, UnitVector3};
+use geom::{Aabb, Point3, Real, UnitVector3, Vector3};
 use rayon::prelude::*;
 use sensor::Sweep;
 use serde::{Deserialize, Serialize};
@@ -316,6 +316,18 @@ impl GridGeometry {
     /// Number of voxels.
     pub fn voxel_count(&self) -> usize {
         self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    /// Every voxel key of the grid, x fastest, then y, then z (the order
+    /// [`OccupancyGrid::from_states`] and stored grids use).
+    pub fn keys(&self) -> impl Iterator<Item = VoxelKey> + use<> {
+        let k0 = self.key_min;
+        let [nx, ny, nz] = self.dims.map(|n| n as i32);
+        (0..nz).flat_map(move |z| {
+            (0..ny).flat_map(move |y| {
+                (0..nx).map(move |x| VoxelKey::new(k0[0] + x, k0[1] + y, k0[2] + z))
+            })
+        })
     }
 
     /// The box the grid covers.
@@ -869,6 +881,38 @@ impl OccupancyGrid {
             newly_important: total.newly_important,
             rays_outside: delta_outside,
         }
+    }
+
+    /// A grid of `config` whose `k`-th voxel (in [`GridGeometry::keys`]
+    /// order) is in state `state(k, key)`: free voxels marked free, occupied
+    /// ones hit by a return from inside the voxel (a stored grid read back,
+    /// or a grid made from a ground truth).
+    pub fn from_states(
+        config: OccupancyConfig,
+        state: impl Fn(usize, VoxelKey) -> VoxelState,
+    ) -> Result<Self, MapError> {
+        let mut grid = Self::new(config)?;
+        let v = grid.geometry().voxel_m();
+        let (mut origins, mut points) = (Vec::new(), Vec::new());
+        let keys: Vec<VoxelKey> = grid.geometry().keys().collect();
+        for (k, key) in keys.into_iter().enumerate() {
+            match state(k, key) {
+                VoxelState::Unknown => {}
+                VoxelState::Free => {
+                    grid.mark_free(key)?;
+                }
+                VoxelState::Occupied => {
+                    let c = key.center(v);
+                    // A return at the centre from inside the voxel: a hit.
+                    origins.push(c + Vector3::new(0.1 * v, 0.0, 0.0));
+                    points.push(c);
+                }
+            }
+        }
+        if !points.is_empty() {
+            grid.integrate_points(&origins, &points)?;
+        }
+        Ok(grid)
     }
 
     /// Mark a voxel free without a measurement (the volume the manipulator

@@ -44,6 +44,14 @@ pub enum PlanError {
         /// The value given.
         got: String,
     },
+    /// An argument of a library call is invalid.
+    #[error("{what}: {message}")]
+    InvalidArgument {
+        /// The argument.
+        what: String,
+        /// What is wrong.
+        message: String,
+    },
     /// The cache file could not be read or written.
     #[error("C-space cache {path}: {message}")]
     Cache {

@@ -8,13 +8,11 @@
 //!   a pose is usable only when `dist(Q) > 1`.
 //! - [`CspaceModel`]: roadmap + `L(cᵢ)` + voxel interference `P(ʲx_c)` (eq.
 //!   4.13), built once and cached to a file.
+//! - [`contact`]: the robot's link shapes against a triangle scene: contacts
+//!   at a configuration and along a joint-space motion, clearance.
 //! - [`PoseSelector`]: Stage Two (A§3.3): a pose from which the scanner's
 //!   centre ray meets a disc [`Target`] within the LRC's constraints, by
 //!   Levenberg–Marquardt on the sigmoid costs `g₁…g₆` (eq. 3.14–3.20).
-//! - [`BlastPoses`]: App. A.1: a pose from which a grit-blasting nozzle on
-//!   the flange hits a disc within the tool's limits (eq. A.1–A.5, LM).
-//! - [`sequence`]: the order of a segment's blast targets (App. A.2): the
-//!   GA of eq. A.6–A.10, nearest neighbour and 2-opt.
 //!
 //! ```
 //! use geom::Isometry3;
@@ -40,17 +38,15 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod blast;
 mod config;
+pub mod contact;
 mod error;
 pub mod interference;
 mod model;
 pub mod pose;
 pub mod roadmap;
 pub mod safety;
-pub mod sequence;
 
-pub use blast::{BlastMeasure, BlastPoses, BlastTool};
 pub use config::PlanConfig;
 pub use error::PlanError;
 pub use interference::{Interference, interfering_voxels};

@@ -13,29 +13,12 @@ pub enum ReportError {
         /// What went wrong.
         message: String,
     },
-    /// A value in a file is not what was expected.
-    #[error("{file}, line {line}, `{field}`: {message}")]
-    Field {
-        /// The file.
-        file: String,
-        /// 1-based line.
-        line: usize,
-        /// The column or key.
-        field: String,
-        /// What was expected.
-        message: String,
-    },
-    /// The folder is not a run folder this crate knows.
-    #[error("{dir}: {message}")]
-    NotARun {
-        /// The folder.
-        dir: String,
-        /// What is missing.
-        message: String,
-    },
+    /// The run folder (its version, a file in it) could not be read.
+    #[error(transparent)]
+    Record(#[from] record::RecordError),
     /// Rebuilding the run's scenario (robot, scene) failed.
     #[error(transparent)]
-    Sim(#[from] sim::SimError),
+    Scenario(#[from] scenario::ScenarioError),
     /// Forward kinematics failed on a recorded pose.
     #[error(transparent)]
     Robot(#[from] robot::RobotError),

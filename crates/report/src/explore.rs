@@ -4,13 +4,14 @@
 //! 4.10, coverage and timings.
 
 use crate::ReportError;
-use crate::data::{Table, read_json, read_run_json};
 use crate::geometry::{Polylines, columns, plane_basis, simplify, stride_for};
 use crate::page::{Page, plot_of, xy_layout};
 use geom::{Isometry3, Point3, Real, Vector3};
 use plotly::common::{Line, Marker, Mode, Title, Visible};
 use plotly::layout::{AspectMode, Axis, BarMode, LayoutScene, Legend, Margin};
 use plotly::{Bar, Layout, Mesh3D, Scatter, Scatter3D, Trace};
+use record::blast::BlastPlan;
+use record::{DiscTable, RunFolder, ViewpointRecord};
 use std::path::Path;
 
 /// At most this many cloud points are drawn.
@@ -41,12 +42,14 @@ struct Setup {
     world: Option<scene::Scene>,
 }
 
-fn setup(dir: &Path) -> Result<Option<Setup>, ReportError> {
-    let path = dir.join("scenario.toml");
-    if !path.exists() {
-        return Ok(None);
-    }
-    let loaded = sim::Scenario::load(&path.display().to_string())?;
+fn setup(folder: &RunFolder) -> Result<Setup, ReportError> {
+    let loaded = crate::scenario_of(folder)?.ok_or_else(|| ReportError::File {
+        file: folder
+            .path(record::folder::SCENARIO_TOML)
+            .display()
+            .to_string(),
+        message: "missing: an explore run folder holds the scenario it ran".into(),
+    })?;
     let robot = loaded.build_robot()?;
     let half_fov_rad = loaded
         .scenario
@@ -60,92 +63,78 @@ fn setup(dir: &Path) -> Result<Option<Setup>, ReportError> {
         scene::World::Mesh(s) => Some(s),
         scene::World::Cloud(_) => None,
     };
-    Ok(Some(Setup {
+    Ok(Setup {
         robot,
         world_from_base: loaded.scenario.world_from_base(),
         half_fov_rad,
         world,
-    }))
+    })
 }
 
-/// Build the page of the explore run in `dir`.
-pub fn page(dir: &Path) -> Result<Page, ReportError> {
-    let run = read_run_json(&dir.join("run.json"))?;
-    let viewpoints = Table::read(&dir.join("viewpoints.csv"))?;
-    let scenario = run["scenario"].as_str().unwrap_or("?").to_owned();
+/// Build the page of the explore run in `folder`, naming it `shown`.
+pub fn page(folder: &RunFolder, shown: &Path) -> Result<Page, ReportError> {
+    let run = folder.summary_json();
+    let viewpoints = folder.viewpoints()?;
+    let scenario = folder.scenario().to_owned();
     let mut page = Page::new(&format!("surveyor explore: {scenario}"));
     page.paragraph(&format!(
         "AXBAM exploration (Paul 2010) of scenario {scenario}, run folder {}.",
-        dir.display()
+        shown.display()
     ));
-    page.summary(&run, &["reports"]);
+    page.summary(run, &["reports", "format_version"]);
 
-    let setup = setup(dir)?;
-    view_3d(&mut page, dir, &viewpoints, setup.as_ref())?;
-    information_plots(&mut page, dir, &viewpoints)?;
+    let setup = setup(folder)?;
+    view_3d(&mut page, folder, &viewpoints, &setup)?;
+    information_plots(&mut page, &viewpoints);
     Ok(page)
 }
 
 fn view_3d(
     page: &mut Page,
-    dir: &Path,
-    viewpoints: &Table,
-    setup: Option<&Setup>,
+    folder: &RunFolder,
+    viewpoints: &[ViewpointRecord],
+    setup: &Setup,
 ) -> Result<(), ReportError> {
     let mut traces: Vec<Box<dyn Trace>> = Vec::new();
     let mut notes = Vec::new();
-    if let Some(scene) = setup.and_then(|s| s.world.as_ref()) {
+    if let Some(scene) = &setup.world {
         truth_meshes(scene, &mut traces);
     } else {
-        notes.push("no ground truth to show (no scenario.toml or a point-cloud world)".to_owned());
+        notes.push("no ground truth to show (a point-cloud world)".to_owned());
     }
-    let cloud_path = dir.join("cloud.ply");
-    if cloud_path.exists() {
-        let cloud = scene::io::load_cloud(&cloud_path)?;
-        let stride = stride_for(cloud.points.len(), MAX_CLOUD_POINTS);
-        let shown: Vec<Point3> = cloud.points.iter().step_by(stride).copied().collect();
-        let [x, y, z] = columns(&shown);
+    let cloud = folder.cloud()?;
+    let stride = stride_for(cloud.len(), MAX_CLOUD_POINTS);
+    let shown: Vec<Point3> = cloud.iter().step_by(stride).copied().collect();
+    let [x, y, z] = columns(&shown);
+    notes.push(format!(
+        "cloud: 1 point in {stride} of {} drawn ({})",
+        cloud.len(),
+        shown.len()
+    ));
+    traces.push(
+        Scatter3D::new(x, y, z.clone())
+            .mode(Mode::Markers)
+            .name(format!("cloud (1 in {stride})"))
+            .visible(Visible::LegendOnly)
+            .marker(Marker::new().size(1).color_array(z).color_scale(
+                plotly::common::ColorScale::Palette(plotly::common::ColorScalePalette::Viridis),
+            )),
+    );
+    let mesh = folder.mesh()?;
+    let (shown, cell) = simplify(&mesh, MAX_MESH_TRIANGLES);
+    if cell > 0.0 {
         notes.push(format!(
-            "cloud: 1 point in {stride} of {} drawn ({})",
-            cloud.points.len(),
-            shown.len()
+            "mesh: {} triangles simplified to {} by vertex clustering on {:.0} mm cells",
+            mesh.triangles.len(),
+            shown.triangles.len(),
+            cell * 1000.0
         ));
-        traces.push(
-            Scatter3D::new(x, y, z.clone())
-                .mode(Mode::Markers)
-                .name(format!("cloud (1 in {stride})"))
-                .visible(Visible::LegendOnly)
-                .marker(Marker::new().size(1).color_array(z).color_scale(
-                    plotly::common::ColorScale::Palette(plotly::common::ColorScalePalette::Viridis),
-                )),
-        );
     }
-    let mesh_path = dir.join("mesh.ply");
-    if mesh_path.exists() {
-        let mesh = scene::io::load_mesh(&mesh_path, 1.0)?;
-        let (shown, cell) = simplify(&mesh, MAX_MESH_TRIANGLES);
-        if cell > 0.0 {
-            notes.push(format!(
-                "mesh: {} triangles simplified to {} by vertex clustering on {:.0} mm cells",
-                mesh.triangles.len(),
-                shown.triangles.len(),
-                cell * 1000.0
-            ));
-        }
-        traces.push(mesh_trace(&shown, "TSDF mesh", "#b0c4de", Visible::True));
-    }
-    let discs_path = dir.join("discs.csv");
-    if discs_path.exists() {
-        disc_traces(&Table::read(&discs_path)?, &mut traces)?;
-    }
-    if let Some(s) = setup {
-        viewpoint_traces(dir, viewpoints, s, &mut traces, &mut notes)?;
-    } else {
-        notes.push("no scenario.toml: viewpoints and paths are not drawn".to_owned());
-    }
-    let blast_path = dir.join("blast_plan.json");
-    if blast_path.exists() {
-        blast_traces(&read_json(&blast_path)?, &blast_path, &mut traces)?;
+    traces.push(mesh_trace(&shown, "TSDF mesh", "#b0c4de", Visible::True));
+    disc_traces(&folder.discs()?, &mut traces);
+    viewpoint_traces(viewpoints, setup, &mut traces)?;
+    if let Some(plan) = folder.blast_plan::<serde_json::Value>()? {
+        blast_traces(&plan, &mut traces);
     }
     page.heading("3-D view");
     page.paragraph(
@@ -232,36 +221,16 @@ pub(crate) fn truth_meshes(scene: &scene::Scene, traces: &mut Vec<Box<dyn Trace>
 /// material is equally likely), drawn as 8-sided fans 3 mm above their
 /// plane, and each segment's outline (the convex hull of its discs' rims in
 /// the segment's mean plane).
-fn disc_traces(discs: &Table, traces: &mut Vec<Box<dyn Trace>>) -> Result<(), ReportError> {
-    let c = [
-        discs.numbers("cx")?,
-        discs.numbers("cy")?,
-        discs.numbers("cz")?,
-    ];
-    let n = [
-        discs.numbers("nx")?,
-        discs.numbers("ny")?,
-        discs.numbers("nz")?,
-    ];
-    let radius = discs.numbers("radius")?;
-    let segment = if discs.has("segment") {
-        discs.indices("segment")?
-    } else {
-        vec![0; discs.len()]
-    };
-    let posterior_columns = discs.columns_with_prefix("p_");
-    let mut posterior = Vec::new();
-    for name in &posterior_columns {
-        posterior.push(discs.numbers(name)?);
-    }
-    let names: Vec<String> = posterior_columns
-        .iter()
-        .map(|s| s.trim_start_matches("p_").to_owned())
-        .collect();
+fn disc_traces(table: &DiscTable, traces: &mut Vec<Box<dyn Trace>>) {
+    let discs = &table.discs;
+    let segment = &table.segment;
+    let names = &table.material_names;
+    let none = Vec::new();
+    let posterior = table.posterior.as_ref().unwrap_or(&none);
     // The MAP material, or None when the belief is still flat.
     let map: Vec<Option<usize>> = (0..discs.len())
         .map(|i| {
-            let p: Vec<Real> = posterior.iter().map(|col| col[i]).collect();
+            let p: &[Real] = posterior.get(i).map_or(&[], Vec::as_slice);
             let (best, &top) = p
                 .iter()
                 .enumerate()
@@ -270,17 +239,14 @@ fn disc_traces(discs: &Table, traces: &mut Vec<Box<dyn Trace>>) -> Result<(), Re
             (top - min > 1e-6).then_some(best)
         })
         .collect();
-    let centre = |i: usize| Point3::new(c[0][i], c[1][i], c[2][i]);
-    let normal = |i: usize| {
-        geom::unit(Vector3::new(n[0][i], n[1][i], n[2][i]))
-            .map_or_else(Vector3::z, geom::UnitVector3::into_inner)
-    };
+    let centre = |i: usize| discs[i].centre;
+    let normal = |i: usize| discs[i].normal.into_inner();
     let rim = |i: usize| -> Vec<Point3> {
         let (u, v) = plane_basis(&normal(i));
         (0..8)
             .map(|k| {
                 let a = f64::from(k) * std::f64::consts::TAU / 8.0;
-                centre(i) + normal(i) * 0.003 + radius[i] * (a.cos() * u + a.sin() * v)
+                centre(i) + normal(i) * 0.003 + discs[i].radius_m * (a.cos() * u + a.sin() * v)
             })
             .collect()
     };
@@ -367,20 +333,15 @@ fn disc_traces(discs: &Table, traces: &mut Vec<Box<dyn Trace>>) -> Result<(), Re
                 .line(Line::new().color("#202020").width(2.0)),
         );
     }
-    Ok(())
 }
 
 /// Scanner fans at the viewpoints (the scan plane's field, `FAN_M` long) and
 /// the scanner's path along the executed motions, per stage.
 fn viewpoint_traces(
-    dir: &Path,
-    viewpoints: &Table,
+    viewpoints: &[ViewpointRecord],
     s: &Setup,
     traces: &mut Vec<Box<dyn Trace>>,
-    notes: &mut Vec<String>,
 ) -> Result<(), ReportError> {
-    let joints = joint_rows(viewpoints, "q", s.robot.dof())?;
-    let stage = viewpoints.indices("stage")?;
     let scanner = |q: &[Real]| -> Result<Option<Isometry3>, ReportError> {
         Ok(s.robot.scanner_pose(q)?.map(|p| s.world_from_base * p))
     };
@@ -389,7 +350,12 @@ fn viewpoint_traces(
         let mut fans = Polylines::default();
         let mut apex = Vec::new();
         let mut labels = Vec::new();
-        for (i, q) in joints.iter().enumerate().filter(|(i, _)| stage[*i] == st) {
+        for (i, q) in viewpoints
+            .iter()
+            .map(|r| &r.joints)
+            .enumerate()
+            .filter(|(i, _)| viewpoints[*i].stage == st)
+        {
             let Some(pose) = scanner(q)? else {
                 continue;
             };
@@ -430,41 +396,27 @@ fn viewpoint_traces(
                 .marker(Marker::new().size(4).color(colour)),
         );
     }
-    let path_csv = dir.join("path.csv");
-    if !path_csv.exists() {
-        notes.push("no path.csv: the executed motions are not drawn".to_owned());
-        return Ok(());
-    }
-    let path = Table::read(&path_csv)?;
-    let k = path.indices("k")?;
-    let pstage = path.indices("stage")?;
-    let q = joint_rows(&path, "q", s.robot.dof())?;
     for st in [1, 2] {
         let mut lines = Polylines::default();
-        let mut i = 0;
-        while i < k.len() {
-            let mut j = i;
-            while j < k.len() && k[j] == k[i] {
-                j += 1;
-            }
-            if pstage[i] == st && j - i >= 2 {
-                let mut pts = Vec::new();
-                for w in q[i..j].windows(2) {
-                    for step in 0..=8 {
-                        let t = f64::from(step) / 8.0;
-                        let qi: Vec<Real> = w[0]
-                            .iter()
-                            .zip(&w[1])
-                            .map(|(a, b)| a + t * (b - a))
-                            .collect();
-                        if let Some(p) = scanner(&qi)? {
-                            pts.push(Point3::from(p.translation.vector));
-                        }
+        for r in viewpoints
+            .iter()
+            .filter(|r| r.stage == st && r.path.len() >= 2)
+        {
+            let mut pts = Vec::new();
+            for w in r.path.windows(2) {
+                for step in 0..=8 {
+                    let t = f64::from(step) / 8.0;
+                    let qi: Vec<Real> = w[0]
+                        .iter()
+                        .zip(&w[1])
+                        .map(|(a, b)| a + t * (b - a))
+                        .collect();
+                    if let Some(p) = scanner(&qi)? {
+                        pts.push(Point3::from(p.translation.vector));
                     }
                 }
-                lines.push(&pts);
             }
-            i = j;
+            lines.push(&pts);
         }
         if lines.is_empty() {
             continue;
@@ -486,47 +438,12 @@ fn viewpoint_traces(
     Ok(())
 }
 
-/// Rows of the columns `q1` … `q{dof}` of `table` (each one required).
-fn joint_rows(table: &Table, prefix: &str, dof: usize) -> Result<Vec<Vec<Real>>, ReportError> {
-    let cols = (1..=dof)
-        .map(|j| table.numbers(&format!("{prefix}{j}")))
-        .collect::<Result<Vec<_>, _>>()?;
-    Ok((0..table.len())
-        .map(|i| cols.iter().map(|c| c[i]).collect())
-        .collect())
-}
-
 /// The blast path: the nozzle tips in the plan's order, segment by segment.
-fn blast_traces(
-    plan: &serde_json::Value,
-    path: &Path,
-    traces: &mut Vec<Box<dyn Trace>>,
-) -> Result<(), ReportError> {
-    let bad = |field: &str| {
-        ReportError::file(
-            &path.display().to_string(),
-            format!(
-                "`{field}`: expected an array of segments with targets holding `nozzle: [x, y, z]`"
-            ),
-        )
-    };
-    let segments = plan["segments"].as_array().ok_or_else(|| bad("segments"))?;
+fn blast_traces(plan: &BlastPlan<serde_json::Value>, traces: &mut Vec<Box<dyn Trace>>) {
     let mut lines = Polylines::default();
     let mut count = 0;
-    for s in segments {
-        let targets = s["targets"]
-            .as_array()
-            .ok_or_else(|| bad("segments[].targets"))?;
-        let mut pts = Vec::new();
-        for t in targets {
-            let p = t["nozzle"].as_array().ok_or_else(|| bad("nozzle"))?;
-            let v: Vec<Real> = p.iter().filter_map(serde_json::Value::as_f64).collect();
-            if let [x, y, z] = v[..] {
-                pts.push(Point3::new(x, y, z));
-            } else {
-                return Err(bad("nozzle"));
-            }
-        }
+    for s in &plan.segments {
+        let mut pts: Vec<Point3> = s.targets.iter().map(|t| Point3::from(t.nozzle)).collect();
         count += pts.len();
         if pts.len() == 1 {
             pts.push(pts[0]);
@@ -534,7 +451,7 @@ fn blast_traces(
         lines.push(&pts);
     }
     if lines.is_empty() {
-        return Ok(());
+        return;
     }
     let [x, y, z] = lines.xyz;
     traces.push(
@@ -546,27 +463,33 @@ fn blast_traces(
             .marker(Marker::new().size(2).color("#d62728"))
             .line(Line::new().color("#d62728").width(1.5)),
     );
-    Ok(())
 }
 
-fn information_plots(page: &mut Page, dir: &Path, vp: &Table) -> Result<(), ReportError> {
-    let k: Vec<usize> = vp.indices("k")?;
+fn information_plots(page: &mut Page, vp: &[ViewpointRecord]) {
+    let k: Vec<usize> = vp.iter().map(|r| r.k).collect();
     // Fig. 6.6: the objectives of every candidate per decision.
-    let candidates_csv = dir.join("candidates.csv");
     page.heading("Objectives of the candidates, per Stage One decision (Paul Fig. 6.6)");
-    if candidates_csv.exists() {
-        let c = Table::read(&candidates_csv)?;
-        let ck = c.indices("k")?;
-        let front = c.indices("front")?;
-        let chosen = c.indices("chosen")?;
+    {
+        let mut ck = Vec::new();
+        let mut cf: Vec<[Real; 4]> = Vec::new();
+        let mut front = Vec::new();
+        let mut chosen = Vec::new();
+        for r in vp {
+            for c in &r.scored {
+                ck.push(r.k);
+                cf.push(c.f);
+                front.push(usize::from(c.front));
+                chosen.push(usize::from(r.f == Some(c.f)));
+            }
+        }
         let titles = [
             ("f1", "f1: weighted geometric information left"),
             ("f2", "f2: C-space information left"),
             ("f3", "f3: joint travel (rad)"),
             ("f4", "f4: dist(Q), smallest over the sweep"),
         ];
-        for (name, title) in titles {
-            let f = c.numbers(name)?;
+        for (j, (name, title)) in titles.into_iter().enumerate() {
+            let f: Vec<Real> = cf.iter().map(|f| f[j]).collect();
             let pick = |keep: &dyn Fn(usize) -> bool| -> (Vec<usize>, Vec<Real>) {
                 (0..f.len())
                     .filter(|&i| keep(i))
@@ -597,25 +520,32 @@ fn information_plots(page: &mut Page, dir: &Path, vp: &Table) -> Result<(), Repo
                 "xy",
             );
         }
-    } else {
-        page.paragraph("no candidates.csv in this run folder");
     }
 
     // Fig. 6.12: information remaining over viewpoints, each relative to its first value.
     page.heading("Information remaining over viewpoints (Paul Fig. 6.12)");
     let mut traces: Vec<Box<dyn Trace>> = Vec::new();
-    for (name, label) in [
-        ("h1_weighted", "H1 (weighted, eq. 4.11)"),
-        ("h2", "H2 (C-space, eq. 4.14)"),
-        ("h3", "H3 (materials, eq. 4.17)"),
-    ] {
-        let v = vp.optional(name)?;
+    let series: [(&[Option<Real>], &str); 3] = [
+        (
+            &vp.iter().map(|r| Some(r.h1_weighted)).collect::<Vec<_>>(),
+            "H1 (weighted, eq. 4.11)",
+        ),
+        (
+            &vp.iter().map(|r| Some(r.h2)).collect::<Vec<_>>(),
+            "H2 (C-space, eq. 4.14)",
+        ),
+        (
+            &vp.iter().map(|r| r.h3).collect::<Vec<_>>(),
+            "H3 (materials, eq. 4.17)",
+        ),
+    ];
+    for (v, label) in series {
         let Some(first) = v.iter().flatten().copied().find(|x| *x != 0.0) else {
             continue;
         };
         let (x, y): (Vec<usize>, Vec<Real>) = k
             .iter()
-            .zip(&v)
+            .zip(v)
             .filter_map(|(k, v)| v.map(|v| (*k, v / first)))
             .unzip();
         traces.push(
@@ -640,8 +570,8 @@ fn information_plots(page: &mut Page, dir: &Path, vp: &Table) -> Result<(), Repo
 
     // Fig. 4.10: predicted against obtained.
     page.heading("Predicted and obtained information (Paul Fig. 4.10)");
-    let predicted = vp.optional("predicted_h1_weighted")?;
-    let actual = vp.numbers("h1_weighted")?;
+    let predicted: Vec<Option<Real>> = vp.iter().map(|r| r.predicted_h1_weighted).collect();
+    let actual: Vec<Real> = vp.iter().map(|r| r.h1_weighted).collect();
     let (xp, yp): (Vec<usize>, Vec<Real>) = k
         .iter()
         .zip(&predicted)
@@ -670,13 +600,13 @@ fn information_plots(page: &mut Page, dir: &Path, vp: &Table) -> Result<(), Repo
     );
 
     page.heading("Coverage and effort");
-    let cov = vp.optional("coverage_a1")?;
+    let cov: Vec<Option<Real>> = vp.iter().map(|r| r.coverage_a1).collect();
     let (xc, yc): (Vec<usize>, Vec<Real>) = k
         .iter()
         .zip(&cov)
         .filter_map(|(k, v)| v.map(|v| (*k, 100.0 * v)))
         .unzip();
-    let travel = vp.numbers("joint_travel")?;
+    let travel: Vec<Real> = vp.iter().map(|r| r.joint_travel).collect();
     let traces: Vec<Box<dyn Trace>> = vec![
         Scatter::new(xc, yc)
             .mode(Mode::LinesMarkers)
@@ -700,15 +630,15 @@ fn information_plots(page: &mut Page, dir: &Path, vp: &Table) -> Result<(), Repo
     page.plot("coverage", &plot_of(traces, layout), 400, "xy");
 
     let mut traces: Vec<Box<dyn Trace>> = Vec::new();
-    for (name, label) in [
-        ("decision_ms", "decision"),
-        ("plan_ms", "of it, choice and path planning"),
-        ("sweep_ms", "sweep"),
-        ("integrate_ms", "integration"),
-    ] {
-        traces.push(Bar::new(k.clone(), vp.numbers(name)?).name(label));
+    let times: [(fn(&ViewpointRecord) -> Real, &str); 4] = [
+        (|r| r.decision_ms, "decision"),
+        (|r| r.plan_ms, "of it, choice and path planning"),
+        (|r| r.sweep_ms, "sweep"),
+        (|r| r.integrate_ms, "integration"),
+    ];
+    for (time, label) in times {
+        traces.push(Bar::new(k.clone(), vp.iter().map(time).collect::<Vec<Real>>()).name(label));
     }
     let layout = xy_layout("Time per viewpoint", "viewpoint k", "ms").bar_mode(BarMode::Group);
     page.plot("timings", &plot_of(traces, layout), 400, "xy");
-    Ok(())
 }

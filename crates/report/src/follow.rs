@@ -5,7 +5,6 @@
 //! mode, the step times and what the sensors saw.
 
 use crate::ReportError;
-use crate::data::{Table, parse_json, read_run_json};
 use crate::explore::truth_meshes;
 use crate::geometry::{Polylines, columns, plane_basis, triangulate};
 use crate::page::{Page, plot_of, xy_layout};
@@ -15,7 +14,7 @@ use plotly::layout::{
     AspectMode, AspectRatio, Axis, AxisType, Camera, CategoryOrder, LayoutScene, Legend, Margin,
 };
 use plotly::{Layout, Mesh3D, Scatter, Scatter3D, Trace};
-use sim::model_snapshots::ModelSnapshots;
+use record::{RunFolder, StepRow};
 use std::path::Path;
 use surface::{ModelJson, SegmentJson};
 
@@ -351,12 +350,10 @@ fn sensed_points(model: &ModelJson) -> Vec<Point3> {
 /// The ground truth of the run's scenario, one mesh per material (hidden
 /// until clicked), when the folder has `scenario.toml` and its world is a
 /// mesh scene.
-fn truth_traces(dir: &Path, traces: &mut Vec<Box<dyn Trace>>) -> Result<bool, ReportError> {
-    let path = dir.join("scenario.toml");
-    if !path.exists() {
+fn truth_traces(folder: &RunFolder, traces: &mut Vec<Box<dyn Trace>>) -> Result<bool, ReportError> {
+    let Some(loaded) = crate::scenario_of(folder)? else {
         return Ok(false);
-    }
-    let loaded = sim::Scenario::load(&path.display().to_string())?;
+    };
     let scene::World::Mesh(scene) = loaded.build_world()? else {
         return Ok(false);
     };
@@ -364,35 +361,28 @@ fn truth_traces(dir: &Path, traces: &mut Vec<Box<dyn Trace>>) -> Result<bool, Re
     Ok(true)
 }
 
-/// Build the page of the follow run in `dir`.
-pub fn page(dir: &Path) -> Result<Page, ReportError> {
-    let run = read_run_json(&dir.join("run.json"))?;
-    let steps = Table::read(&dir.join("steps.csv"))?;
-    let model: ModelJson = parse_json(&dir.join("surface_model.json"))?;
-    let scenario = run["scenario"].as_str().unwrap_or("?").to_owned();
+/// Build the page of the follow run in `folder`, naming it `shown`.
+pub fn page(folder: &RunFolder, shown: &Path) -> Result<Page, ReportError> {
+    let run = folder.summary_json();
+    let steps = folder.steps()?;
+    let model = folder.surface_model()?;
+    let scenario = folder.scenario().to_owned();
     let robot = run["robot"].as_str().unwrap_or("?").to_owned();
     let mut page = Page::new(&format!("surveyor follow: {scenario}, {robot}"));
     page.paragraph(&format!(
         "Surface following (Pudney 1994) of {scenario} with {robot}, run folder {}.",
-        dir.display()
+        shown.display()
     ));
-    page.summary(&run, &["initial_segments"]);
+    page.summary(run, &["initial_segments", "format_version"]);
 
-    let path = [
-        steps.numbers("x")?,
-        steps.numbers("y")?,
-        steps.numbers("z")?,
-    ];
-    let path: Vec<Point3> = (0..steps.len())
-        .map(|i| Point3::new(path[0][i], path[1][i], path[2][i]))
-        .collect();
+    let path: Vec<Point3> = steps.iter().map(|r| r.control_point).collect();
     let mut framed = sensed_points(&model);
     framed.extend(path.iter().copied());
     let bounds = Bounds::of(&framed, 0.05);
 
     // The completed model and the path (Figs 45 and 47).
     let mut traces = Vec::new();
-    let truth = truth_traces(dir, &mut traces)?;
+    let truth = truth_traces(folder, &mut traces)?;
     traces.extend(model_traces(&model, Initial::Hidden, true));
     if !path.is_empty() {
         let [x, y, z] = columns(&path);
@@ -425,8 +415,7 @@ pub fn page(dir: &Path) -> Result<Page, ReportError> {
     );
     if !truth {
         page.paragraph(
-            "no ground truth to show (no scenario.toml: a --scene run, or an older run folder, \
-             or a point-cloud world)",
+            "no ground truth to show (no scenario.toml: a --scene run, or a point-cloud world)",
         );
     }
     let mut scene = bounds.map_or_else(
@@ -441,21 +430,21 @@ pub fn page(dir: &Path) -> Result<Page, ReportError> {
         .scene(scene);
     page.plot("view3d", &plot_of(traces, layout), 780, "view3d");
 
-    evolution(&mut page, dir, bounds)?;
-    step_plots(&mut page, &steps)?;
+    evolution(&mut page, folder, bounds)?;
+    step_plots(&mut page, &steps);
     Ok(page)
 }
 
 /// One small view per snapshot of `model_snapshots.json` (Figs 44 and 46),
 /// all on the same axes, initial segments left out as in the thesis.
-fn evolution(page: &mut Page, dir: &Path, bounds: Option<Bounds>) -> Result<(), ReportError> {
+fn evolution(
+    page: &mut Page,
+    folder: &RunFolder,
+    bounds: Option<Bounds>,
+) -> Result<(), ReportError> {
     page.heading("Evolution of the model (Pudney Figs 44 and 46)");
-    let path = dir.join("model_snapshots.json");
-    if !path.exists() {
-        page.paragraph("no model_snapshots.json in this run folder (an older run)");
-        return Ok(());
-    }
-    let snaps: ModelSnapshots = parse_json(&path)?;
+    let path = folder.path(record::snapshots::MODEL_SNAPSHOTS_JSON);
+    let snaps = folder.snapshots()?;
     page.paragraph(&format!(
         "The model after the number of sensor sets given above each view (every {} sets, and \
          at the end), on the same axes as the view above; initial segments are not shown, as \
@@ -519,9 +508,9 @@ fn mode_categories(modes: &[&str]) -> Vec<String> {
     out
 }
 
-fn step_plots(page: &mut Page, steps: &Table) -> Result<(), ReportError> {
-    let step = steps.indices("step")?;
-    let modes = steps.text("mode")?;
+fn step_plots(page: &mut Page, steps: &[StepRow]) {
+    let step: Vec<usize> = steps.iter().map(|r| r.step as usize).collect();
+    let modes: Vec<&str> = steps.iter().map(|r| r.mode.as_str()).collect();
     page.heading("Motion mode per step (P§3.4)");
     let categories = mode_categories(&modes);
     let mut traces: Vec<Box<dyn Trace>> = vec![
@@ -565,12 +554,13 @@ fn step_plots(page: &mut Page, steps: &Table) -> Result<(), ReportError> {
 
     page.heading("Step times");
     let mut traces: Vec<Box<dyn Trace>> = Vec::new();
-    for (name, label) in [
-        ("update_us", "surface model update"),
-        ("direction_us", "direction (mode) choice"),
-        ("kinematics_us", "actuator changes (kinematics)"),
-    ] {
-        let v = steps.optional(name)?;
+    let parts: [(fn(&record::StepTimes) -> Real, &str); 3] = [
+        (|t| t.update_us, "surface model update"),
+        (|t| t.direction_us, "direction (mode) choice"),
+        (|t| t.kinematics_us, "actuator changes (kinematics)"),
+    ];
+    for (part, label) in parts {
+        let v: Vec<Option<Real>> = steps.iter().map(|r| r.times.as_ref().map(part)).collect();
         let (x, y): (Vec<usize>, Vec<Real>) = step
             .iter()
             .zip(&v)
@@ -599,8 +589,9 @@ fn step_plots(page: &mut Page, steps: &Table) -> Result<(), ReportError> {
     page.plot("times", &plot_of(traces, layout), 400, "xy");
 
     page.heading("Sensing and clearance per step");
-    let set_size = steps.numbers("set_size")?;
-    let clearance = steps.optional("link_clearance_m")?;
+    // As numbers, as the table holds them.
+    let set_size: Vec<Real> = steps.iter().map(|r| r.set_size as Real).collect();
+    let clearance: Vec<Option<Real>> = steps.iter().map(|r| r.link_clearance_m).collect();
     let (xc, yc): (Vec<usize>, Vec<Real>) = step
         .iter()
         .zip(&clearance)
@@ -629,7 +620,6 @@ fn step_plots(page: &mut Page, steps: &Table) -> Result<(), ReportError> {
             .side(plotly::common::AxisSide::Right),
     );
     page.plot("sensing", &plot_of(traces, layout), 400, "xy");
-    Ok(())
 }
 
 #[cfg(test)]

@@ -2,11 +2,10 @@
 //! 3-D view and the plots the theses draw, made with plotly.js embedded in
 //! the page (no network request of any kind).
 //!
-//! [`write()`] looks at the folder: a `surveyor explore` run (`viewpoints.csv`)
-//! gets the view of Paul ch. 6; a `surveyor follow` run (`steps.csv`) the
-//! view of Pudney's Figs 44–47.
+//! The folder is read through [`record::RunFolder`] (its format version is
+//! checked there): a `surveyor explore` run gets the view of Paul ch. 6, a
+//! `surveyor follow` run the view of Pudney's Figs 44–47.
 
-pub mod data;
 pub mod error;
 pub mod explore;
 pub mod follow;
@@ -14,33 +13,56 @@ pub mod geometry;
 pub mod page;
 
 pub use error::ReportError;
+use record::{RunFolder, RunKind, Staging};
 use std::path::{Path, PathBuf};
 
-/// The page of the run in `dir`.
-pub fn render(dir: &Path) -> Result<String, ReportError> {
-    let page = if dir.join("viewpoints.csv").exists() {
-        explore::page(dir)?
-    } else if dir.join("steps.csv").exists() {
-        follow::page(dir)?
-    } else {
-        return Err(ReportError::NotARun {
-            dir: dir.display().to_string(),
-            message: if dir.is_dir() {
-                "not a run folder: expected viewpoints.csv (surveyor explore) or steps.csv \
-                 (surveyor follow)"
-            } else {
-                "no such folder"
-            }
-            .into(),
-        });
+/// The page of the run in `dir`, naming the folder `shown`.
+pub fn render_as(dir: &Path, shown: &Path) -> Result<String, ReportError> {
+    let folder = RunFolder::open(dir)?;
+    let page = match folder.kind() {
+        RunKind::Explore => explore::page(&folder, shown)?,
+        RunKind::Follow => follow::page(&folder, shown)?,
     };
     Ok(page.finish())
 }
 
-/// Write `dir/report.html`; returns its path.
+/// The page of the run in `dir`.
+pub fn render(dir: &Path) -> Result<String, ReportError> {
+    render_as(dir, dir)
+}
+
+/// Write `dir/report.html` (through a temporary file, so a failure leaves
+/// no partial page); returns its path.
 pub fn write(dir: &Path) -> Result<PathBuf, ReportError> {
     let html = render(dir)?;
-    let path = dir.join("report.html");
-    std::fs::write(&path, html).map_err(|e| ReportError::file(&path.display().to_string(), e))?;
+    let path = dir.join(record::folder::REPORT_HTML);
+    let mut staged = record::output::Staged::new();
+    let tmp = staged.file(&path)?;
+    std::fs::write(&tmp, html).map_err(|e| ReportError::file(&path.display().to_string(), e))?;
+    staged.commit()?;
     Ok(path)
+}
+
+/// Write the report of a run folder being staged ([`Staging`]), naming it
+/// by its final place.
+pub fn write_staged(staging: &Staging) -> Result<(), ReportError> {
+    let html = render_as(staging.dir(), staging.out())?;
+    staging.write(record::folder::REPORT_HTML, html)?;
+    Ok(())
+}
+
+/// The scenario a run folder holds (`scenario.toml`, its paths absolute),
+/// `None` for a run without one (a `surveyor follow --scene` run).
+pub(crate) fn scenario_of(
+    folder: &RunFolder,
+) -> Result<Option<scenario::LoadedScenario>, ReportError> {
+    let Some(text) = folder.scenario_toml()? else {
+        return Ok(None);
+    };
+    let path = folder.path(record::folder::SCENARIO_TOML);
+    let scenario = scenario::Scenario::from_toml(&text, &path.display().to_string())?;
+    Ok(Some(scenario::LoadedScenario {
+        scenario,
+        base_dir: folder.dir().to_owned(),
+    }))
 }

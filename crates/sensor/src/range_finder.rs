@@ -21,7 +21,7 @@ pub struct RangeFinder {
 
 /// A sensor point (P eq. 1): the surface point `p = s + d·â` in the world
 /// frame, with the sensing axis that measured it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SensorPoint {
     /// The measured point.
     pub point: Point3,

@@ -17,6 +17,7 @@
 //! surface, with no voxel unknown: the planner with a perfect map. The noise
 //! of each sweep is seeded by the pose's index, as a run's is by the viewpoint.
 
+use explore::Setup;
 use geom::{Isometry3, Real};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use map::VoxelKey;
@@ -24,7 +25,8 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use robot::Robot;
-use sim::explore_run::{ExploreOptions, StageOneSetup};
+use scene::World;
+use sim::explore_job::{ExploreOptions, explore_setup};
 use std::collections::HashSet;
 use std::sync::Arc;
 
@@ -39,21 +41,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let name = args.first().map_or("bridge1", String::as_str);
     let sweeps: usize = args.get(1).map_or(Ok(12), |s| s.parse())?;
     let extra: usize = args.get(2).map_or(Ok(0), |s| s.parse())?;
-    let loaded = sim::Scenario::load(name)?;
+    let loaded = scenario::Scenario::load(name)?;
     // One cache file per scenario, named after it (a path's separators too).
     let stem: String = name
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
         .collect();
-    let setup = StageOneSetup::new(
+    let (setup, world) = explore_setup(
         &loaded,
         &ExploreOptions {
             cspace_cache: Some(std::env::temp_dir().join(format!("surveyor-oracle-{stem}.json"))),
             ..ExploreOptions::default()
         },
     )?;
-    let scene = setup
-        .world
+    let scene = world
         .as_scene()
         .ok_or("the oracle needs a scene with true surfaces")?;
 
@@ -106,8 +107,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut ellipsoid = true;
             for c in &checks {
                 let frames = robot.forward_kinematics(c).map_err(|e| e.to_string())?;
-                contact &=
-                    sim::safety::robot_contacts(robot, &frames, &world_from_base, scene).is_empty();
+                contact &= plan::contact::robot_contacts(robot, &frames, &world_from_base, scene)
+                    .is_empty();
                 ellipsoid &= plan::interfering_voxels(safety, c, voxel)
                     .map_err(|e| e.to_string())?
                     .iter()
@@ -116,7 +117,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut bits = vec![0u64; words];
             // The start's sweep is taken whatever the rules say (a run takes it).
             if i == 0 || contact || ellipsoid {
-                let points = simulated_sweep(&setup, robot, &world_from_base, &scanner, q, i)?;
+                let points =
+                    simulated_sweep(&setup, &world, robot, &world_from_base, &scanner, q, i)?;
                 for p in points {
                     for n in tree.within_unsorted::<SquaredEuclidean>(&[p.x, p.y, p.z], r2) {
                         let k = n.item as usize;
@@ -193,7 +195,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
 /// The configurations of the tilt sweep from `q`: every `CHECK_TILT_DEG` of
 /// the sweep joint's range, ends included, and `q` itself.
-fn sweep_configurations(setup: &StageOneSetup, q: &[Real]) -> Vec<Vec<Real>> {
+fn sweep_configurations(setup: &Setup, q: &[Real]) -> Vec<Vec<Real>> {
     let (lo, hi) = setup.stage.sweep_range(q);
     let j = setup.config.sweep.joint - 1;
     let steps = ((hi[j] - lo[j]) / CHECK_TILT_DEG.to_radians())
@@ -210,7 +212,8 @@ fn sweep_configurations(setup: &StageOneSetup, q: &[Real]) -> Vec<Vec<Real>> {
 
 /// The points of the sweep from `q`, simulated with noise seeded by `seed`.
 fn simulated_sweep(
-    setup: &StageOneSetup,
+    setup: &Setup,
+    world: &Arc<World>,
     robot: &Robot,
     world_from_base: &Isometry3,
     scanner: &sensor::ScannerConfig,
@@ -220,14 +223,14 @@ fn simulated_sweep(
     let scanner = sensor::Scanner::new(*scanner).map_err(|e| e.to_string())?;
     let mut rig = sim::SimRig::new(
         robot.clone(),
-        Arc::clone(&setup.world),
+        Arc::clone(world),
         *world_from_base,
         q,
         Some(scanner),
         seed as u64,
     )
     .map_err(|e| e.to_string())?;
-    let sweep = sim::tilt_sweep(
+    let sweep = hw::tilt_sweep(
         &mut rig,
         robot,
         world_from_base,

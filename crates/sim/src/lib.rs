@@ -4,37 +4,25 @@
 //!
 //! | module | entry points |
 //! |---|---|
-//! | [`scenario`] | [`Scenario`] (TOML), [`scenario::builtin_scenario`], [`LoadedScenario`] |
-//! | [`rig`] | the hardware traits [`Arm`], [`LineScanner`], [`RangeSensors`]; [`SimRig`] |
-//! | [`sweep`] | [`tilt_sweep`]: nod the scanner through the hardware traits into a [`sensor::Sweep`] |
-//! | [`metrics`] | [`metrics::coverage`], [`metrics::accuracy`] against the ground truth |
-//! | [`safety`] | [`safety::robot_contacts`]: the robot's link shapes against the scene; [`safety::motion_contacts`] along a joint-space motion |
-//! | [`range_sensors`] | [`range_sensors::RangeSensorsSpec`]: a scenario's range finders (single and rings) and range noise |
-//! | [`scan_check`] | [`scan_check::ScanIndex`] (kd-tree over scan points), [`scan_check::scan_clearance`] (link capsules against a scan), [`scan_check::model_to_scan`] (model polygons against a scan) |
-//! | [`surface_score`] | [`surface_score::score_surface_model`]: a surface model against the true faces, edges and corners |
-//! | [`table_fit`] | [`table_fit::fit_table`]: a table plane fitted to scan points, as world frame and initial segment |
+//! | [`rig`] | [`SimRig`]: the `hw` traits over a ground-truth world |
+//! | [`explore_job`] | [`explore_job::SimExplore`]: a scenario's exploration on a [`SimRig`], judged by [`explore_job::ExploreJudge`]; [`explore_job::write_run`] stages its run folder with the blast plan |
+//! | [`follow_job`] | [`follow_job::FollowSetup`]: a scenario's or a scene file's surface following on a [`SimRig`], judged by [`follow_job::FollowJudge`]; [`follow_job::FollowRun::write`] |
 //! | [`scan_job`] | the `surveyor scan` job as library calls |
-//! | [`explore_run`] | [`explore_run::run_exploration`]: AXBAM (both stages) through the hardware traits, every motion audited against the map and the ground truth; [`explore_run::ExploreRun::write`] (the `surveyor explore` files) |
-//! | [`follow_run`] | [`follow_run::run_episode`]: a `follow::Follower` through the hardware traits with ground-truth safety; [`follow_run::FollowSetup`] (scenario or scene file → rig + follower), [`follow_run::FollowRun::outputs`] (the `surveyor follow` files) |
+//! | [`metrics`] | [`metrics::coverage`], [`metrics::accuracy`], [`metrics::CoverageTracker`] against the ground truth |
+//! | [`surface_score`] | [`surface_score::score_surface_model`]: a surface model against the true faces, edges and corners |
+//! | [`scan_check`] | [`scan_check::ScanIndex`] (kd-tree over scan points), [`scan_check::scan_clearance`] (link capsules against a scan), [`scan_check::model_to_scan`] (model polygons against a scan) |
+//! | [`truth`] | [`truth::ground_truth_grid`], [`truth::reachable_discs`]: the blast plan's oracle |
 
-pub mod blast;
-pub mod explore_run;
-pub mod follow_run;
+pub mod explore_job;
+pub mod follow_job;
 pub mod metrics;
-pub mod model_snapshots;
-pub mod range_sensors;
 pub mod rig;
-pub mod safety;
 pub mod scan_check;
 pub mod scan_job;
-pub mod scenario;
 pub mod surface_score;
-pub mod sweep;
-pub mod table_fit;
+pub mod truth;
 
-pub use rig::{Arm, LineScanner, RangeSensors, ScanReadings, SimRig};
-pub use scenario::{LoadedScenario, Scenario};
-pub use sweep::tilt_sweep;
+pub use rig::SimRig;
 
 /// What can go wrong running a scenario.
 #[derive(Debug, thiserror::Error)]
@@ -47,6 +35,18 @@ pub enum SimError {
         /// What is wrong.
         message: String,
     },
+    /// A scenario could not be read or built.
+    #[error(transparent)]
+    ScenarioFile(#[from] scenario::ScenarioError),
+    /// The hardware (the simulated rig) refused or failed.
+    #[error(transparent)]
+    Hw(#[from] hw::HwError),
+    /// A run-folder file could not be written or read.
+    #[error(transparent)]
+    Record(#[from] record::RecordError),
+    /// Blast planning failed.
+    #[error(transparent)]
+    Blast(Box<blast::BlastError>),
     /// The robot model rejected something.
     #[error(transparent)]
     Robot(#[from] robot::RobotError),
@@ -97,6 +97,12 @@ impl From<plan::PlanError> for SimError {
 impl From<explore::ExploreError> for SimError {
     fn from(e: explore::ExploreError) -> Self {
         Self::Explore(Box::new(e))
+    }
+}
+
+impl From<blast::BlastError> for SimError {
+    fn from(e: blast::BlastError) -> Self {
+        Self::Blast(Box::new(e))
     }
 }
 

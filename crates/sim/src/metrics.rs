@@ -2,55 +2,15 @@
 //! true surfaces (per material and overall) and accuracy of the points.
 
 use crate::SimError;
-use crate::scenario::MetricsConfig;
 use geom::{Aabb, Point3, Real};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
+use scenario::MetricsConfig;
 use scene::{DEFAULT_SAMPLE_CHUNK, RayCast, Scene, SurfaceSampler};
 use serde::Serialize;
 use std::num::NonZero;
 
-/// Coverage of one material.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct MaterialCoverage {
-    /// Material name.
-    pub material: String,
-    /// True-surface samples of this material.
-    pub samples: usize,
-    /// Of which covered.
-    pub covered: usize,
-}
-
-/// Coverage of the true surfaces.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct CoverageReport {
-    /// Samples of the true surfaces considered.
-    pub samples: usize,
-    /// Samples with a measured point within the threshold.
-    pub covered: usize,
-    /// The threshold, metres.
-    pub covered_within_m: Real,
-    /// The region the samples were restricted to.
-    pub region: Option<Aabb>,
-    /// Density actually sampled, per m²: the configured one, or less when the
-    /// sampling budget (`max_samples`) capped it.
-    pub samples_per_m2: Real,
-    /// `true` when the budget lowered the density.
-    pub density_capped: bool,
-    /// Per material, in the scene's table order (materials with no samples omitted).
-    pub per_material: Vec<MaterialCoverage>,
-}
-
-impl CoverageReport {
-    /// Covered fraction in `[0, 1]` (0 when there are no samples).
-    pub fn fraction(&self) -> Real {
-        if self.samples == 0 {
-            0.0
-        } else {
-            self.covered as Real / self.samples as Real
-        }
-    }
-}
+pub use record::{CoverageReport, MaterialCoverage};
 
 /// Distances from measured points to the true surface.
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -1,52 +1,18 @@
-//! Hardware behind traits, and their simulated implementations.
-//!
-//! The algorithms talk to a robot through [`Arm`] (report joints, move) and to
-//! sensors through [`LineScanner`] (a 2-D laser scan at the current pose) and
-//! [`RangeSensors`] (single-point range finders). A driver for a real robot
-//! implements the same traits; [`SimRig`] implements them against a
-//! ground-truth [`World`], so nothing above this module knows which it has.
+//! The simulated robot: [`SimRig`] implements the hardware traits of `hw`
+//! ([`Arm`], [`LineScanner`], [`RangeSensors`]) against a ground-truth
+//! [`World`], so the loops above it cannot tell it from a real robot's
+//! driver.
 
 use crate::SimError;
 use geom::{Isometry3, Real};
+use hw::{Arm, HwError, LineScanner, RangeSensors, ScanReadings};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use robot::Robot;
-use scene::{MaterialId, World};
+use scenario::LoadedScenario;
+use scene::World;
 use sensor::{RangeFinder, Scanner, SensorPoint};
 use std::sync::Arc;
-
-/// A robot that reports its joints and moves.
-pub trait Arm {
-    /// Current joint values (radians / metres).
-    fn joints(&self) -> Vec<Real>;
-    /// Move to `q` and wait until there; errors leave the arm where it was.
-    fn move_to(&mut self, q: &[Real]) -> Result<(), SimError>;
-}
-
-/// One 2-D scan as a scanner reports it, in bearing order.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ScanReadings {
-    /// Range per bearing, `None` without a return.
-    pub ranges_m: Vec<Option<Real>>,
-    /// Intensity per bearing (0 without a return).
-    pub intensities: Vec<Real>,
-    /// Ground truth a simulator can add: the material hit per bearing.
-    pub truth_materials: Option<Vec<Option<MaterialId>>>,
-}
-
-/// A 2-D line scanner taking a scan at the robot's current pose.
-pub trait LineScanner {
-    /// Bearing of every slot, radians (scanner frame, A eq. 4.7).
-    fn bearings_rad(&self) -> &[Real];
-    /// Take one scan.
-    fn scan(&mut self) -> Result<ScanReadings, SimError>;
-}
-
-/// Single-point range finders mounted on the robot.
-pub trait RangeSensors {
-    /// One reading per mounted sensor at the current pose (`None`: nothing in range).
-    fn read_all(&mut self) -> Result<Vec<Option<SensorPoint>>, SimError>;
-}
 
 /// A simulated robot with its sensors in a ground-truth world.
 #[derive(Clone, Debug)]
@@ -62,6 +28,26 @@ pub struct SimRig {
 }
 
 impl SimRig {
+    /// The rig of a scenario: the robot of [`LoadedScenario::build_robot`]
+    /// (with the `[range_sensors]` mounts) at its start joints, in the
+    /// world of [`LoadedScenario::build_world`], with the scenario's range
+    /// noise σ; `seed` drives all sensor noise. The scanner is not
+    /// simulated (surface following uses range finders only).
+    pub fn of_scenario(loaded: &LoadedScenario, seed: u64) -> Result<Self, SimError> {
+        let robot = loaded.build_robot()?;
+        let world = Arc::new(loaded.build_world()?);
+        let mut rig = Self::new(
+            robot,
+            world,
+            loaded.scenario.world_from_base(),
+            &loaded.scenario.robot.start_joints,
+            None,
+            seed,
+        )?;
+        rig.set_range_noise_sigma_m(loaded.scenario.range_sensors.noise_sigma_m)?;
+        Ok(rig)
+    }
+
     /// A rig at joint values `q`. `seed` drives all sensor noise.
     pub fn new(
         robot: Robot,
@@ -123,6 +109,11 @@ impl SimRig {
         &self.world
     }
 
+    /// The world, shared.
+    pub fn world_arc(&self) -> Arc<World> {
+        Arc::clone(&self.world)
+    }
+
     /// Where the base stands.
     pub fn world_from_base(&self) -> Isometry3 {
         self.world_from_base
@@ -148,7 +139,7 @@ impl Arm for SimRig {
         self.q.clone()
     }
 
-    fn move_to(&mut self, q: &[Real]) -> Result<(), SimError> {
+    fn move_to(&mut self, q: &[Real]) -> Result<(), HwError> {
         self.robot.check_within_limits(q)?;
         self.robot.fk_into(q, &mut self.frames)?;
         self.q.clear();
@@ -162,9 +153,9 @@ impl LineScanner for SimRig {
         self.scanner.as_ref().map_or(&[], |s| s.bearings_rad())
     }
 
-    fn scan(&mut self) -> Result<ScanReadings, SimError> {
-        let pose = self.world_from_scanner()?;
-        let scanner = self.scanner.as_ref().ok_or(SimError::NoScanner)?;
+    fn scan(&mut self) -> Result<ScanReadings, HwError> {
+        let pose = self.world_from_scanner().map_err(|_| HwError::NoScanner)?;
+        let scanner = self.scanner.as_ref().ok_or(HwError::NoScanner)?;
         let scan = scanner.scan(self.world.as_ref(), &pose, &mut self.rng);
         Ok(ScanReadings {
             ranges_m: scan.returns.iter().map(|r| r.map(|r| r.range_m)).collect(),
@@ -181,10 +172,14 @@ impl LineScanner for SimRig {
             ),
         })
     }
+
+    fn seed_noise(&mut self, seed: u64) {
+        self.reseed(seed);
+    }
 }
 
 impl RangeSensors for SimRig {
-    fn read_all(&mut self) -> Result<Vec<Option<SensorPoint>>, SimError> {
+    fn read_all(&mut self) -> Result<Vec<Option<SensorPoint>>, HwError> {
         let sigma = self.range_noise_sigma_m;
         let Self {
             robot,

@@ -5,12 +5,11 @@
 use crate::SimError;
 use crate::metrics::{AccuracyReport, CoverageReport, accuracy, coverage};
 use crate::rig::SimRig;
-use crate::safety::{Contact, robot_contacts};
-use crate::scenario::MetricsConfig;
-use crate::scenario::{LoadedScenario, mount_scanner, robot_by_name_or_urdf};
-use crate::sweep::tilt_sweep;
 use geom::{Aabb, Isometry3, Point3, Real};
+use hw::tilt_sweep;
+use plan::contact::{Contact, robot_contacts};
 use robot::Robot;
+use scenario::{LoadedScenario, MetricsConfig, RobotChoice, mount_scanner};
 use scene::{PointCloudWorld, SceneError, World};
 use sensor::{Scanner, ScannerConfig, Sweep, SweepConfig};
 use std::path::Path;
@@ -123,7 +122,7 @@ impl ScanSetup {
 
     /// From a scene file (geometry placed as-is in the world frame) and a robot
     /// preset or URDF (with an optional tip link, see
-    /// [`robot_by_name_or_urdf`]) standing at `world_from_base`. Coverage is scored within
+    /// [`RobotChoice::parse`]) standing at `world_from_base`. Coverage is scored within
     /// reach of the scanner: a box of half-size max range + 1 m around the base.
     pub fn from_scene_file(
         scene_file: &Path,
@@ -135,7 +134,7 @@ impl ScanSetup {
         seed: u64,
     ) -> Result<Self, SimError> {
         let world = Arc::new(world_from_file(scene_file)?);
-        let mut robot = robot_by_name_or_urdf(robot_name_or_urdf, tip)?;
+        let mut robot = RobotChoice::parse(robot_name_or_urdf, tip)?.build()?;
         mount_scanner(&mut robot, None);
         robot.check_within_limits(&joints)?;
         let mut sweep = SweepConfig::default();

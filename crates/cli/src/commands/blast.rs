@@ -1,10 +1,9 @@
 //! `surveyor plan-blast`: the grit-blasting plan (Paul App. A) over the map of
-//! a `surveyor explore` run folder ([`sim::blast`]).
+//! a `surveyor explore` run folder ([`blast`], read through [`record`]).
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
+use blast::{BlastConfig, BlastTool};
 use clap::Args;
-use sim::Scenario;
-use sim::blast::{BLAST_INPUTS_FILE, BlastConfig, BlastInputs, plan_blast_inputs};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
@@ -41,10 +40,10 @@ pub struct PlanBlastArgs {
 }
 
 /// The tool of a `--tool` file.
-fn load_tool(path: &Path) -> Result<sim::blast::BlastTool> {
+fn load_tool(path: &Path) -> Result<BlastTool> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("--tool {}: cannot read the file", path.display()))?;
-    let tool: sim::blast::BlastTool = toml::from_str(&text).map_err(|e| {
+    let tool: BlastTool = toml::from_str(&text).map_err(|e| {
         anyhow::anyhow!(
             "--tool {}: {} (expected the fields of a blast tool; see `surveyor plan-blast --help`)",
             path.display(),
@@ -63,40 +62,24 @@ pub fn plan_blast(args: &PlanBlastArgs) -> Result<()> {
         config.tool = load_tool(path)?;
     }
     config.ga.seed = args.seed;
-    let scenario_path = args.run.join("scenario.toml");
-    if !scenario_path.is_file() || !args.run.join(BLAST_INPUTS_FILE).is_file() {
-        bail!(
-            "--run {}: expected scenario.toml and {BLAST_INPUTS_FILE}, as `surveyor explore --out DIR` writes them",
-            args.run.display()
-        );
-    }
-    let loaded = Scenario::load(&scenario_path.display().to_string())?;
-    let Some(regions) = loaded.scenario.regions else {
-        bail!(
-            "{}: the scenario has no regions (A2 is where discs are blasted)",
-            scenario_path.display()
-        );
-    };
-    let robot = loaded
-        .build_robot()
-        .with_context(|| format!("{}: building the robot", scenario_path.display()))?;
-    let inputs = BlastInputs::load(&args.run)?;
     let t = std::time::Instant::now();
-    let plan = plan_blast_inputs(
-        &inputs,
-        &robot,
-        loaded.scenario.world_from_base(),
-        &regions.a2,
-        &config,
-    )?;
+    let plan = sim::explore_job::plan_blast_run(&args.run, &config)?;
     let seconds = t.elapsed().as_secs_f64();
-    super::output::create_out_dir(&args.out)?;
-    plan.write(&args.out)?;
+    let mut staged = super::output::Staged::new();
+    staged.ensure_dir(&args.out)?;
+    std::fs::write(
+        staged.file_in(&args.out, record::blast::BLAST_PLAN_JSON)?,
+        plan.to_json()?,
+    )?;
+    std::fs::write(
+        staged.file_in(&args.out, record::blast::BLAST_PLAN_CSV)?,
+        plan.csv(),
+    )?;
+    staged.commit()?;
     say!(
         "{}; {seconds:.1} s; outputs in {}",
         plan.summary(),
         args.out.display()
     )?;
-
     Ok(())
 }

@@ -1,10 +1,10 @@
 //! `surveyor explore`: AXBAM exploration (Paul ch. 3, 4, 6) in a simulated
-//! world ([`sim::explore_run`]), with its outputs in a folder.
+//! world ([`sim::explore_job`]), with its outputs in a folder.
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use sim::Scenario;
-use sim::explore_run::{ExploreOptions, run_exploration};
+use scenario::{RobotChoice, Scenario};
+use sim::explore_job::ExploreOptions;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -88,24 +88,19 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     };
     let mut loaded = Scenario::load(&args.scenario)?;
     if let Some(robot) = &args.robot {
-        let spec = &mut loaded.scenario.robot;
-        if robot.to_ascii_lowercase().ends_with(".urdf") {
-            let link = args.scanner_link.clone().context(
-                "--robot FILE.urdf needs --scanner-link LINK (the link carrying the scanner)",
-            )?;
-            let path = std::fs::canonicalize(robot)
-                .with_context(|| format!("--robot {robot}: cannot read the URDF file"))?;
-            spec.preset = None;
-            spec.urdf = Some(path);
-            spec.tip = Some(link);
-        } else {
-            if args.scanner_link.is_some() {
-                bail!("--scanner-link applies to URDF robots; `{robot}` is a built-in robot");
+        let choice = RobotChoice::parse(robot, args.scanner_link.as_deref())?;
+        match (&choice, &args.scanner_link) {
+            (RobotChoice::Urdf { .. }, None) => {
+                bail!("--robot FILE.urdf needs --scanner-link LINK (the link carrying the scanner)")
             }
-            spec.preset = Some(robot.clone());
-            spec.urdf = None;
-            spec.tip = None;
+            (RobotChoice::Builtin(_), Some(_)) => {
+                bail!("--scanner-link applies to URDF robots; `{robot}` is a built-in robot")
+            }
+            _ => {}
         }
+        loaded
+            .set_robot(&choice)
+            .with_context(|| format!("--robot {robot}"))?;
         let dof = loaded.build_robot()?.dof();
         if dof != loaded.scenario.robot.start_joints.len() {
             bail!(
@@ -117,133 +112,98 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     if loaded.scenario.robot.urdf.is_some() {
         super::warn_about(&loaded.build_robot()?);
     }
-    // One cache file per robot (a URDF by its file name), so runs that
-    // alternate robots do not rebuild each other's model.
-    let spec = &loaded.scenario.robot;
-    let robot_name = spec.preset.clone().unwrap_or_else(|| {
-        let stem = spec
-            .urdf
-            .as_ref()
-            .and_then(|p| p.file_stem())
-            .map(|s| s.to_string_lossy().into_owned());
-        format!("urdf-{}", stem.unwrap_or_default())
-    });
-    let cache = args
-        .cspace_cache
-        .clone()
-        .unwrap_or_else(|| std::env::temp_dir().join(format!("surveyor-cspace-{robot_name}.json")));
+    let cspace_cache = match &args.cspace_cache {
+        Some(path) => path.clone(),
+        None => ExploreOptions::default_cspace_cache(&loaded)?,
+    };
     let options = ExploreOptions {
         seed: args.seed,
         max_viewpoints: args.max_viewpoints,
-        cspace_cache: Some(cache),
+        cspace_cache: Some(cspace_cache),
         timings: !args.no_timings,
-        checkpoint: Some(args.out.join("checkpoint.json")),
         resume: args.resume,
         stage_two,
         ..ExploreOptions::default()
     };
-    for foreign in ["steps.csv", "surface_model.json"] {
-        if args.out.join(foreign).exists() {
-            bail!(
-                "{}: holds a `surveyor follow` run ({foreign}); give another --out",
-                args.out.display()
-            );
-        }
-    }
-    if args.resume && !args.out.join("checkpoint.json").is_file() {
-        bail!(
-            "--resume: {} holds no checkpoint.json (no run to continue there; run without --resume)",
-            args.out.display()
-        );
-    }
-    super::output::create_out_dir(&args.out)?;
     let t = std::time::Instant::now();
-    let run = run_exploration(&loaded, &options, &mut |r| {
-        eprintln!(
-            "stage {}, viewpoint {:>2}: H1 {:>9.1} (weighted {:>8.1}), H2 {:>7.3}, H3 {}, revealed {:>6}, A1 covered {}, {} candidates, decision {:>6.0} ms",
-            r.stage,
-            r.k,
-            r.h1,
-            r.h1_weighted,
-            r.h2,
-            r.h3.map_or("-".into(), |h| format!("{h:.0}")),
-            r.revealed,
-            r.coverage_a1
-                .map_or("-".into(), |c| format!("{:.1} %", 100.0 * c)),
-            r.candidates,
-            r.decision_ms
-        );
-    })?;
-    run.write(&args.out)
-        .with_context(|| format!("writing {}", args.out.display()))?;
-    // The scenario as run (with any --robot, its paths made absolute:
-    // `scenario.toml`) and the map products `plan-blast --run` reads; the
-    // report rebuilds the robot and scene from the same scenario file.
-    sim::blast::write_blast_inputs(&run, &loaded, &args.out)
-        .with_context(|| format!("writing {}", args.out.display()))?;
-    // The maintenance plan over the map (Paul App. A): a nozzle pose for
-    // every disc in A2 that has one, each segment's targets ordered by the GA.
-    let blast = match (loaded.scenario.regions, run.discs.discs.is_empty()) {
-        (Some(regions), false) => {
-            let plan = sim::blast::plan_blast(
-                &run,
-                &loaded.build_robot()?,
-                loaded.scenario.world_from_base(),
-                &regions.a2,
-                &sim::blast::BlastConfig::default(),
-            )?;
-            plan.write(&args.out)?;
-            Some(plan)
-        }
-        _ => None,
-    };
-    let json = run.run_json();
+    let (outcome, blast) = sim::explore_job::explore(
+        &loaded,
+        &options,
+        &args.out,
+        &mut |r| {
+            eprintln!(
+                "stage {}, viewpoint {:>2}: H1 {:>9.1} (weighted {:>8.1}), H2 {:>7.3}, H3 {}, revealed {:>6}, A1 covered {}, {} candidates, decision {:>6.0} ms",
+                r.stage,
+                r.k,
+                r.h1,
+                r.h1_weighted,
+                r.h2,
+                r.h3.map_or("-".into(), |h| format!("{h:.0}")),
+                r.revealed,
+                r.coverage_a1
+                    .map_or("-".into(), |c| format!("{:.1} %", 100.0 * c)),
+                r.candidates,
+                r.decision_ms
+            );
+        },
+        &mut |staging| report::write_staged(staging).map_err(|e| e.to_string()),
+    )?;
+    let run = &outcome.run;
+    let summary = outcome.summary();
     let per_stage = |k: u8| run.viewpoints.iter().filter(|r| r.stage == k).count();
-    println!(
-        "{}: stage one ended ({}) after {} viewpoints; {} collisions, {} unsafe configurations (both stages), min clearance {:.3} m; C-space model {}",
+    say!(
+        "{}: stage one ended ({}) after {} viewpoints; {}, {} unsafe configurations (both stages), {}; C-space model {}",
         loaded.scenario.name,
-        json["termination"].as_str().unwrap_or(""),
+        summary.termination,
         per_stage(1),
-        run.collisions,
+        summary.collisions.map_or_else(
+            || "collisions not judged (no true surfaces)".to_owned(),
+            |c| format!("{c} collisions")
+        ),
         run.unsafe_configurations.len(),
-        run.min_clearance_m,
+        summary.min_clearance_m.map_or_else(
+            || "clearance not judged".to_owned(),
+            |m| format!("min clearance {m:.3} m")
+        ),
         run.cspace
-    );
+    )?;
     if let Some(end) = &run.stage_two_termination {
-        println!(
+        say!(
             "stage two ended ({end}) after {} viewpoints; material right on {} of the discs the LRC observed",
             per_stage(2),
             run.discs
                 .material_accuracy()
                 .map_or("none".into(), |a| format!("{:.1} %", 100.0 * a))
-        );
+        )?;
     }
-    if let Some(c) = &run.coverage {
-        println!(
+    if let Some(c) = &outcome.coverage {
+        say!(
             "coverage of the true surfaces: A1 {:.1} %, A2 {:.1} %, A3 {:.1} %",
             100.0 * c[0].fraction(),
             100.0 * c[1].fraction(),
             100.0 * c[2].fraction()
-        );
-        if let Some((n, covered)) = run.observable.first() {
-            println!(
+        )?;
+        if let Some((n, covered)) = outcome.observable.first() {
+            say!(
                 "A1 surfaces observable from some collision-free roadmap pose: {:.1} % of them; {:.1} % of those covered",
                 100.0 * *n as f64 / c[0].samples.max(1) as f64,
                 100.0 * *covered as f64 / (*n).max(1) as f64
-            );
+            )?;
         }
     }
     if let Some(plan) = &blast {
-        println!("{}", plan.summary());
+        say!("{}", plan.summary())?;
     }
-    let report = report::write(&args.out)?;
-    println!("report: {}", report.display());
-    println!(
+    say!(
+        "report: {}",
+        args.out.join(record::folder::REPORT_HTML).display()
+    )?;
+    say!(
         "{} points, mesh of {} triangles; {:.1} s; outputs in {}",
         run.cloud.len(),
         run.mesh.triangles.len(),
         t.elapsed().as_secs_f64(),
         args.out.display()
-    );
+    )?;
     Ok(())
 }

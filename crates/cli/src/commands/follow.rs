@@ -1,14 +1,15 @@
 //! `surveyor follow`: Pudney's surface following (P ch. 3) in a simulated
-//! world, one episode ([`sim::follow_run`]), with its outputs in a folder.
+//! world, one episode ([`sim::follow_job`]), with its outputs in a folder.
 
-use super::output::{Staged, config_toml, load_config};
+use super::output::{config_toml, load_config};
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use follow::RunEnd;
 use geom::Real;
 use indicatif::{ProgressBar, ProgressStyle};
-use sim::Scenario;
-use sim::follow_run::{
-    DEFAULT_MAX_SETS, FollowRunConfig, FollowRunOptions, FollowSetup, RunEnd, StartPose,
+use scenario::{RobotChoice, Scenario};
+use sim::follow_job::{
+    DEFAULT_MAX_SETS, FollowRunConfig, FollowRunOptions, FollowSetup, StartPose,
 };
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -135,8 +136,10 @@ fn options(a: &FollowArgs, config: FollowRunConfig) -> Result<FollowRunOptions> 
         bail!("--scale {s}: expected a finite factor > 0");
     }
     if let Some(r) = &a.robot
-        && !r.to_ascii_lowercase().ends_with(".urdf")
-        && !matches!(r.as_str(), "point3" | "arm4")
+        && !matches!(
+            RobotChoice::parse(r, None)?.builtin_name(),
+            None | Some("point3" | "arm4")
+        )
     {
         bail!("--robot {r}: unknown robot; expected point3, arm4 or a URDF file (FILE.urdf)");
     }
@@ -168,23 +171,13 @@ fn options(a: &FollowArgs, config: FollowRunConfig) -> Result<FollowRunOptions> 
 pub fn follow(a: &FollowArgs) -> Result<()> {
     let config: FollowRunConfig = load_config(a.config.as_deref())?;
     if a.print_config {
-        print!("{}", config_toml(&config)?);
+        put!("{}", config_toml(&config)?)?;
         return Ok(());
     }
     let Some(out) = &a.out else {
         bail!("--out is required");
     };
-    super::output::check_out_dir(out)?;
-    // Another command's run folder is not overwritten (its files would be
-    // a mix the report cannot read).
-    for foreign in ["viewpoints.csv", "checkpoint.json", "blast_inputs.json"] {
-        if out.join(foreign).exists() {
-            bail!(
-                "{}: holds a `surveyor explore` run ({foreign}); give another --out",
-                out.display()
-            );
-        }
-    }
+    sim::follow_job::check_follow_out(out)?;
     let opts = options(a, config)?;
     // The scenario as given (its paths made absolute), for the report's
     // ground truth; a --scene run has none.
@@ -212,29 +205,26 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     {
         pb.set_style(style.progress_chars("=> "));
     }
-    let run = setup.run(&stop, &mut |row, follower| {
-        pb.set_position(row.step + 1);
-        if row.step % 10 == 0 {
-            pb.set_message(format!(
-                "{} · {} segments",
-                row.mode.name(),
-                follower.model().len()
-            ));
-        }
-    });
+    let run = sim::follow_job::follow(
+        setup,
+        scenario_toml,
+        out,
+        &stop,
+        &mut |row, follower| {
+            pb.set_position(row.step + 1);
+            if row.step % 10 == 0 {
+                pb.set_message(format!(
+                    "{} · {} segments",
+                    row.mode,
+                    follower.model().len()
+                ));
+            }
+        },
+        &mut |staging| report::write_staged(staging).map_err(|e| e.to_string()),
+    );
     pb.finish_and_clear();
     let run = run?;
-    let mut staged = Staged::new();
-    staged.ensure_dir(out)?;
-    let outputs = run.outputs()?;
-    let scenario = scenario_toml.map(|text| ("scenario.toml", text));
-    for (name, text) in outputs.into_iter().chain(scenario) {
-        let path = staged.file_in(out, name)?;
-        std::fs::write(&path, text)
-            .with_context(|| format!("writing {}", out.join(name).display()))?;
-    }
-    staged.commit()?;
-    let summary = run.run_json();
+    let summary = run.summary();
     let collisions = summary
         .collisions
         .map_or_else(|| "no ground truth for".to_owned(), |n| n.to_string());
@@ -283,8 +273,10 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
         };
         say!("scan: {clearance}; {model}")?;
     }
-    let report = report::write(out)?;
-    say!("report: {}", report.display())?;
+    say!(
+        "report: {}",
+        out.join(record::folder::REPORT_HTML).display()
+    )?;
     if let RunEnd::Error(e) = &run.episode.end {
         bail!(
             "the run stopped on an error after {} steps (the outputs of those steps are in {}): {e}",

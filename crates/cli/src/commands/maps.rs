@@ -53,7 +53,7 @@ pub fn sld(a: &SldArgs) -> Result<()> {
         cfg.min_points = n;
     }
     if a.print_config {
-        print!("{}", config_toml(&cfg)?);
+        put!("{}", config_toml(&cfg)?)?;
         return Ok(());
     }
     let (Some(input), Some(out)) = (&a.input, &a.out) else {
@@ -135,7 +135,7 @@ pub fn segment(a: &SegmentArgs) -> Result<()> {
         cfg.tau_q_deg = q;
     }
     if a.print_config {
-        print!("{}", config_toml(&cfg)?);
+        put!("{}", config_toml(&cfg)?)?;
         return Ok(());
     }
     let (Some(discs_path), Some(out)) = (&a.discs, &a.out) else {
@@ -197,14 +197,14 @@ pub fn map(a: &MapArgs) -> Result<()> {
         config = config.with_voxel_m(v);
     }
     if let Some(name) = &a.scenario {
-        let loaded = sim::Scenario::load(name)?;
+        let loaded = scenario::Scenario::load(name)?;
         match loaded.scenario.regions {
             Some(regions) => config.occupancy.regions = regions,
             None => bail!("scenario {name} defines no regions of interest"),
         }
     }
     if a.print_config {
-        print!("{}", config_toml(&config)?);
+        put!("{}", config_toml(&config)?)?;
         return Ok(());
     }
     let Some(out) = &a.out else {

@@ -13,10 +13,9 @@ use geom::Real;
 use geom::math::isometry_to_rows;
 use indicatif::{ProgressBar, ProgressStyle};
 use output::Staged;
+use scenario::{BUILTIN_NAMES, LoadedScenario, RobotChoice, Scenario, builtin_scenario};
 use serde::Serialize;
-use sim::LoadedScenario;
 use sim::scan_job::ScanSetup;
-use sim::scenario::{BUILTIN_NAMES, Scenario, builtin_scenario, robot_by_name_or_urdf};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -236,7 +235,7 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::Scenario(ScenarioCmd::Show { name }) => {
             let loaded = Scenario::load(&name)?;
-            print!("{}", loaded.scenario.to_toml()?);
+            put!("{}", loaded.scenario.to_toml()?)?;
             Ok(())
         }
         Command::Fk(a) => fk(&a),
@@ -249,7 +248,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Model(a) => model::model(&a),
         Command::Report(a) => {
             let path = report::write(&a.run_dir)?;
-            println!("{}", path.display());
+            say!("{}", path.display())?;
             Ok(())
         }
         Command::Follow(a) => follow::follow(&a),
@@ -294,7 +293,7 @@ fn warn_about(robot: &robot::Robot) {
 }
 
 fn fk(a: &FkArgs) -> Result<()> {
-    let robot = robot_by_name_or_urdf(&a.robot, a.tip.as_deref())?;
+    let robot = RobotChoice::parse(&a.robot, a.tip.as_deref())?.build()?;
     warn_about(&robot);
     let q = a
         .joints
@@ -380,7 +379,7 @@ fn scan(a: &ScanArgs) -> Result<()> {
             let robot = a.robot.as_deref().unwrap_or("denso-vm6083");
             let q = a
                 .joints
-                .values(|| Ok(robot_by_name_or_urdf(robot, a.tip.as_deref())?))?
+                .values(|| Ok(RobotChoice::parse(robot, a.tip.as_deref())?.build()?))?
                 .ok_or_else(|| anyhow!("--joints is required with --scene"))?;
             let base = scene::PoseSpec {
                 translation: three(a.base_xyz.as_deref(), "--base-xyz", "metres", 1e6)?,

@@ -63,7 +63,7 @@ pub fn model(a: &ModelArgs) -> Result<()> {
         }
     }
     if a.print_config {
-        print!("{}", config_toml(&config)?);
+        put!("{}", config_toml(&config)?)?;
         return Ok(());
     }
     let (Some(sets_path), Some(out)) = (&a.sets, &a.out) else {

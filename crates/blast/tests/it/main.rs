@@ -1,0 +1,3 @@
+//! The blast crate's integration tests, one binary (a module per topic) so a test build links few executables.
+
+mod poses;

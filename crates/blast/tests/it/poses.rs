@@ -1,0 +1,143 @@
+//! App. A.1's blast poses against independent oracles: poses for a grid
+//! of discs on a wall re-measured in closed form from the nozzle's forward
+//! kinematics, and bad tools refused.
+
+use blast::{BlastPoses, BlastTool};
+use geom::{Isometry3, Point3, Real, Vector3};
+use map::{OccupancyConfig, OccupancyGrid, RegionsConfig};
+use plan::{PlanConfig, PoseConfig, Safety, Target};
+
+/// The wall's face: occupied voxels fill x ∈ [0.7, 0.8).
+const WALL_X: Real = 0.7;
+
+/// A pose of the arm well inside its limits, scanner looking forward and down.
+const START: [Real; 6] = [0.0, 0.0, 1.57, 0.0, 1.0, 0.0];
+
+fn vm6083() -> robot::Robot {
+    robot::builtin("denso-vm6083").unwrap()
+}
+
+fn safety() -> Safety {
+    Safety::new(
+        vm6083(),
+        Isometry3::identity(),
+        &PlanConfig::default(),
+        vec![1.0; 6],
+    )
+    .unwrap()
+}
+
+/// Free everywhere except a wall of occupied voxels at x ∈ [0.7, 0.8),
+/// y ∈ [−0.8, 0.8), z ∈ [0, 1.4), measured by rays from x = 0.35.
+fn walled_grid() -> OccupancyGrid {
+    let mut g = OccupancyGrid::new(OccupancyConfig {
+        voxel_m: 0.1,
+        regions: RegionsConfig::around([0.0, 0.0, 0.475], [1.1, 1.6, 2.1]),
+        ..OccupancyConfig::default()
+    })
+    .unwrap();
+    let keys: Vec<_> = g.geometry().keys().collect();
+    for k in keys {
+        g.mark_free(k).unwrap();
+    }
+    let mut origins = Vec::new();
+    let mut points = Vec::new();
+    for iy in -8..8 {
+        for iz in 0..14 {
+            let (y, z) = (0.05 + 0.1 * Real::from(iy), 0.05 + 0.1 * Real::from(iz));
+            origins.push(Point3::new(0.35, y, z));
+            points.push(Point3::new(WALL_X + 0.05, y, z));
+        }
+    }
+    g.integrate_points(&origins, &points).unwrap();
+    g
+}
+
+fn wall_target(y: Real, z: Real) -> Target {
+    Target::new(Point3::new(WALL_X, y, z), -Vector3::x()).unwrap()
+}
+
+/// App. A.1: blast poses for a grid of discs on the wall, each re-measured
+/// in closed form from the nozzle's forward kinematics (the stream from the
+/// nozzle tip along its z axis meets the plane x = 0.7 at t = (0.7 − oₓ)/zₓ).
+#[test]
+fn blast_poses_hit_wall_discs_within_the_tool_limits() {
+    let grid = walled_grid();
+    let tool = BlastTool::default();
+    let blast = BlastPoses::new(
+        &vm6083(),
+        Isometry3::identity(),
+        &PlanConfig::default(),
+        vec![1.0; 6],
+        &PoseConfig::default(),
+        tool,
+    )
+    .unwrap();
+    let robot = vm6083();
+    let offset = geom::math::isometry_from_xyz_rpy(tool.translation_m, [0.0; 3]);
+    let (mut targets, mut valid) = (0, 0);
+    for iy in -3..=3 {
+        for iz in 0..=8 {
+            let (y, z) = (0.1 * Real::from(iy), 0.3 + 0.1 * Real::from(iz));
+            let target = wall_target(y, z);
+            targets += 1;
+            let solution = blast.select(&grid, &target, &START).unwrap();
+            let m = blast.measure(&grid, &target, solution.joints()).unwrap();
+            assert_eq!(m.valid, solution.valid(), "({y}, {z}): {m:?}");
+            if !solution.valid() {
+                continue;
+            }
+            valid += 1;
+            let nozzle = robot.tool_pose(solution.joints()).unwrap() * offset;
+            let o = Point3::from(nozzle.translation.vector);
+            let dir = nozzle.rotation * Vector3::z();
+            let t = (WALL_X - o.x) / dir.x;
+            let hit = o + dir * t;
+            let phi = dir.x.clamp(-1.0, 1.0).acos().to_degrees();
+            let aim = (hit - target.centre).norm();
+            assert!(phi < tool.phi_max_deg, "φ {phi}");
+            assert!((tool.d_min_m..=tool.d_max_m).contains(&t), "d {t}");
+            assert!(aim <= tool.rho_min_m + 1e-9, "aim {aim}");
+            assert!(
+                safety().dist(&grid, solution.joints()).unwrap() > 1.0,
+                "dist(Q)"
+            );
+            assert!((phi - m.phi_deg).abs() < 1e-6 && (t - m.d_m).abs() < 1e-9);
+            assert!((aim - m.aim_error_m).abs() < 1e-9);
+        }
+    }
+    eprintln!("blast poses: {valid} of {targets} wall discs");
+    assert!(valid * 100 >= 95 * targets, "{valid} of {targets}");
+}
+
+#[test]
+fn bad_blast_tools_are_refused() {
+    let ok = BlastTool::default();
+    assert!(ok.validate().is_ok());
+    for bad in [
+        BlastTool {
+            translation_m: [0.0, Real::NAN, 0.1],
+            ..ok
+        },
+        BlastTool { d_min_m: 0.6, ..ok },
+        BlastTool {
+            phi_max_deg: -5.0,
+            ..ok
+        },
+    ] {
+        let e = bad.validate().unwrap_err().to_string();
+        assert!(!e.is_empty());
+        assert!(
+            BlastPoses::new(
+                &vm6083(),
+                Isometry3::identity(),
+                &PlanConfig::default(),
+                vec![1.0; 6],
+                &PoseConfig::default(),
+                bad,
+            )
+            .is_err(),
+            "{bad:?}"
+        );
+    }
+}

@@ -1,0 +1,384 @@
+//! `surveyor explore` through the binary: `kill -9` mid-run then `--resume`
+//! gives the outputs of an uninterrupted run (issue 10 acceptance 5), bad
+//! input gets a clear message, and `surveyor plan-blast` on a run's folder
+//! gives the plan the run wrote (issue 11; it shares the Stage Two test's
+//! run).
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers may panic
+
+use crate::support;
+
+use std::path::Path;
+use support::{fails, fails_with, ok};
+
+/// The viewpoints recorded in `dir`'s checkpoint, by stage.
+fn checkpointed(dir: &Path) -> (usize, usize) {
+    let v = std::fs::read(dir.join("checkpoint.json"))
+        .ok()
+        .and_then(|t| serde_json::from_slice::<serde_json::Value>(&t).ok());
+    let stages: Vec<u64> = v
+        .as_ref()
+        .and_then(|v| v["viewpoints"].as_array())
+        .map(|a| a.iter().filter_map(|r| r["stage"].as_u64()).collect())
+        .unwrap_or_default();
+    (
+        stages.iter().filter(|s| **s == 1).count(),
+        stages.iter().filter(|s| **s == 2).count(),
+    )
+}
+
+/// The arguments of `surveyor explore <args> --no-timings --cspace-cache
+/// CACHE --out OUT`.
+fn explore_args(args: &[&str], cache: &Path, out: &Path) -> Vec<String> {
+    std::iter::once("explore")
+        .chain(args.iter().copied())
+        .chain(["--no-timings", "--cspace-cache", cache.to_str().unwrap()])
+        .chain(["--out", out.to_str().unwrap()])
+        .map(String::from)
+        .collect()
+}
+
+fn ok_owned(args: &[String]) -> String {
+    ok(&args.iter().map(String::as_str).collect::<Vec<_>>())
+}
+
+/// A bridge1 run through both stages (budget of 3 Stage Two viewpoints, seed
+/// 4), made once for the tests that need one (the kill -9 test of Stage Two
+/// and plan-blast's): its arguments, C-space cache and folder.
+struct StageTwoRun {
+    args: Vec<String>,
+    cache: std::path::PathBuf,
+    whole: std::path::PathBuf,
+}
+
+fn stage_two_run() -> &'static StageTwoRun {
+    static RUN: std::sync::OnceLock<StageTwoRun> = std::sync::OnceLock::new();
+    RUN.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("explore-stage-two");
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let scenario = dir.join("b.toml");
+        let text = ok(&["scenario", "show", "bridge1"]).replace(
+            "stage_two_max_viewpoints = 20",
+            "stage_two_max_viewpoints = 3",
+        );
+        assert!(text.contains("stage_two_max_viewpoints = 3"));
+        std::fs::write(&scenario, text).unwrap();
+        let args = vec![
+            "--scenario".to_owned(),
+            scenario.to_str().unwrap().to_owned(),
+            "--seed".to_owned(),
+            "4".to_owned(),
+        ];
+        let cache = dir.join("cspace.json");
+        let whole = dir.join("whole");
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        ok_owned(&explore_args(&a, &cache, &whole));
+        StageTwoRun { args, cache, whole }
+    })
+}
+
+/// Run `surveyor explore <args> --no-timings --out DIR` killed with `kill -9`
+/// once `kill_when` holds of its checkpoint, then resumed: every output must
+/// equal the uninterrupted run's in `whole` (same arguments and `cache`).
+#[cfg(unix)]
+fn kill_9_then_resume(
+    args: &[&str],
+    cache: &Path,
+    whole: &Path,
+    kill_when: impl Fn((usize, usize)) -> bool,
+) {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let cut = dir.path().join("cut");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_surveyor"))
+        .args(explore_args(args, cache, &cut))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Up to 10 minutes (a slow or busy machine): the loop ends as soon as
+    // the checkpoint shows the viewpoints to kill at, or the run has ended.
+    for _ in 0..24_000 {
+        if kill_when(checkpointed(&cut)) || child.try_wait().unwrap().is_some() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(25));
+    }
+    let killed_at = checkpointed(&cut);
+    // SIGKILL (kill -9) through the child handle: no signal to a process id
+    // that may already have been reaped and reused.
+    child.kill().unwrap();
+    let _ = child.wait();
+    assert!(kill_when(killed_at), "killed at {killed_at:?} viewpoints");
+    assert!(!cut.join("run.json").exists(), "the killed run finished");
+
+    let mut resume = explore_args(args, cache, &cut);
+    resume.insert(1, "--resume".into());
+    ok_owned(&resume);
+    for name in [
+        "viewpoints.csv",
+        "run.json",
+        "cloud.ply",
+        "mesh.ply",
+        "discs.csv",
+        "segments.json",
+        "blast_plan.json",
+        "blast_plan.csv",
+    ] {
+        let (x, y) = (
+            std::fs::read(whole.join(name)).unwrap(),
+            std::fs::read(cut.join(name)).unwrap(),
+        );
+        assert!(
+            x == y,
+            "{name} differs after resuming at {killed_at:?} viewpoints (stage one, stage two)"
+        );
+    }
+}
+
+#[cfg(unix)]
+#[test]
+#[ignore = "three exploration runs: seconds in release; run by .ci/run"]
+fn kill_9_in_stage_one_then_resume_gives_the_uninterrupted_outputs() {
+    let args = [
+        "--scenario",
+        "bridge1",
+        "--stages",
+        "one",
+        "--max-viewpoints",
+        "5",
+        "--seed",
+        "4",
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let (cache, whole) = (dir.path().join("cspace.json"), dir.path().join("whole"));
+    ok_owned(&explore_args(&args, &cache, &whole));
+    kill_9_then_resume(&args, &cache, &whole, |(one, _)| (2..5).contains(&one));
+}
+
+#[cfg(unix)]
+#[test]
+#[ignore = "exploration runs: a minute in release; run by .ci/run"]
+fn kill_9_in_stage_two_then_resume_gives_the_uninterrupted_outputs() {
+    let run = stage_two_run();
+    let args: Vec<&str> = run.args.iter().map(String::as_str).collect();
+    kill_9_then_resume(&args, &run.cache, &run.whole, |(_, two)| {
+        (1..3).contains(&two)
+    });
+}
+
+/// `--resume` refuses a checkpoint edited by hand (its records would be
+/// replayed without audit), one written for other scenario content (the same
+/// name) and one of the other `--stages`.
+#[test]
+#[ignore = "an exploration run (shared with the kill -9 test): run by .ci/run"]
+fn resume_refuses_a_changed_checkpoint_or_scenario() {
+    let run = stage_two_run();
+    let dir = tempfile::tempdir().unwrap();
+    let copy = |name: &str| {
+        let d = dir.path().join(name);
+        std::fs::create_dir_all(&d).unwrap();
+        std::fs::copy(run.whole.join("checkpoint.json"), d.join("checkpoint.json")).unwrap();
+        d
+    };
+    let resume = |args: &[String], d: &Path| {
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        let mut v = explore_args(&a, &run.cache, d);
+        v.insert(1, "--resume".into());
+        let e = fails(&v.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(!e.contains("panicked"), "{e}");
+        assert!(!d.join("run.json").exists());
+        e
+    };
+    // A viewpoint's joints edited (into the floor).
+    let edited = copy("edited");
+    let path = edited.join("checkpoint.json");
+    let mut c: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    c["viewpoints"][1]["joints"] = serde_json::json!([0.0, 1.9, 1.3, 0.0, 0.0, 0.0]);
+    std::fs::write(&path, serde_json::to_string(&c).unwrap()).unwrap();
+    let e = resume(&run.args, &edited);
+    assert!(e.contains("changed after it was written"), "{e}");
+    // The same scenario file name, another range noise.
+    let scenario = Path::new(&run.args[1]);
+    let text = std::fs::read_to_string(scenario).unwrap();
+    assert!(text.contains("sigma_near_m = 0.01"));
+    let noisier = dir.path().join("noisier");
+    std::fs::create_dir_all(&noisier).unwrap();
+    let moved = noisier.join(scenario.file_name().unwrap());
+    std::fs::write(
+        &moved,
+        text.replace("sigma_near_m = 0.01", "sigma_near_m = 0.05"),
+    )
+    .unwrap();
+    let mut args = run.args.clone();
+    args[1] = moved.to_str().unwrap().to_owned();
+    let e = resume(&args, &copy("content"));
+    assert!(e.contains("scenario's content"), "{e}");
+    // Both stages then, Stage One now.
+    let mut args = run.args.clone();
+    args.extend(["--stages".to_owned(), "one".to_owned()]);
+    let e = resume(&args, &copy("stages"));
+    assert!(e.contains("--stages (both then, one now)"), "{e}");
+}
+
+/// `surveyor plan-blast` (issue 11) on the folder of an explore run plans
+/// exactly the blast plan the run wrote; a tool file changes the limits it
+/// records; a damaged inputs file is named.
+#[test]
+#[ignore = "an exploration run (shared with the kill -9 test): run by .ci/run"]
+fn plan_blast_on_an_explore_run_gives_the_plan_explore_wrote() {
+    let run = stage_two_run();
+    let dir = tempfile::tempdir().unwrap();
+    let r = run.whole.to_str().unwrap();
+    let read = |p: std::path::PathBuf| std::fs::read_to_string(p).unwrap();
+    let explored = read(run.whole.join("blast_plan.json"));
+    let plan: serde_json::Value = serde_json::from_str(&explored).unwrap();
+    assert!(plan["discs_with_pose"].as_u64().unwrap() > 0);
+    let out = dir.path().join("plan");
+    let o = out.to_str().unwrap();
+    let said = ok(&["plan-blast", "--run", r, "--out", o]);
+    assert!(said.contains("blast plan"), "{said}");
+    assert_eq!(read(out.join("blast_plan.json")), explored);
+    assert_eq!(
+        read(out.join("blast_plan.csv")),
+        read(run.whole.join("blast_plan.csv"))
+    );
+    // A tool file changes the limits the plan records; --seed is taken
+    // (determinism per seed is checked on the library, sim's blast test).
+    let tool = dir.path().join("tool.toml");
+    std::fs::write(&tool, "phi_max_deg = 25.0\n").unwrap();
+    let a = dir.path().join("a");
+    ok(&[
+        "plan-blast",
+        "--run",
+        r,
+        "--tool",
+        tool.to_str().unwrap(),
+        "--seed",
+        "5",
+        "--out",
+        a.to_str().unwrap(),
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&read(a.join("blast_plan.json"))).unwrap();
+    assert_eq!(v["tool"]["phi_max_deg"].as_f64(), Some(25.0));
+    // A damaged inputs file (beside the run's scenario, in a copy: the run
+    // is shared) is named, not a panic.
+    let damaged = dir.path().join("damaged");
+    std::fs::create_dir_all(&damaged).unwrap();
+    std::fs::copy(
+        run.whole.join("scenario.toml"),
+        damaged.join("scenario.toml"),
+    )
+    .unwrap();
+    std::fs::write(damaged.join("blast_inputs.json"), "{\"format\": 1").unwrap();
+    fails_with(
+        &["plan-blast", "--run", damaged.to_str().unwrap(), "--out", o],
+        &["blast_inputs.json"],
+    );
+    // Segments that leave discs out (here: none at all) are refused; the plan
+    // was of 0 segments with every disc posed.
+    let mut inputs: serde_json::Value =
+        serde_json::from_str(&read(run.whole.join("blast_inputs.json"))).unwrap();
+    inputs["segments"] = serde_json::json!([]);
+    std::fs::write(
+        damaged.join("blast_inputs.json"),
+        serde_json::to_string(&inputs).unwrap(),
+    )
+    .unwrap();
+    fails_with(
+        &["plan-blast", "--run", damaged.to_str().unwrap(), "--out", o],
+        &["blast_inputs.json", "disc 0 is in no segment"],
+    );
+}
+
+#[test]
+fn bad_explore_input_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = out.to_str().unwrap();
+    let e = fails(&["explore", "--stages", "three", "--out", o]);
+    assert!(e.contains("--stages three") && e.contains("`both`"), "{e}");
+    let e = fails(&["explore", "--max-viewpoints", "0", "--out", o]);
+    assert!(e.contains("--max-viewpoints 0"), "{e}");
+    let e = fails(&["explore", "--resume", "--out", o]);
+    assert!(
+        e.contains("checkpoint.json") && e.contains("no run to continue"),
+        "{e}"
+    );
+    assert!(!out.exists(), "--resume created the folder");
+    let e = fails(&["explore", "--scenario", "bridge9", "--out", o]);
+    assert!(e.contains("bridge9") && e.contains("built-ins"), "{e}");
+    // Another robot: a URDF needs its scanner link; a start pose that puts
+    // the robot into the scene is refused.
+    let e = fails(&["explore", "--robot", "x.urdf", "--out", o]);
+    assert!(e.contains("--scanner-link"), "{e}");
+    let e = fails(&["explore", "--robot", "arm4", "--out", o]);
+    assert!(
+        e.contains("start pose") && e.contains("into the scene"),
+        "{e}"
+    );
+    // A bad mapping parameter names its field.
+    let bad = dir.path().join("bad.toml");
+    let text = ok(&["scenario", "show", "bridge1"]).replace("radius_m = 0.04", "radius_m = -0.04");
+    std::fs::write(&bad, text).unwrap();
+    let e = fails(&["explore", "--scenario", bad.to_str().unwrap(), "--out", o]);
+    assert!(e.contains("radius_m") && e.contains("-0.04"), "{e}");
+    // A start pose outside the joint limits names the scenario's key (the
+    // scenario by its `name`, not the file's path).
+    let text = ok(&["scenario", "show", "bridge1"]).replace(
+        "start_joints = [0.0, -0.9599310885968813",
+        "start_joints = [10.0, -0.9599310885968813",
+    );
+    assert!(text.contains("start_joints = [10.0,"));
+    std::fs::write(&bad, text).unwrap();
+    let e = fails(&["explore", "--scenario", bad.to_str().unwrap(), "--out", o]);
+    assert!(
+        e.contains("robot.start_joints") && e.contains("outside its limits"),
+        "{e}"
+    );
+    // A checkpoint of another run is refused, not continued.
+    std::fs::create_dir_all(&out).unwrap();
+    for (text, says) in [
+        ("{\"format\": 2}", "not a checkpoint"),
+        ("{\"format\": 1}", "checkpoint format 1"),
+    ] {
+        std::fs::write(out.join("checkpoint.json"), text).unwrap();
+        let e = fails(&["explore", "--resume", "--out", o]);
+        assert!(e.contains(says) && e.contains("without --resume"), "{e}");
+        for bad in ["panicked", "RUST_BACKTRACE"] {
+            assert!(!e.contains(bad), "{e}");
+        }
+    }
+}
+
+#[test]
+#[ignore = "an exploration run: seconds in release; run by .ci/run"]
+fn mapping_parameters_come_from_the_scenario() {
+    // Table 6.1's μ = 0.04 m changed to 0.06 m in the scenario file: every
+    // disc of the run has that radius.
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = dir.path().join("b.toml");
+    let text = ok(&["scenario", "show", "bridge1"]).replace("radius_m = 0.04", "radius_m = 0.06");
+    std::fs::write(&scenario, text).unwrap();
+    let out = dir.path().join("run");
+    ok(&[
+        "explore",
+        "--scenario",
+        scenario.to_str().unwrap(),
+        "--stages",
+        "one",
+        "--max-viewpoints",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let discs = std::fs::read_to_string(out.join("discs.csv")).unwrap();
+    let mut lines = discs.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "radius").unwrap();
+    let radii: Vec<f64> = lines
+        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
+        .collect();
+    assert!(radii.len() > 100, "{} discs", radii.len());
+    assert!(radii.iter().all(|r| (r - 0.06).abs() < 1e-12), "{radii:?}");
+}

@@ -1,0 +1,182 @@
+//! The map products of Stage One (A§5.2–5.3): the TSDF mesh's Scale-Like
+//! Discs, each tied to the viewpoint that saw it, and their segments; with
+//! the material belief of each disc once materials are identified.
+
+use crate::judge::Judge;
+use crate::{ExploreError, MappingConfig};
+use geom::{Real, TriMesh};
+use record::ViewpointRecord;
+use sensor::SweepPoint;
+
+/// Scale-Like Discs of the TSDF mesh (A§5.2, Table 6.1: μ = 0.04 m, n_min =
+/// 8), each with the viewpoint that saw it (the viewpoint of the nearest
+/// measured point) and its segment (A§5.3, with the pose graph τq over those
+/// viewpoints' joints).
+#[derive(Clone, Debug, Default)]
+pub struct DiscMap {
+    /// The discs.
+    pub discs: Vec<map::Disc>,
+    /// Per disc: the viewpoint (index into `viewpoints`) that saw it.
+    pub viewpoint: Vec<usize>,
+    /// Per disc: its segment (index into `segments`).
+    pub segment: Vec<usize>,
+    /// The segments: disc indices, ascending.
+    pub segments: Vec<Vec<map::DiscId>>,
+    /// Per disc: the material of the nearest true surface (index into the
+    /// material table; runs with a ground truth, [`Judge::true_material`]).
+    pub true_material: Vec<Option<usize>>,
+    /// The scene's material names.
+    pub material_names: Vec<String>,
+    /// Per disc: the material posterior (one probability per material of
+    /// the scene, uniform until an LRC observation updates it; empty for
+    /// worlds without materials).
+    pub posterior: Vec<Vec<Real>>,
+    /// Per disc: the material information remaining `H3` (eq. 4.16, summed
+    /// over the disc's voxels).
+    pub h3: Vec<Real>,
+    /// Per disc: LRC observations that updated it.
+    pub observations: Vec<usize>,
+    /// `H3` over every disc voxel (eq. 4.17; a voxel shared by two discs
+    /// counts once), when materials were identified.
+    pub h3_total: Option<Real>,
+}
+
+impl DiscMap {
+    /// The share of the discs with at least one LRC observation and a known
+    /// true material whose most probable material is the true one (`None`
+    /// without such discs).
+    pub fn material_accuracy(&self) -> Option<Real> {
+        let mut n = 0usize;
+        let mut right = 0usize;
+        for ((p, t), o) in self
+            .posterior
+            .iter()
+            .zip(&self.true_material)
+            .zip(&self.observations)
+        {
+            let (Some(t), true) = (t, *o > 0) else {
+                continue;
+            };
+            n += 1;
+            let best = p
+                .iter()
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))
+                .map(|(i, _)| i);
+            right += usize::from(best == Some(*t));
+        }
+        (n > 0).then(|| right as Real / n as Real)
+    }
+}
+
+impl DiscMap {
+    /// The discs as `discs.csv` holds them.
+    pub fn table(&self) -> record::DiscTable {
+        let n = self.discs.len();
+        record::DiscTable {
+            discs: self
+                .discs
+                .iter()
+                .map(|d| record::DiscRecord {
+                    centre: d.centre,
+                    normal: d.normal,
+                    radius_m: d.radius_m,
+                    points: d.points,
+                })
+                .collect(),
+            segment: self.segment.clone(),
+            viewpoint: self.viewpoint.clone(),
+            true_material: self.true_material.clone(),
+            material_names: self.material_names.clone(),
+            posterior: (self.posterior.len() == n).then(|| self.posterior.clone()),
+            h3: (self.h3.len() == n).then(|| (self.h3.clone(), self.observations.clone())),
+        }
+    }
+
+    /// The segments as `segments.json` holds them.
+    pub fn segments_file(&self) -> record::explore::SegmentsFile {
+        record::explore::SegmentsFile {
+            segments: self
+                .segments
+                .iter()
+                .map(|s| s.iter().map(|d| d.0).collect())
+                .collect(),
+        }
+    }
+}
+
+/// Discs of `mesh`, each tied to the viewpoint of the nearest point of
+/// `cloud`, and segmented with those viewpoints' joints as the pose graph.
+pub(crate) fn disc_map(
+    mesh: &TriMesh,
+    cloud: &[SweepPoint],
+    cloud_viewpoint: &[usize],
+    viewpoints: &[ViewpointRecord],
+    materials: &[scene::Material],
+    judge: &dyn Judge,
+    mapping: &MappingConfig,
+    seed: u64,
+) -> Result<DiscMap, ExploreError> {
+    use kiddo::{ImmutableKdTree, SquaredEuclidean};
+    if mesh.vertices.is_empty() || cloud.is_empty() {
+        return Ok(DiscMap::default());
+    }
+    let normals = mesh.vertex_normals();
+    let sld = map::generate_discs(
+        &mesh.vertices,
+        map::Orientation::ReferenceNormals(&normals),
+        &mapping.sld,
+        seed,
+    )?;
+    let pts: Vec<[Real; 3]> = cloud
+        .iter()
+        .map(|p| [p.point.x, p.point.y, p.point.z])
+        .collect();
+    let tree: ImmutableKdTree<Real, 3> = ImmutableKdTree::new_from_slice(&pts);
+    let viewpoint: Vec<usize> = sld
+        .discs
+        .iter()
+        .map(|d| {
+            let n =
+                tree.approx_nearest_one::<SquaredEuclidean>(&[d.centre.x, d.centre.y, d.centre.z]);
+            cloud_viewpoint[n.item as usize]
+        })
+        .collect();
+    let poses: Vec<map::segment::JointPose> = viewpoint
+        .iter()
+        .map(|&k| {
+            let mut pose = [0.0; 6];
+            for (slot, v) in pose.iter_mut().zip(&viewpoints[k].joints) {
+                *slot = *v;
+            }
+            pose
+        })
+        .collect();
+    let dof6 = viewpoints.first().is_some_and(|r| r.joints.len() == 6);
+    let segments = map::segment_discs(
+        &sld.discs,
+        dof6.then_some(poses.as_slice()),
+        &mapping.segment,
+    )?;
+    let mut segment = vec![0; sld.discs.len()];
+    for (s, members) in segments.iter().enumerate() {
+        for d in members {
+            segment[d.0] = s;
+        }
+    }
+    let true_material = sld
+        .discs
+        .iter()
+        .map(|d| judge.true_material(&d.centre))
+        .collect();
+    let material_names = materials.iter().map(|m| m.name.clone()).collect();
+    Ok(DiscMap {
+        discs: sld.discs,
+        viewpoint,
+        segment,
+        segments,
+        true_material,
+        material_names,
+        ..DiscMap::default()
+    })
+}

@@ -1,0 +1,93 @@
+//! A sweep predicted on the map: the scanner's own model (its rays, range
+//! noise and intensities) cast at the surface Stage One mapped (its TSDF
+//! mesh), from a pose the arm has not taken. Stage Two keeps a pose for a
+//! disc only when the observation predicted this way is one the LRC can
+//! use. The probe implements the hardware traits so that the prediction
+//! nods the scanner exactly as a sweep of the real scanner does
+//! ([`hw::tilt_sweep`]).
+
+use geom::{Isometry3, Real};
+use hw::{Arm, HwError, LineScanner, ScanReadings};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use robot::Robot;
+use scene::World;
+use sensor::Scanner;
+use std::sync::Arc;
+
+/// The robot's scanner over a mapped surface.
+pub(crate) struct MapProbe {
+    robot: Robot,
+    world: Arc<World>,
+    world_from_base: Isometry3,
+    q: Vec<Real>,
+    frames: Vec<Isometry3>,
+    scanner: Scanner,
+    rng: ChaCha8Rng,
+}
+
+impl MapProbe {
+    /// The probe at joints `q` in the mapped `world`.
+    pub(crate) fn new(
+        robot: Robot,
+        world: Arc<World>,
+        world_from_base: Isometry3,
+        q: &[Real],
+        scanner: Scanner,
+    ) -> Result<Self, HwError> {
+        let frames = robot.forward_kinematics(q)?;
+        Ok(Self {
+            robot,
+            world,
+            world_from_base,
+            q: q.to_vec(),
+            frames,
+            scanner,
+            rng: ChaCha8Rng::seed_from_u64(0),
+        })
+    }
+}
+
+impl Arm for MapProbe {
+    fn joints(&self) -> Vec<Real> {
+        self.q.clone()
+    }
+
+    fn move_to(&mut self, q: &[Real]) -> Result<(), HwError> {
+        self.robot.check_within_limits(q)?;
+        self.robot.fk_into(q, &mut self.frames)?;
+        self.q.clear();
+        self.q.extend_from_slice(q);
+        Ok(())
+    }
+}
+
+impl LineScanner for MapProbe {
+    fn bearings_rad(&self) -> &[Real] {
+        self.scanner.bearings_rad()
+    }
+
+    fn scan(&mut self) -> Result<ScanReadings, HwError> {
+        let mount = self.robot.scanner.as_ref().ok_or(HwError::NoScanner)?;
+        let pose = self.world_from_base * self.frames[mount.link.0] * mount.link_from_scanner;
+        let scan = self.scanner.scan(self.world.as_ref(), &pose, &mut self.rng);
+        Ok(ScanReadings {
+            ranges_m: scan.returns.iter().map(|r| r.map(|r| r.range_m)).collect(),
+            intensities: scan
+                .returns
+                .iter()
+                .map(|r| r.map_or(0.0, |r| r.intensity))
+                .collect(),
+            truth_materials: Some(
+                scan.returns
+                    .iter()
+                    .map(|r| r.and_then(|r| r.material))
+                    .collect(),
+            ),
+        })
+    }
+
+    fn seed_noise(&mut self, seed: u64) {
+        self.rng = ChaCha8Rng::seed_from_u64(seed);
+    }
+}

@@ -1,0 +1,884 @@
+//! The exploration episode (A ch. 3, Fig. 6.3): sweep from the start pose,
+//! then Stage One — decide, move, sweep, integrate — until the 1 % rule or
+//! the budget; the map products (discs, segments); then Stage Two — aim the
+//! scanner at the disc with the most material information left, move,
+//! sweep, classify — until no disc can be targeted or the budget is spent.
+//!
+//! [`run`] drives any hardware that implements [`hw::Arm`] and
+//! [`hw::LineScanner`]; a [`Judge`] sees every executed motion and sweep
+//! (a simulator's ground truth; [`crate::NoJudge`] for a real robot). Every
+//! executed motion (paths and sweeps) is also checked against the map of
+//! that moment at configurations no farther apart than half the planner's
+//! step: `dist(Q) ≤ 1` there is an *unsafe configuration*, recorded.
+//!
+//! A checkpoint is written after every viewpoint; resuming replays the
+//! recorded viewpoints' sweeps (the scanner's noise is reseeded per
+//! viewpoint, [`hw::LineScanner::seed_noise`]) and goes on, so an
+//! interrupted run ends as an uninterrupted one. The replayed records are
+//! not judged again, so the checkpoint carries a checksum and the
+//! scenario as run: an edited checkpoint, or one of other inputs, is
+//! refused.
+
+use crate::discs::{DiscMap, disc_map};
+use crate::judge::{Judge, SafetyTally};
+use crate::materials::{Materials, sweep_patch};
+use crate::probe::MapProbe;
+use crate::setup::Setup;
+use crate::{Choice, ExploreConfig, ExploreError, StageOne, Termination};
+use geom::{Isometry3, Real, TriMesh};
+use hw::{Arm, LineScanner, tilt_sweep};
+use map::{IntegrationStats, TsdfConfig, TsdfMap};
+use plan::{PlanConfig, Safety};
+use record::checkpoint::{CHECKPOINT_FORMAT, Checkpoint};
+use record::{ScoredCandidate, UnsafeConfiguration, ViewpointRecord};
+use robot::Robot;
+use sensor::{Scanner, Sweep, SweepPoint};
+use std::collections::VecDeque;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Which run this is, as a checkpoint records it: a resumed run must be of
+/// the same scenario, content included.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RunIdentity {
+    /// The scenario's name.
+    pub scenario: String,
+    /// The scenario as run (its file's text, robot included): any change
+    /// refuses a resume.
+    pub scenario_toml: String,
+}
+
+/// How to run.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Seed of the run (the scanner's noise per viewpoint, the disc draws).
+    pub seed: u64,
+    /// The TSDF of the output mesh.
+    pub tsdf: TsdfConfig,
+    /// Record wall-clock times (off: the time columns are 0, so outputs are
+    /// the same byte for byte for the same inputs).
+    pub timings: bool,
+    /// Write a checkpoint here after every viewpoint.
+    pub checkpoint: Option<PathBuf>,
+    /// Continue the run recorded in `checkpoint` (which must exist).
+    pub resume: bool,
+    /// Run Stage Two after Stage One.
+    pub stage_two: bool,
+    /// Which run this is (kept in the checkpoint).
+    pub identity: RunIdentity,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self {
+            seed: 0,
+            tsdf: TsdfConfig::default(),
+            timings: true,
+            checkpoint: None,
+            resume: false,
+            stage_two: true,
+            identity: RunIdentity::default(),
+        }
+    }
+}
+
+/// A finished run.
+#[derive(Clone, Debug)]
+pub struct ExploreRun {
+    /// Scenario name.
+    pub scenario: String,
+    /// Per viewpoint.
+    pub viewpoints: Vec<ViewpointRecord>,
+    /// Why Stage One stopped.
+    pub termination: Termination,
+    /// Why Stage Two stopped (`None` when it did not run).
+    pub stage_two_termination: Option<String>,
+    /// Configurations with `dist(Q) ≤ 1` along executed motions.
+    pub unsafe_configurations: Vec<UnsafeConfiguration>,
+    /// What the judge tallied.
+    pub tally: SafetyTally,
+    /// `(H1 weighted, H2)` before the first sweep.
+    pub initial_information: (Real, Real),
+    /// How the C-space model was obtained.
+    pub cspace: String,
+    /// Every measured point.
+    pub cloud: Vec<SweepPoint>,
+    /// The TSDF mesh.
+    pub mesh: TriMesh,
+    /// The map products of Stage One (A§5.2–5.3): the mesh's Scale-Like
+    /// Discs and their segments, with the material belief.
+    pub discs: DiscMap,
+    /// The planning grid at the end of the run (occupancy at
+    /// `planning_voxel_m`, with H1 and H2): what later plans, such as blast
+    /// plans, must respect.
+    pub grid: map::OccupancyGrid,
+    /// Wall time of the whole run, seconds (0 when timings are off).
+    pub wall_s: Real,
+}
+
+/// The noise seed of viewpoint `k`'s sweep.
+fn viewpoint_seed(seed: u64, k: usize) -> u64 {
+    seed ^ 0xa076_1d64_78bd_642f_u64.wrapping_mul(k as u64 + 1)
+}
+
+/// Poses the arm has stood at that are tried as the last waypoint before a
+/// goal the roadmap cannot reach.
+const VISITED_BRIDGES: usize = 5;
+
+/// Run AXBAM from `setup` on `hw`: Stage One, then Stage Two when
+/// `options.stage_two` (and the setup has materials), then the map
+/// products. `judge` sees every executed motion and sweep; `progress` each
+/// viewpoint's record as it completes.
+pub fn run<H: Arm + LineScanner + ?Sized>(
+    setup: Setup,
+    hw: &mut H,
+    judge: &mut dyn Judge,
+    options: &RunOptions,
+    progress: &mut dyn FnMut(&ViewpointRecord),
+) -> Result<ExploreRun, ExploreError> {
+    let t_run = Instant::now();
+    let mut episode = Episode::new(setup, hw, judge, options)?;
+    let restored = if options.resume {
+        Some(episode.restore()?)
+    } else {
+        None
+    };
+    let (mut replay_one, replay_two, tried_before) = restored.unwrap_or_default();
+    let termination = episode.stage_one(&mut replay_one, progress)?;
+    let mesh = episode.tsdf.extract_mesh();
+    let mut discs = disc_map(
+        &mesh,
+        &episode.cloud,
+        &episode.cloud_viewpoint,
+        &episode.viewpoints,
+        &episode.setup.materials,
+        &*episode.judge,
+        &episode.setup.config.mapping,
+        options.seed,
+    )?;
+    let mut materials = Materials::new(
+        &mut discs,
+        &mesh,
+        &episode.setup.config.pose,
+        &episode.setup.materials,
+        &episode.setup.scanner,
+        options.seed,
+    )?;
+    if let Some(m) = &mut materials {
+        for sweep in &std::mem::take(&mut episode.sweeps) {
+            m.observe(&mut discs, sweep)?;
+        }
+        // Stage One's last row holds H3 once its sweeps are classified on
+        // the map Stage One built: the baseline of Stage Two's curve.
+        if let Some(last) = episode.viewpoints.last_mut() {
+            last.h3 = Some(m.h3_total());
+        }
+    }
+    let mut stage_two_termination = None;
+    if let (true, Some(m)) = (options.stage_two, materials.as_mut()) {
+        let end = episode.stage_two(m, &mut discs, &mesh, &tried_before, replay_two, progress)?;
+        stage_two_termination = Some(end.to_owned());
+    }
+    if let Some(m) = &materials {
+        m.finish(&mut discs);
+    }
+    let Episode {
+        setup,
+        tsdf,
+        viewpoints,
+        cloud,
+        unsafe_configurations,
+        judge,
+        ..
+    } = episode;
+    Ok(ExploreRun {
+        scenario: options.identity.scenario.clone(),
+        viewpoints,
+        termination,
+        stage_two_termination,
+        unsafe_configurations,
+        tally: judge.tally(),
+        initial_information: setup.stage.initial_information(),
+        cspace: setup.cspace,
+        cloud,
+        mesh: tsdf.extract_mesh(),
+        discs,
+        grid: setup.stage.grid().clone(),
+        wall_s: if options.timings {
+            t_run.elapsed().as_secs_f64()
+        } else {
+            0.0
+        },
+    })
+}
+
+/// A Stage One choice waiting for its sweep.
+struct Pending {
+    choice: Choice,
+    scored: Vec<ScoredCandidate>,
+    front: usize,
+    unreachable: usize,
+    decision_ms: Real,
+    plan_ms: Real,
+}
+
+/// A Stage Two choice: the disc, the path to its pose, the decision's time
+/// and the discs ranked.
+struct Aim {
+    target: usize,
+    path: plan::Path,
+    decision_ms: Real,
+    ranked: usize,
+}
+
+/// What a viewpoint's sweep gave.
+struct Taken {
+    stats: IntegrationStats,
+    sweep_ms: Real,
+    integrate_ms: Real,
+}
+
+/// What a checkpoint restores: the Stage One and Stage Two viewpoints to
+/// replay, and the discs Stage Two has tried.
+type Restored = (
+    VecDeque<ViewpointRecord>,
+    VecDeque<ViewpointRecord>,
+    Vec<usize>,
+);
+
+/// The state of a run under way.
+struct Episode<'a, H: ?Sized> {
+    setup: Setup,
+    hw: &'a mut H,
+    judge: &'a mut dyn Judge,
+    options: &'a RunOptions,
+    /// Motions are checked against the map at half the planner's step.
+    fine: Safety,
+    tsdf: TsdfMap,
+    viewpoints: Vec<ViewpointRecord>,
+    cloud: Vec<SweepPoint>,
+    /// Per point of `cloud`: the viewpoint that measured it.
+    cloud_viewpoint: Vec<usize>,
+    /// Stage One's sweeps, classified once its map is made.
+    sweeps: Vec<Sweep>,
+    unsafe_configurations: Vec<UnsafeConfiguration>,
+    /// Where the arm is.
+    q: Vec<Real>,
+}
+
+impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
+    fn new(
+        setup: Setup,
+        hw: &'a mut H,
+        judge: &'a mut dyn Judge,
+        options: &'a RunOptions,
+    ) -> Result<Self, ExploreError> {
+        let config = &setup.config;
+        let fine = Safety::new(
+            setup.robot.clone(),
+            setup.world_from_base,
+            &PlanConfig {
+                check_step_m: 0.5 * config.plan.check_step_m,
+                ..config.plan.clone()
+            },
+            setup.stage.model().roadmap().weights().to_vec(),
+        )?;
+        let tsdf = TsdfMap::new(options.tsdf)?;
+        let q = setup.start.clone();
+        Ok(Self {
+            setup,
+            hw,
+            judge,
+            options,
+            fine,
+            tsdf,
+            viewpoints: Vec::new(),
+            cloud: Vec::new(),
+            cloud_viewpoint: Vec::new(),
+            sweeps: Vec::new(),
+            unsafe_configurations: Vec::new(),
+            q,
+        })
+    }
+
+    fn stage(&self) -> &StageOne {
+        &self.setup.stage
+    }
+
+    fn config(&self) -> &ExploreConfig {
+        &self.setup.config
+    }
+
+    /// Milliseconds since `t`, or 0 when timings are off.
+    fn timed(&self, t: Instant) -> Real {
+        if self.options.timings {
+            t.elapsed().as_secs_f64() * 1e3
+        } else {
+            0.0
+        }
+    }
+
+    /// The checkpoint of the run so far.
+    fn checkpoint(&self, tried: &[usize]) -> Checkpoint<ExploreConfig> {
+        let tally = self.judge.tally();
+        let id = &self.options.identity;
+        Checkpoint {
+            format: CHECKPOINT_FORMAT,
+            checksum: 0,
+            scenario: id.scenario.clone(),
+            scenario_toml: id.scenario_toml.clone(),
+            stage_two: self.options.stage_two,
+            seed: self.options.seed,
+            config: self.config().clone(),
+            sweep: self.config().sweep,
+            viewpoints: self.viewpoints.clone(),
+            collisions: tally.collisions,
+            unsafe_configurations: self.unsafe_configurations.clone(),
+            min_clearance_m: tally.min_clearance_m,
+            stage_two_tried: tried.to_vec(),
+        }
+    }
+
+    /// Write the checkpoint, when the run keeps one.
+    fn save(&self, tried: &[usize]) -> Result<(), ExploreError> {
+        match &self.options.checkpoint {
+            Some(path) => Ok(self.checkpoint(tried).write(path)?),
+            None => Ok(()),
+        }
+    }
+
+    /// Read the checkpoint to resume from, refuse one of another run, and
+    /// restore the tallies; the viewpoints to replay are returned.
+    fn restore(&mut self) -> Result<Restored, ExploreError> {
+        let path = self
+            .options
+            .checkpoint
+            .as_ref()
+            .ok_or_else(|| ExploreError::Resume {
+                what: "resume".into(),
+                message: "no checkpoint file given".into(),
+            })?;
+        let c = Checkpoint::<ExploreConfig>::read(path)?;
+        let mine = self.checkpoint(&[]);
+        let mut config = mine.config.clone();
+        config.sweep = c.config.sweep;
+        let stages = |two: bool| if two { "both" } else { "one" };
+        let differs = if c.scenario != mine.scenario {
+            Some(format!(
+                "the scenario ({} then, {} now)",
+                c.scenario, mine.scenario
+            ))
+        } else if c.seed != mine.seed {
+            Some(format!("--seed ({} then, {} now)", c.seed, mine.seed))
+        } else if c.stage_two != mine.stage_two {
+            Some(format!(
+                "--stages ({} then, {} now)",
+                stages(c.stage_two),
+                stages(mine.stage_two)
+            ))
+        } else if c.scenario_toml != mine.scenario_toml {
+            Some(
+                "the scenario's content (the file, or --robot, changed since the checkpoint)"
+                    .to_owned(),
+            )
+        } else if c.config != config || c.sweep != mine.sweep {
+            Some("the exploration parameters ([explore], --max-viewpoints)".to_owned())
+        } else {
+            None
+        };
+        if let Some(what) = differs {
+            return Err(ExploreError::Resume {
+                what: path.display().to_string(),
+                message: format!(
+                    "the checkpoint is of another run: {what} differs; resume with the same \
+                     scenario, robot, --seed, --stages and parameters, or run again without --resume"
+                ),
+            });
+        }
+        self.judge.restore(SafetyTally {
+            collisions: c.collisions,
+            min_clearance_m: c.min_clearance_m,
+        });
+        self.unsafe_configurations = c.unsafe_configurations;
+        let (one, two): (Vec<_>, Vec<_>) = c.viewpoints.into_iter().partition(|r| r.stage == 1);
+        Ok((one.into(), two.into(), c.stage_two_tried))
+    }
+
+    /// Check the executed motion `a` → `b` (on the way to, or sweeping at,
+    /// viewpoint `k`) against the map of this moment, and show it to the
+    /// judge.
+    fn audit(&mut self, k: usize, a: &[Real], b: &[Real]) -> Result<(), ExploreError> {
+        let checked = self.fine.interpolate(a, b);
+        for c in &checked {
+            let d = self.fine.dist(self.setup.stage.grid(), c)?;
+            if d <= 1.0 {
+                self.unsafe_configurations.push(UnsafeConfiguration {
+                    viewpoint: k,
+                    joints: c.clone(),
+                    dist: d,
+                });
+            }
+        }
+        self.judge.motion(k, a, b, &checked)
+    }
+
+    /// Move along `waypoints` to viewpoint `k`, each motion audited first.
+    fn move_along(&mut self, k: usize, waypoints: &[Vec<Real>]) -> Result<(), ExploreError> {
+        for w in waypoints.windows(2) {
+            self.audit(k, &w[0], &w[1])?;
+            self.hw.move_to(&w[1])?;
+        }
+        self.q = self.hw.joints();
+        Ok(())
+    }
+
+    /// Take viewpoint `k`'s sweep where the arm stands and integrate it;
+    /// with `classify`, the sweep also updates the material beliefs. A
+    /// replayed viewpoint's sweep motion was audited before the
+    /// interruption, a new one's is audited now.
+    fn take_viewpoint(
+        &mut self,
+        k: usize,
+        replayed: bool,
+        classify: Option<(&mut Materials, &mut DiscMap)>,
+    ) -> Result<(Sweep, Taken), ExploreError> {
+        if !replayed {
+            let q = self.q.clone();
+            let (lo, hi) = self.stage().sweep_range(&q);
+            self.audit(k, &q, &lo)?;
+            self.audit(k, &lo, &hi)?;
+            self.audit(k, &hi, &q)?;
+        }
+        self.hw.seed_noise(viewpoint_seed(self.options.seed, k));
+        let t = Instant::now();
+        let s = &self.setup;
+        let sweep = tilt_sweep(
+            &mut *self.hw,
+            &s.robot,
+            &s.world_from_base,
+            &s.config.sweep,
+            &mut |_, _| {},
+        )?;
+        let sweep_ms = self.timed(t);
+        let t = Instant::now();
+        let stats = self.setup.stage.integrate(&sweep);
+        self.tsdf.integrate_sweep(&sweep);
+        if let Some((m, discs)) = classify {
+            m.observe(discs, &sweep)?;
+        }
+        let integrate_ms = self.timed(t);
+        self.cloud.extend_from_slice(sweep.points());
+        self.cloud_viewpoint.resize(self.cloud.len(), k);
+        self.judge.sweep(&sweep);
+        Ok((
+            sweep,
+            Taken {
+                stats,
+                sweep_ms,
+                integrate_ms,
+            },
+        ))
+    }
+
+    /// The record of a viewpoint just taken at the arm's pose.
+    fn record(&self, k: usize, stage: u8, taken: &Taken) -> ViewpointRecord {
+        let (h1_weighted, h2) = self.stage().information();
+        ViewpointRecord {
+            k,
+            stage,
+            joints: self.q.clone(),
+            f: None,
+            h1: self.stage().grid().h1_unweighted(),
+            h1_weighted,
+            h2,
+            h3: None,
+            target_disc: None,
+            predicted_h1_weighted: None,
+            candidates: 0,
+            front: 0,
+            unreachable: 0,
+            predicted_revealed: 0,
+            revealed: taken.stats.newly_known,
+            coverage_a1: self.judge.coverage_a1(),
+            joint_travel: 0.0,
+            waypoints: 0,
+            path: Vec::new(),
+            scored: Vec::new(),
+            decision_ms: 0.0,
+            plan_ms: 0.0,
+            sweep_ms: taken.sweep_ms,
+            integrate_ms: taken.integrate_ms,
+        }
+    }
+
+    /// Put the arm where a replayed viewpoint stood.
+    fn stand_at(&mut self, r: &ViewpointRecord) -> Result<(), ExploreError> {
+        self.hw.move_to(&r.joints)?;
+        self.q.clone_from(&r.joints);
+        Ok(())
+    }
+
+    /// Stage One (A§3.2): sweep, then decide, move and sweep again until
+    /// the 1 % rule, the budget, or no safe candidate.
+    fn stage_one(
+        &mut self,
+        replay: &mut VecDeque<ViewpointRecord>,
+        progress: &mut dyn FnMut(&ViewpointRecord),
+    ) -> Result<Termination, ExploreError> {
+        let mut pending: Option<Pending> = None;
+        loop {
+            let k = self.viewpoints.len();
+            // A replayed viewpoint: the arm is put where it stood and its
+            // sweep taken again (same seed, same points); its record and
+            // audit come from the checkpoint.
+            let replayed = replay.pop_front();
+            if let Some(r) = &replayed {
+                self.stand_at(r)?;
+            }
+            let (sweep, taken) = self.take_viewpoint(k, replayed.is_some(), None)?;
+            self.sweeps.push(sweep);
+            let was_replayed = replayed.is_some();
+            let record = match replayed {
+                Some(r) => r,
+                None => {
+                    let mut record = self.record(k, 1, &taken);
+                    if let Some(p) = pending.take() {
+                        let c = &p.choice;
+                        record.f = Some(c.candidate.f);
+                        record.predicted_h1_weighted = Some(c.candidate.f[0]);
+                        record.predicted_revealed = c.candidate.revealed;
+                        record.candidates = p.scored.len();
+                        record.front = p.front;
+                        record.unreachable = p.unreachable;
+                        record.joint_travel = c.path.joint_travel();
+                        record.waypoints = c.path.waypoints.len();
+                        record.path.clone_from(&c.path.waypoints);
+                        record.scored = p.scored;
+                        record.decision_ms = p.decision_ms;
+                        record.plan_ms = p.plan_ms;
+                    }
+                    record
+                }
+            };
+            progress(&record);
+            self.viewpoints.push(record);
+            if !replay.is_empty() {
+                continue;
+            }
+            // A replayed viewpoint is in the checkpoint already (with any
+            // Stage Two viewpoints after it).
+            if !was_replayed {
+                self.save(&[])?;
+            }
+            if let Some(t) = self.stage().termination() {
+                return Ok(t);
+            }
+            let t = Instant::now();
+            let decision = self.stage().decide(&self.q)?;
+            let decision_ms = self.timed(t);
+            let plan_ms = if self.options.timings {
+                decision.plan_ms
+            } else {
+                0.0
+            };
+            let Some(choice) = decision.choice else {
+                return Ok(Termination::NoSafeCandidate);
+            };
+            // Move along the path, auditing each motion against the map as it is.
+            self.move_along(k + 1, &choice.path.waypoints)?;
+            let scored = decision
+                .candidates
+                .iter()
+                .zip(&decision.on_front)
+                .map(|(c, &front)| ScoredCandidate { f: c.f, front })
+                .collect();
+            pending = Some(Pending {
+                choice,
+                scored,
+                front: decision.front_size,
+                unreachable: decision.unreachable,
+                decision_ms,
+                plan_ms,
+            });
+        }
+    }
+
+    /// Stage Two (A§3.3): aim the scanner at the disc with the most
+    /// material information left that a valid, reachable pose can target;
+    /// sweep, classify, update; until none can be targeted or the budget is
+    /// spent. Returns why it stopped.
+    fn stage_two(
+        &mut self,
+        m: &mut Materials,
+        discs: &mut DiscMap,
+        mesh: &TriMesh,
+        tried_before: &[usize],
+        mut replay: VecDeque<ViewpointRecord>,
+        progress: &mut dyn FnMut(&ViewpointRecord),
+    ) -> Result<&'static str, ExploreError> {
+        let mut tried = vec![false; discs.discs.len()];
+        for &i in tried_before {
+            if let Some(t) = tried.get_mut(i) {
+                *t = true;
+            }
+        }
+        let safety = self.stage().model().safety().clone();
+        let mut aimer = Aimer::new(self, mesh, &safety)?;
+        loop {
+            let done = self.viewpoints.iter().filter(|r| r.stage == 2).count();
+            if done >= self.config().stage_two_max_viewpoints {
+                return Ok("viewpoint_budget");
+            }
+            let k = self.viewpoints.len();
+            // A replayed viewpoint: the arm is put where it stood (its
+            // record and audit come from the checkpoint).
+            let replayed = replay.pop_front();
+            let aim = match &replayed {
+                Some(r) => {
+                    self.stand_at(r)?;
+                    None
+                }
+                None => {
+                    let t = Instant::now();
+                    let found = aimer.choose(self, m, discs, &mut tried, k)?;
+                    let decision_ms = self.timed(t);
+                    let Some((target, path, ranked)) = found else {
+                        return Ok("no_targetable_disc");
+                    };
+                    self.move_along(k, &path.waypoints)?;
+                    Some(Aim {
+                        target,
+                        path,
+                        decision_ms,
+                        ranked,
+                    })
+                }
+            };
+            let (_, taken) = self.take_viewpoint(k, replayed.is_some(), Some((m, discs)))?;
+            let record = match (replayed, aim) {
+                (Some(r), _) => r,
+                (None, None) => {
+                    return Err(ExploreError::Resume {
+                        what: "stage two".into(),
+                        message: "a viewpoint is neither replayed nor chosen".into(),
+                    });
+                }
+                (None, Some(aim)) => ViewpointRecord {
+                    h3: Some(m.h3_total()),
+                    target_disc: Some(aim.target),
+                    candidates: aim.ranked,
+                    joint_travel: aim.path.joint_travel(),
+                    waypoints: aim.path.waypoints.len(),
+                    path: aim.path.waypoints,
+                    decision_ms: aim.decision_ms,
+                    ..self.record(k, 2, &taken)
+                },
+            };
+            progress(&record);
+            self.viewpoints.push(record);
+            if replay.is_empty() {
+                let tried: Vec<usize> = (0..tried.len()).filter(|&i| tried[i]).collect();
+                self.save(&tried)?;
+            }
+        }
+    }
+}
+
+/// Stage Two's choice of the next disc and pose.
+struct Aimer<'s> {
+    selector: plan::PoseSelector<'s>,
+    /// The mapped surface (Stage One's mesh) as a world to predict sweeps in.
+    map_world: Arc<scene::World>,
+    probe: MapProbe,
+    /// `ln n_t`, the information of a voxel under the uniform prior.
+    uniform: Real,
+}
+
+impl<'s> Aimer<'s> {
+    /// `safety` is the C-space model's (the selector keeps it).
+    fn new<H: Arm + LineScanner + ?Sized>(
+        episode: &Episode<'_, H>,
+        mesh: &TriMesh,
+        safety: &'s Safety,
+    ) -> Result<Self, ExploreError> {
+        let s = &episode.setup;
+        let selector = plan::PoseSelector::new(safety, s.config.pose.clone())?;
+        // The map as the scanner would see it: a simulated sweep of the
+        // mapped surface (Stage One's mesh) from a candidate pose, with the
+        // scanner's own model and noise, predicts the observation the LRC
+        // will get; a pose whose predicted observation fails the LRC's
+        // geometric checks (range, incidence, returns and span in the fit
+        // window, flatness) is not a viewpoint for that disc.
+        let map_world = Arc::new(scene::World::Mesh(scene::Scene::from_mesh(
+            "map",
+            mesh.clone(),
+            vec![scene::Material::new("map", 0.5, 0.5)],
+            scene::MaterialId(0),
+        )?));
+        let probe = MapProbe::new(
+            s.robot.clone(),
+            Arc::clone(&map_world),
+            s.world_from_base,
+            &episode.q,
+            Scanner::new(s.scanner)?,
+        )?;
+        Ok(Self {
+            selector,
+            map_world,
+            probe,
+            uniform: (s.materials.len() as Real).ln(),
+        })
+    }
+
+    /// The disc to aim at next, the path to its pose and how many discs
+    /// were ranked; `None` when no disc can be targeted. Every disc tried
+    /// is marked in `tried` for good.
+    fn choose<H: Arm + LineScanner + ?Sized>(
+        &mut self,
+        episode: &Episode<'_, H>,
+        m: &Materials,
+        discs: &DiscMap,
+        tried: &mut [bool],
+        k: usize,
+    ) -> Result<Option<(usize, plan::Path, usize)>, ExploreError> {
+        let s = &episode.setup;
+        let config = &s.config;
+        let stage = &s.stage;
+        let a2 = s.regions.a2;
+        let mut ranked: Vec<(usize, Real)> = (0..discs.discs.len())
+            .filter(|&i| !tried[i] && m.flat[i] && a2.contains(&discs.discs[i].centre))
+            .map(|i| (i, m.h3(discs, i)))
+            .filter(|(i, h)| {
+                let voxels = m.belief.disc_voxels(&discs.discs[*i]).len() as Real;
+                *h > config.significant_h3 * self.uniform * voxels
+            })
+            .collect();
+        ranked.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        // One map for the whole decision: every motion checked while
+        // trying one disc is known when trying the next.
+        let mut checker = plan::MemoChecker::new(stage.model().safety().checker(stage.grid()));
+        let q = &episode.q;
+        for &(i, _) in ranked.iter().take(config.stage_two_target_attempts) {
+            tried[i] = true;
+            let target = plan::Target::from_disc(&discs.discs[i]);
+            let solution = self.selector.select(stage.grid(), &target, q)?;
+            if !solution.valid() {
+                continue;
+            }
+            let goal = solution.joints().to_vec();
+            if stage.sweep_dist(&goal)?.is_none() {
+                continue;
+            }
+            self.probe.move_to(&goal)?;
+            self.probe
+                .seed_noise(viewpoint_seed(episode.options.seed, k) ^ i as u64);
+            let predicted = tilt_sweep(
+                &mut self.probe,
+                &s.robot,
+                &s.world_from_base,
+                &config.sweep,
+                &mut |_, _| {},
+            )?;
+            let check = m.lrc.check_geometry(
+                &sweep_patch(predicted.points(), &discs.discs[i].centre, m.patch_m),
+                &m.lrc.config,
+            );
+            if check.is_err() {
+                continue;
+            }
+            let visited: Vec<&[Real]> = episode
+                .viewpoints
+                .iter()
+                .map(|r| r.joints.as_slice())
+                .collect();
+            if let Some(path) = path_via_visited(
+                stage.model().roadmap(),
+                &visited,
+                q,
+                &goal,
+                config.link_k,
+                &mut checker,
+            ) && clear_of_map(
+                &s.robot,
+                &s.world_from_base,
+                &self.map_world,
+                &episode.fine,
+                &path.waypoints,
+                stage.sweep_range(&goal),
+                config.stage_two_clearance_m,
+            )? {
+                return Ok(Some((i, path, ranked.len())));
+            }
+        }
+        Ok(None)
+    }
+}
+/// Whether the robot's collision capsules stay `clearance_m` or more from
+/// `map` (the mapped surface) at every configuration checked along
+/// `waypoints` and through the tilt sweep `(lo, hi)` at its end.
+fn clear_of_map(
+    robot: &Robot,
+    world_from_base: &Isometry3,
+    map: &scene::World,
+    safety: &Safety,
+    waypoints: &[Vec<Real>],
+    (lo, hi): (Vec<Real>, Vec<Real>),
+    clearance_m: Real,
+) -> Result<bool, ExploreError> {
+    let (Some(map), true) = (map.as_scene(), clearance_m > 0.0) else {
+        return Ok(true);
+    };
+    let Some(goal) = waypoints.last() else {
+        return Ok(true);
+    };
+    let sweep = [goal.clone(), lo, hi];
+    for pair in waypoints.windows(2).chain(sweep.windows(2)) {
+        for c in safety.interpolate(&pair[0], &pair[1]) {
+            let frames = robot.forward_kinematics(&c)?;
+            if plan::contact::min_clearance(robot, &frames, world_from_base, map, clearance_m)
+                < clearance_m
+            {
+                return Ok(false);
+            }
+        }
+    }
+    Ok(true)
+}
+
+/// A safe path from `from` to `goal`: the roadmap's (a direct motion, or A*
+/// through the roadmap), or else through one of the poses the arm has
+/// already stood at (`visited`; the [`VISITED_BRIDGES`] nearest to the goal,
+/// nearest first) from which a straight motion reaches the goal. A Stage Two
+/// pose is chosen by LM anywhere in free space, often beside a viewpoint
+/// the arm took but far from every roadmap node whose surroundings are known
+/// free.
+fn path_via_visited(
+    roadmap: &plan::Roadmap,
+    visited: &[&[Real]],
+    from: &[Real],
+    goal: &[Real],
+    link_k: usize,
+    checker: &mut dyn plan::MotionChecker,
+) -> Option<plan::Path> {
+    if let Some(path) = roadmap.plan(from, goal, link_k, checker) {
+        return Some(path);
+    }
+    let mut near: Vec<(Real, &[Real])> = visited
+        .iter()
+        .map(|v| (roadmap.distance(v, goal), *v))
+        .collect();
+    near.sort_by(|a, b| a.0.total_cmp(&b.0));
+    near.dedup_by(|a, b| a.1 == b.1);
+    for (d, v) in near.into_iter().take(VISITED_BRIDGES) {
+        if v == from || !checker.motion_ok(v, goal) {
+            continue;
+        }
+        if let Some(mut path) = roadmap.plan(from, v, link_k, checker) {
+            path.waypoints.push(goal.to_vec());
+            path.cost += d;
+            return Some(path);
+        }
+    }
+    None
+}

@@ -1,0 +1,21 @@
+#![doc = include_str!("../README.md")]
+//!
+//! # Map of the crate
+//!
+//! | item | what |
+//! |---|---|
+//! | [`Arm`] | a robot that reports its joints and moves |
+//! | [`LineScanner`], [`ScanReadings`] | a 2-D laser scan at the current pose |
+//! | [`RangeSensors`] | single-point range finders on the robot |
+//! | [`HwError`] | what hardware can refuse or fail at |
+//! | [`tilt_sweep`] | nod the scanner with one joint into a [`sensor::Sweep`] |
+//! | [`script`] | [`script::Recorder`] (logs what any hardware did) and [`script::Replay`] (plays a log back, checking every command) |
+
+mod error;
+pub mod script;
+mod sweep;
+mod traits;
+
+pub use error::HwError;
+pub use sweep::tilt_sweep;
+pub use traits::{Arm, LineScanner, RangeSensors, ScanReadings};

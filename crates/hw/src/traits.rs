@@ -1,0 +1,46 @@
+//! The traits themselves.
+
+use crate::HwError;
+use geom::Real;
+use scene::MaterialId;
+use sensor::SensorPoint;
+
+/// A robot that reports its joints and moves.
+pub trait Arm {
+    /// Current joint values (radians / metres).
+    fn joints(&self) -> Vec<Real>;
+    /// Move to `q` and wait until there; errors leave the arm where it was.
+    fn move_to(&mut self, q: &[Real]) -> Result<(), HwError>;
+}
+
+/// One 2-D scan as a scanner reports it, in bearing order.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ScanReadings {
+    /// Range per bearing, `None` without a return.
+    pub ranges_m: Vec<Option<Real>>,
+    /// Intensity per bearing (0 without a return).
+    pub intensities: Vec<Real>,
+    /// Ground truth a simulator can add: the material hit per bearing.
+    pub truth_materials: Option<Vec<Option<MaterialId>>>,
+}
+
+/// A 2-D line scanner taking a scan at the robot's current pose.
+pub trait LineScanner {
+    /// Bearing of every slot, radians (scanner frame, A eq. 4.7).
+    fn bearings_rad(&self) -> &[Real];
+    /// Take one scan.
+    fn scan(&mut self) -> Result<ScanReadings, HwError>;
+    /// Restart the scanner's noise from `seed`. A loop calls it before each
+    /// viewpoint's sweep, so a simulated scanner gives the same sweep when
+    /// a run is resumed; real hardware has no seed and ignores it (the
+    /// default).
+    fn seed_noise(&mut self, seed: u64) {
+        let _ = seed;
+    }
+}
+
+/// Single-point range finders mounted on the robot.
+pub trait RangeSensors {
+    /// One reading per mounted sensor at the current pose (`None`: nothing in range).
+    fn read_all(&mut self) -> Result<Vec<Option<SensorPoint>>, HwError>;
+}

@@ -1,0 +1,4 @@
+//! The plan crate's integration tests, one binary (a module per topic) so a test build links few executables.
+
+mod cspace;
+mod pose;

@@ -1,0 +1,454 @@
+//! The files of an exploration run (`surveyor explore`) other than the
+//! viewpoint tables ([`crate::viewpoints`]): the summary `run.json`
+//! ([`ExploreSummary`]), the map products `discs.csv` ([`DiscTable`]) and
+//! `segments.json`, and the measured `cloud.ply` and the TSDF `mesh.ply`.
+
+use crate::RecordError;
+use crate::coverage::CoverageReport;
+use crate::table::Table;
+use crate::viewpoints::UnsafeConfiguration;
+use geom::{Point3, Real, TriMesh, UnitVector3, Vector3};
+use sensor::SweepPoint;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The summary file of a run.
+pub const RUN_JSON: &str = "run.json";
+/// Every measured point with its ray origin.
+pub const CLOUD_PLY: &str = "cloud.ply";
+/// The TSDF mesh.
+pub const MESH_PLY: &str = "mesh.ply";
+/// The Scale-Like Discs with their segment, viewpoint and material belief.
+pub const DISCS_CSV: &str = "discs.csv";
+/// The map segments: disc indices.
+pub const SEGMENTS_JSON: &str = "segments.json";
+
+/// `run.json` of an exploration: what the run did and, when it was judged
+/// against a ground truth (a simulation), how well. Its keys are written in
+/// alphabetical order at every level.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExploreSummary {
+    /// Version of the run folder's format ([`crate::FORMAT_VERSION`]).
+    pub format_version: u32,
+    /// Scenario name.
+    pub scenario: String,
+    /// Viewpoints per stage.
+    pub viewpoints: StageCounts,
+    /// Why Stage One stopped.
+    pub termination: String,
+    /// Why Stage Two stopped (`null` when it did not run).
+    pub stage_two_termination: Option<String>,
+    /// Ground-truth contacts along executed motions (`null` without a
+    /// ground truth).
+    pub collisions: Option<usize>,
+    /// Configurations with `dist(Q) ≤ 1` along executed motions.
+    pub unsafe_configurations: usize,
+    /// Those configurations.
+    pub unsafe_configuration_list: Vec<UnsafeConfiguration>,
+    /// Smallest ground-truth clearance of the links, metres (`null`
+    /// without a ground truth).
+    pub min_clearance_m: Option<Real>,
+    /// `H1` (weighted) and `H2` before the first sweep.
+    pub initial_information: InitialInformation,
+    /// Measured points.
+    pub points: usize,
+    /// Triangles of the TSDF mesh.
+    pub mesh_triangles: usize,
+    /// Scale-Like Discs.
+    pub discs: usize,
+    /// Map segments.
+    pub segments: usize,
+    /// The material names of the belief (the scene's table).
+    pub materials: Vec<String>,
+    /// Coverage of the true surfaces (`null` without a ground truth).
+    pub coverage: Option<ExploreCoverage>,
+    /// Share of the discs observed by the LRC whose most probable material is
+    /// the true one (`null` without such discs).
+    pub material_accuracy: Option<Real>,
+    /// Discs with at least one LRC observation.
+    pub discs_observed_by_lrc: usize,
+    /// `H3` over every disc voxel at the end (eq. 4.17).
+    pub h3: Option<Real>,
+    /// Stage One decision times, ms.
+    pub decision_ms: Spread,
+    /// Stage Two decision times, ms.
+    pub stage_two_decision_ms: Spread,
+    /// Wall time of the whole run, seconds (0 when timings are off).
+    pub wall_s: Real,
+}
+
+/// Viewpoints per stage.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StageCounts {
+    /// Stage One's, the start pose's sweep included.
+    pub stage_one: usize,
+    /// Stage Two's.
+    pub stage_two: usize,
+}
+
+/// The information before the first sweep.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialInformation {
+    /// Weighted `H1` (eq. 4.11).
+    #[serde(rename = "H1_weighted")]
+    pub h1_weighted: Real,
+    /// `H2` (eq. 4.14).
+    #[serde(rename = "H2")]
+    pub h2: Real,
+}
+
+/// Median and largest of a set of times.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spread {
+    /// Median (the upper one of an even count), 0 for none.
+    pub median: Real,
+    /// Largest, 0 for none.
+    pub max: Real,
+}
+
+impl Spread {
+    /// Of `values` (any order).
+    pub fn of(mut values: Vec<Real>) -> Self {
+        values.sort_by(Real::total_cmp);
+        Self {
+            median: values.get(values.len() / 2).copied().unwrap_or(0.0),
+            max: values.last().copied().unwrap_or(0.0),
+        }
+    }
+}
+
+/// Coverage of the true surfaces in the regions of interest.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExploreCoverage {
+    /// Covered share of A1.
+    #[serde(rename = "A1")]
+    pub a1: Real,
+    /// Covered share of A2.
+    #[serde(rename = "A2")]
+    pub a2: Real,
+    /// Covered share of A3.
+    #[serde(rename = "A3")]
+    pub a3: Real,
+    /// The samples some collision-free pose could observe, and how many of
+    /// them were covered.
+    pub observable: Observable,
+    /// Covered share of A1 per material.
+    #[serde(rename = "A1_per_material")]
+    pub a1_per_material: BTreeMap<String, Real>,
+    /// The full reports of A1, A2, A3.
+    pub reports: Vec<CoverageReport>,
+}
+
+/// Covered share of the observable samples per region, and the observable
+/// share of A1.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Observable {
+    /// Covered share of A1's observable samples.
+    #[serde(rename = "A1")]
+    pub a1: Option<Real>,
+    /// Covered share of A2's observable samples.
+    #[serde(rename = "A2")]
+    pub a2: Option<Real>,
+    /// Covered share of A3's observable samples.
+    #[serde(rename = "A3")]
+    pub a3: Option<Real>,
+    /// Observable share of A1's samples.
+    #[serde(rename = "A1_observable_share")]
+    pub a1_observable_share: Option<Real>,
+}
+
+impl ExploreCoverage {
+    /// The coverage of A1, A2, A3 from their reports, and per region the
+    /// observable samples and the covered ones among them (`None` when not
+    /// measured).
+    pub fn new(reports: [CoverageReport; 3], observable: &[(usize, usize)]) -> Self {
+        let share = |k: usize| {
+            observable.get(k).map(|(n, c)| {
+                if *n == 0 {
+                    0.0
+                } else {
+                    *c as Real / *n as Real
+                }
+            })
+        };
+        let [a1, a2, a3] = &reports;
+        Self {
+            a1: a1.fraction(),
+            a2: a2.fraction(),
+            a3: a3.fraction(),
+            observable: Observable {
+                a1: share(0),
+                a2: share(1),
+                a3: share(2),
+                a1_observable_share: observable
+                    .first()
+                    .map(|(n, _)| *n as Real / a1.samples.max(1) as Real),
+            },
+            a1_per_material: a1
+                .per_material
+                .iter()
+                .map(|m| {
+                    let share = if m.samples == 0 {
+                        0.0
+                    } else {
+                        m.covered as Real / m.samples as Real
+                    };
+                    (m.material.clone(), share)
+                })
+                .collect(),
+            reports: reports.to_vec(),
+        }
+    }
+}
+
+impl ExploreSummary {
+    /// `run.json`'s text: keys in alphabetical order at every level (as a
+    /// JSON object's keys carry no order, sorting makes the file the same
+    /// whatever the field order here), pretty-printed, a final newline.
+    pub fn to_json(&self) -> Result<String, RecordError> {
+        crate::sorted_json(self, RUN_JSON)
+    }
+}
+
+/// A Scale-Like Disc's geometry as `discs.csv` holds it (the algorithm's
+/// type is `map::Disc`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DiscRecord {
+    /// Centre.
+    pub centre: Point3,
+    /// Unit normal.
+    pub normal: UnitVector3,
+    /// Radius, metres.
+    pub radius_m: Real,
+    /// Points registered to the disc.
+    pub points: usize,
+}
+
+/// `discs.csv` of a run: the discs (columns `cx,cy,cz,nx,ny,nz,radius,points`,
+/// the disc-file contract of `map::sld_io`), then per disc its `segment`,
+/// the `viewpoint` that saw it, its `true_material` (−1 when unknown), and
+/// when materials were identified the posterior `p_<material>` per
+/// material, `h3` and `lrc_observations`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DiscTable {
+    /// The discs.
+    pub discs: Vec<DiscRecord>,
+    /// Per disc: its segment.
+    pub segment: Vec<usize>,
+    /// Per disc: the viewpoint that saw it.
+    pub viewpoint: Vec<usize>,
+    /// Per disc: the material of the nearest true surface (runs judged
+    /// against a ground truth).
+    pub true_material: Vec<Option<usize>>,
+    /// The material names of the posterior columns.
+    pub material_names: Vec<String>,
+    /// Per disc: the posterior over `material_names` (`None`: not written).
+    pub posterior: Option<Vec<Vec<Real>>>,
+    /// Per disc: `H3` and the LRC observations that updated it (`None`: not
+    /// written).
+    pub h3: Option<(Vec<Real>, Vec<usize>)>,
+}
+
+/// Names `discs.csv` starts with.
+pub const DISC_CSV_HEADER: [&str; 8] = ["cx", "cy", "cz", "nx", "ny", "nz", "radius", "points"];
+
+impl DiscTable {
+    /// The table as CSV text.
+    pub fn to_csv(&self) -> Result<String, RecordError> {
+        let n = self.discs.len();
+        let mut columns: Vec<(String, Vec<Real>)> = vec![
+            (
+                "segment".into(),
+                self.segment.iter().map(|v| *v as Real).collect(),
+            ),
+            (
+                "viewpoint".into(),
+                self.viewpoint.iter().map(|v| *v as Real).collect(),
+            ),
+            (
+                "true_material".into(),
+                self.true_material
+                    .iter()
+                    .map(|m| m.map_or(-1.0, |v| v as Real))
+                    .collect(),
+            ),
+        ];
+        if let Some(p) = &self.posterior {
+            for (m, name) in self.material_names.iter().enumerate() {
+                columns.push((
+                    format!("p_{name}"),
+                    p.iter().map(|p| p.get(m).copied().unwrap_or(0.0)).collect(),
+                ));
+            }
+        }
+        if let Some((h3, obs)) = &self.h3 {
+            columns.push(("h3".into(), h3.clone()));
+            columns.push((
+                "lrc_observations".into(),
+                obs.iter().map(|v| *v as Real).collect(),
+            ));
+        }
+        for (k, (name, values)) in columns.iter().enumerate() {
+            let bad_name = name.is_empty()
+                || name.contains([',', '\n', '\r', '"'])
+                || DISC_CSV_HEADER.contains(&name.as_str())
+                || columns[..k].iter().any(|o| &o.0 == name);
+            if bad_name || values.len() != n {
+                return Err(RecordError::Invalid {
+                    what: format!("{DISCS_CSV} column `{name}`"),
+                    message: format!(
+                        "needs a unique name without commas and {n} values (has {})",
+                        values.len()
+                    ),
+                });
+            }
+        }
+        let mut out = DISC_CSV_HEADER.join(",");
+        for (name, _) in &columns {
+            out.push(',');
+            out.push_str(name);
+        }
+        out.push('\n');
+        for (i, d) in self.discs.iter().enumerate() {
+            let _ = write!(
+                out,
+                "{},{},{},{},{},{},{},{}",
+                d.centre.x,
+                d.centre.y,
+                d.centre.z,
+                d.normal.x,
+                d.normal.y,
+                d.normal.z,
+                d.radius_m,
+                d.points
+            );
+            for (_, values) in &columns {
+                let _ = write!(out, ",{}", values[i]);
+            }
+            out.push('\n');
+        }
+        Ok(out)
+    }
+
+    /// Read a run's `discs.csv`: the contract columns and every extra column
+    /// the writer makes (`segment`, `viewpoint` and `true_material` are
+    /// required; the posterior, `h3` and `lrc_observations` are read when
+    /// present). Every number must be finite and every normal a unit vector.
+    pub fn read(path: &Path) -> Result<Self, RecordError> {
+        let t = Table::read(path)?;
+        let col = |n: &str| t.numbers(n);
+        let [cx, cy, cz, nx, ny, nz, radius] = [
+            col("cx")?,
+            col("cy")?,
+            col("cz")?,
+            col("nx")?,
+            col("ny")?,
+            col("nz")?,
+            col("radius")?,
+        ];
+        let points = t.indices("points")?;
+        let mut discs = Vec::with_capacity(t.len());
+        for i in 0..t.len() {
+            let n = Vector3::new(nx[i], ny[i], nz[i]);
+            if (n.norm() - 1.0).abs() > 1e-6 {
+                return Err(RecordError::Field {
+                    file: t.source.clone(),
+                    line: i + 2,
+                    field: "nx,ny,nz".into(),
+                    message: format!("expected a unit normal, found one of length {}", n.norm()),
+                });
+            }
+            discs.push(DiscRecord {
+                centre: Point3::new(cx[i], cy[i], cz[i]),
+                normal: UnitVector3::new_normalize(n),
+                radius_m: radius[i],
+                points: points[i],
+            });
+        }
+        let material = t.numbers("true_material")?;
+        let material_names: Vec<String> = t
+            .columns_with_prefix("p_")
+            .iter()
+            .map(|c| c["p_".len()..].to_owned())
+            .collect();
+        let posterior = if material_names.is_empty() {
+            None
+        } else {
+            let cols = material_names
+                .iter()
+                .map(|m| t.numbers(&format!("p_{m}")))
+                .collect::<Result<Vec<_>, _>>()?;
+            Some(
+                (0..t.len())
+                    .map(|i| cols.iter().map(|c| c[i]).collect())
+                    .collect(),
+            )
+        };
+        let h3 = if t.has("h3") {
+            Some((t.numbers("h3")?, t.indices("lrc_observations")?))
+        } else {
+            None
+        };
+        Ok(Self {
+            discs,
+            segment: t.indices("segment")?,
+            viewpoint: t.indices("viewpoint")?,
+            true_material: material
+                .iter()
+                .map(|m| (*m >= 0.0).then_some(*m as usize))
+                .collect(),
+            material_names,
+            posterior,
+            h3,
+        })
+    }
+}
+
+/// The segments file: `{"segments": [[disc index, ...], ...]}`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentsFile {
+    /// Disc indices of each segment.
+    pub segments: Vec<Vec<usize>>,
+}
+
+impl SegmentsFile {
+    /// The file's text: one line of JSON.
+    pub fn to_json(&self) -> Result<String, RecordError> {
+        serde_json::to_string(self)
+            .map(|s| s + "\n")
+            .map_err(|e| RecordError::named(SEGMENTS_JSON, e))
+    }
+}
+
+/// Write `cloud.ply`: every measured point (`x y z`) with its ray origin
+/// (`origin_x origin_y origin_z`), binary little-endian `f32`.
+pub fn write_cloud(path: &Path, cloud: &[SweepPoint]) -> Result<(), RecordError> {
+    let cols: [Vec<f32>; 6] = [
+        cloud.iter().map(|p| p.point.x as f32).collect(),
+        cloud.iter().map(|p| p.point.y as f32).collect(),
+        cloud.iter().map(|p| p.point.z as f32).collect(),
+        cloud.iter().map(|p| p.origin.x as f32).collect(),
+        cloud.iter().map(|p| p.origin.y as f32).collect(),
+        cloud.iter().map(|p| p.origin.z as f32).collect(),
+    ];
+    let refs: Vec<&[f32]> = cols.iter().map(Vec::as_slice).collect();
+    Ok(scene::io::write_ply_vertices_file(
+        path,
+        &["x", "y", "z", "origin_x", "origin_y", "origin_z"],
+        &refs,
+    )?)
+}
+
+/// Write `mesh.ply` (binary PLY, `scene::io`'s mesh layout).
+pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<(), RecordError> {
+    Ok(scene::io::write_mesh_ply(path, mesh)?)
+}

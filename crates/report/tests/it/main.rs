@@ -1,0 +1,4 @@
+//! The report crate's integration tests, one binary (a module per topic) so a test build links few executables.
+
+mod bad_input;
+mod browser;

@@ -1,0 +1,4 @@
+//! The sensor crate's integration tests, one binary (a module per topic) so a test build links few executables.
+
+mod classifier;
+mod plane_sweep;

@@ -1,0 +1,617 @@
+//! AXBAM exploration of a scenario in the simulator: the scenario's robot
+//! and scanner as a [`SimRig`] in its ground-truth world, the loop of
+//! `explore` ([`explore::run()`]) driving it, and an [`ExploreJudge`] that
+//! checks every executed motion against the truth (contacts, clearance)
+//! and measures what the sweeps cover. [`explore`] is the whole
+//! `surveyor explore` job: the run, then its run folder staged with the
+//! blast plan (Paul App. A), written whole or not at all.
+
+use crate::metrics::{CoverageReport, CoverageTracker};
+use crate::{SimError, SimRig};
+use blast::{BlastConfig, BlastInputs, BlastPlan};
+use explore::{ExploreConfig, ExploreRun, Judge, SafetyTally, Setup, SetupInputs};
+use geom::{Isometry3, Point3, Real};
+use map::TsdfConfig;
+use plan::contact::{min_clearance, motion_contacts, robot_contacts, smallest_link_radius};
+use record::Staging;
+use record::explore::{ExploreCoverage, ExploreSummary};
+use robot::Robot;
+use scenario::LoadedScenario;
+use scene::{Scene, World};
+use sensor::{Scanner, Sweep};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// How to run.
+#[derive(Clone, Debug, Default)]
+pub struct ExploreOptions {
+    /// Seed of the scanner noise.
+    pub seed: u64,
+    /// Override of the Stage One viewpoint budget.
+    pub max_viewpoints: Option<usize>,
+    /// Where the C-space model is cached (`None`: built every run).
+    pub cspace_cache: Option<PathBuf>,
+    /// Stage One parameters instead of the scenario's `[explore]` table
+    /// (`None`: the scenario's, or the defaults).
+    pub config: Option<ExploreConfig>,
+    /// TSDF of the output mesh.
+    pub tsdf: TsdfConfig,
+    /// Record wall-clock times (off: the time columns are 0, so outputs are
+    /// the same byte for byte for the same inputs).
+    pub timings: bool,
+    /// Write a checkpoint here after every viewpoint.
+    pub checkpoint: Option<PathBuf>,
+    /// Continue the run recorded in `checkpoint` (which must exist).
+    pub resume: bool,
+    /// Run Stage Two after Stage One.
+    pub stage_two: bool,
+}
+
+impl ExploreOptions {
+    /// The default C-space cache of a scenario's robot: one file per robot
+    /// (a URDF by its file name) in the system's temporary folder, so runs
+    /// that alternate robots do not rebuild each other's model.
+    pub fn default_cspace_cache(loaded: &LoadedScenario) -> Result<PathBuf, SimError> {
+        let name = loaded.robot_choice()?.short_name();
+        Ok(std::env::temp_dir().join(format!("surveyor-cspace-{name}.json")))
+    }
+}
+
+/// Clearance search radius of the judge, metres.
+const CLEARANCE_SEARCH_M: Real = 0.5;
+
+/// Cell size of the observability test, metres.
+const OBSERVABLE_CELL_M: Real = 0.05;
+
+/// Within this distance of a disc's centre, the nearest true surface gives
+/// the disc its true material, metres.
+const TRUE_MATERIAL_SEARCH_M: Real = 0.05;
+
+/// The ground truth's judgement of an exploration: contacts of the robot's
+/// collision shapes with the true scene along every executed motion, the
+/// smallest clearance at the configurations the loop checked, and the
+/// coverage of the true surfaces in A1, A2, A3 with an observability upper
+/// bound (the samples some collision-free roadmap pose's scanner position
+/// sees). A point-cloud world has no surfaces to judge against: nothing is
+/// tallied then.
+#[derive(Debug)]
+pub struct ExploreJudge {
+    robot: Robot,
+    world: Arc<World>,
+    world_from_base: Isometry3,
+    contact_step: Real,
+    collisions: usize,
+    min_clearance_m: Real,
+    trackers: Vec<CoverageTracker>,
+}
+
+impl ExploreJudge {
+    /// The judge of `setup` in `world`, with the scenario's `metrics`.
+    pub fn new(
+        setup: &Setup,
+        world: Arc<World>,
+        metrics: &scenario::MetricsConfig,
+    ) -> Result<Self, SimError> {
+        let robot = setup.robot.clone();
+        let world_from_base = setup.world_from_base;
+        let mut trackers = Vec::new();
+        if let Some(scene) = world.as_scene() {
+            let eyes = observation_points(
+                &robot,
+                &world_from_base,
+                scene,
+                setup.stage.model().roadmap(),
+                &setup.start,
+            )?;
+            let r = &setup.regions;
+            for b in [r.a1, r.a2, r.a3] {
+                let mut m = *metrics;
+                m.sampling.region = Some(b.aabb());
+                let mut t = CoverageTracker::new(scene, &m)?;
+                t.set_observable_from(scene, &eyes, setup.reach_m, OBSERVABLE_CELL_M);
+                trackers.push(t);
+            }
+        }
+        Ok(Self {
+            contact_step: smallest_link_radius(&robot).map_or(0.01, |r| 0.5 * r),
+            robot,
+            world,
+            world_from_base,
+            collisions: 0,
+            min_clearance_m: CLEARANCE_SEARCH_M,
+            trackers,
+        })
+    }
+
+    /// Coverage of the true surfaces in A1, A2, A3 (mesh worlds).
+    pub fn coverage(&self) -> Option<[CoverageReport; 3]> {
+        match self.trackers.as_slice() {
+            [a1, a2, a3] => Some([a1.report(), a2.report(), a3.report()]),
+            _ => None,
+        }
+    }
+
+    /// Per region A1, A2, A3: the samples observable from some
+    /// collision-free roadmap pose's scanner position, and of those the
+    /// covered ones (see [`CoverageTracker::set_observable_from`]).
+    pub fn observable(&self) -> Vec<(usize, usize)> {
+        self.trackers
+            .iter()
+            .filter_map(CoverageTracker::observable_counts)
+            .collect()
+    }
+}
+
+impl Judge for ExploreJudge {
+    fn motion(
+        &mut self,
+        _viewpoint: usize,
+        a: &[Real],
+        b: &[Real],
+        checked: &[Vec<Real>],
+    ) -> Result<(), explore::ExploreError> {
+        let Some(scene) = self.world.as_scene() else {
+            return Ok(());
+        };
+        for c in checked {
+            let frames = self.robot.forward_kinematics(c)?;
+            self.min_clearance_m = self.min_clearance_m.min(min_clearance(
+                &self.robot,
+                &frames,
+                &self.world_from_base,
+                scene,
+                self.min_clearance_m,
+            ));
+        }
+        let check = motion_contacts(
+            &self.robot,
+            a,
+            b,
+            &self.world_from_base,
+            scene,
+            self.contact_step,
+        )?;
+        if !check.is_clear() {
+            self.collisions += 1;
+        }
+        Ok(())
+    }
+
+    fn sweep(&mut self, sweep: &Sweep) {
+        let positions = sweep.positions();
+        for t in &mut self.trackers {
+            t.add_points(&positions);
+        }
+    }
+
+    fn coverage_a1(&self) -> Option<Real> {
+        self.trackers.first().map(CoverageTracker::fraction)
+    }
+
+    fn true_material(&self, centre: &Point3) -> Option<usize> {
+        let scene = self.world.as_scene()?;
+        scene
+            .closest_point(centre, TRUE_MATERIAL_SEARCH_M)
+            .map(|(_, face, _)| usize::from(scene.triangle_material(face).0))
+    }
+
+    fn tally(&self) -> SafetyTally {
+        match self.world.as_scene() {
+            Some(_) => SafetyTally {
+                collisions: Some(self.collisions),
+                min_clearance_m: Some(self.min_clearance_m),
+            },
+            None => SafetyTally::default(),
+        }
+    }
+
+    fn restore(&mut self, tally: SafetyTally) {
+        self.collisions = tally.collisions.unwrap_or(0);
+        self.min_clearance_m = tally.min_clearance_m.unwrap_or(CLEARANCE_SEARCH_M);
+    }
+}
+
+/// Where a scanner could look from: the scanner position at the start and at
+/// every roadmap node where no link touches the true scene.
+fn observation_points(
+    robot: &Robot,
+    world_from_base: &Isometry3,
+    scene: &Scene,
+    roadmap: &plan::Roadmap,
+    start: &[Real],
+) -> Result<Vec<Point3>, SimError> {
+    let mut out = Vec::new();
+    for q in std::iter::once(start).chain(roadmap.nodes()) {
+        let frames = robot.forward_kinematics(q)?;
+        if !robot_contacts(robot, &frames, world_from_base, scene).is_empty() {
+            continue;
+        }
+        if let Some(pose) = robot.scanner_pose(q)? {
+            out.push(Point3::from((world_from_base * pose).translation.vector));
+        }
+    }
+    Ok(out)
+}
+
+/// What a scenario's exploration starts from, and its ground truth: the
+/// scenario's robot, scanner, parameters (with `options`' overrides) and
+/// regions, the scene's materials, the C-space model (built or loaded from
+/// `options.cspace_cache`). The start pose must be within the joint limits
+/// and clear of the scene (exploration assumes only that the start is
+/// safe, A§6.1).
+pub fn explore_setup(
+    loaded: &LoadedScenario,
+    options: &ExploreOptions,
+) -> Result<(Setup, Arc<World>), SimError> {
+    let s = &loaded.scenario;
+    let scenario_error = |message: String| SimError::Scenario {
+        source_name: s.name.clone(),
+        message,
+    };
+    let robot = loaded.build_robot()?;
+    let world = Arc::new(loaded.build_world()?);
+    let world_from_base = s.world_from_base();
+    let spec = s.scanner.clone().unwrap_or_default();
+    let mut config = options
+        .config
+        .clone()
+        .or_else(|| s.explore.clone())
+        .unwrap_or_default();
+    if let Some(n) = options.max_viewpoints {
+        config.max_viewpoints = n;
+    }
+    let regions = s.regions.ok_or_else(|| {
+        scenario_error("exploration needs regions of interest ([regions] a1, a2, a3)".into())
+    })?;
+    let start = s.robot.start_joints.clone();
+    robot
+        .check_within_limits(&start)
+        .map_err(|e| scenario_error(format!("robot.start_joints: {e}")))?;
+    if let Some(scene) = world.as_scene() {
+        let frames = robot.forward_kinematics(&start)?;
+        if let Some(c) = robot_contacts(&robot, &frames, &world_from_base, scene).first() {
+            return Err(scenario_error(format!(
+                "robot.start_joints: the start pose puts link {} ({}) into the scene (object {}); exploration starts from a safe pose",
+                c.link.index(),
+                robot.links[c.link.index()].name,
+                scene.object(c.object).map_or("?", |o| o.name.as_str())
+            )));
+        }
+    }
+    let materials = world
+        .as_scene()
+        .map(|scene| scene.materials().to_vec())
+        .unwrap_or_default();
+    let setup = Setup::new(SetupInputs {
+        robot,
+        world_from_base,
+        scanner: spec.config,
+        sweep: spec.sweep,
+        config,
+        regions,
+        start,
+        materials,
+        cspace_cache: options.cspace_cache.clone(),
+    })?;
+    Ok((setup, world))
+}
+
+/// A scenario's exploration, ready to run: the setup, the simulated rig at
+/// the start pose, its judge and how to run.
+#[derive(Debug)]
+pub struct SimExplore {
+    /// The scenario as given.
+    pub loaded: LoadedScenario,
+    /// What the loop starts from.
+    pub setup: Setup,
+    /// The ground truth.
+    pub world: Arc<World>,
+    /// The simulated arm and scanner at the start pose.
+    pub rig: SimRig,
+    /// The ground truth's judge.
+    pub judge: ExploreJudge,
+    /// How the loop runs.
+    pub run_options: explore::RunOptions,
+}
+
+impl SimExplore {
+    /// The exploration of `loaded` under `options` (seed, budget,
+    /// parameters, cache): [`explore_setup`], the rig at the start pose and
+    /// the judge.
+    pub fn new(loaded: &LoadedScenario, options: &ExploreOptions) -> Result<Self, SimError> {
+        let s = &loaded.scenario;
+        let (setup, world) = explore_setup(loaded, options)?;
+        let spec = s.scanner.clone().unwrap_or_default();
+        let robot = setup.robot.clone();
+        let world_from_base = setup.world_from_base;
+        let start = setup.start.clone();
+        let rig = SimRig::new(
+            robot,
+            Arc::clone(&world),
+            world_from_base,
+            &start,
+            Some(Scanner::new(spec.config)?),
+            options.seed,
+        )?;
+        let judge = ExploreJudge::new(&setup, Arc::clone(&world), &s.metrics)?;
+        let run_options = explore::RunOptions {
+            seed: options.seed,
+            tsdf: options.tsdf,
+            timings: options.timings,
+            checkpoint: options.checkpoint.clone(),
+            resume: options.resume,
+            stage_two: options.stage_two,
+            identity: explore::RunIdentity {
+                scenario: s.name.clone(),
+                scenario_toml: loaded.standalone().to_toml()?,
+            },
+        };
+        Ok(Self {
+            loaded: loaded.clone(),
+            setup,
+            world,
+            rig,
+            judge,
+            run_options,
+        })
+    }
+
+    /// Run it; `progress` sees each viewpoint's record as it completes.
+    pub fn run(
+        self,
+        progress: &mut dyn FnMut(&record::ViewpointRecord),
+    ) -> Result<ExploreOutcome, SimError> {
+        let Self {
+            loaded,
+            setup,
+            mut rig,
+            mut judge,
+            run_options,
+            ..
+        } = self;
+        let run = explore::run(setup, &mut rig, &mut judge, &run_options, progress)?;
+        Ok(ExploreOutcome {
+            coverage: judge.coverage(),
+            observable: judge.observable(),
+            run,
+            loaded,
+        })
+    }
+}
+
+/// A finished simulated exploration and its judgement.
+#[derive(Clone, Debug)]
+pub struct ExploreOutcome {
+    /// The scenario run.
+    pub loaded: LoadedScenario,
+    /// What the loop did.
+    pub run: ExploreRun,
+    /// Coverage of the true surfaces in A1, A2, A3 (mesh worlds).
+    pub coverage: Option<[CoverageReport; 3]>,
+    /// Per region: observable samples and the covered ones among them.
+    pub observable: Vec<(usize, usize)>,
+}
+
+impl ExploreOutcome {
+    /// The coverage as `run.json` holds it.
+    pub fn coverage_summary(&self) -> Option<ExploreCoverage> {
+        self.coverage
+            .clone()
+            .map(|c| ExploreCoverage::new(c, &self.observable))
+    }
+
+    /// `run.json`.
+    pub fn summary(&self) -> ExploreSummary {
+        self.run.summary(self.coverage_summary())
+    }
+
+    /// What a blast plan over this run is made from: its discs and segments,
+    /// each disc's start the joints of the viewpoint that saw it, and its
+    /// planning grid.
+    pub fn blast_inputs(&self) -> Result<BlastInputs, SimError> {
+        let run = &self.run;
+        Ok(BlastInputs::new(
+            run.discs.discs.clone(),
+            run.disc_start_joints()?,
+            run.discs.segments.clone(),
+            run.grid.clone(),
+            "the run",
+        )?)
+    }
+
+    /// The blast plan of the run's discs in A2 (none without discs or
+    /// regions), for the scenario's robot where it stands.
+    pub fn blast_plan(&self, config: &BlastConfig) -> Result<Option<BlastPlan>, SimError> {
+        let s = &self.loaded.scenario;
+        match (s.regions, self.run.discs.discs.is_empty()) {
+            (Some(regions), false) => Ok(Some(blast::plan_blast(
+                &self.blast_inputs()?,
+                &self.loaded.build_robot()?,
+                s.world_from_base(),
+                &regions.a2,
+                config,
+            )?)),
+            _ => Ok(None),
+        }
+    }
+}
+
+/// Run an exploration of `loaded` under `options`.
+pub fn run_exploration(
+    loaded: &LoadedScenario,
+    options: &ExploreOptions,
+    progress: &mut dyn FnMut(&record::ViewpointRecord),
+) -> Result<ExploreOutcome, SimError> {
+    SimExplore::new(loaded, options)?.run(progress)
+}
+
+/// Stage the run folder of `outcome`: the run's files
+/// ([`ExploreRun::write`]), `scenario.toml` (the scenario as run, its file
+/// paths made absolute so they resolve from the folder:
+/// [`LoadedScenario::standalone`]), `blast_inputs.json` (what
+/// `surveyor plan-blast` reads) and the blast plan (`blast_plan.json`,
+/// `blast_plan.csv`) when the run made discs. Returns the plan.
+pub fn write_run(
+    outcome: &ExploreOutcome,
+    staging: &Staging,
+) -> Result<Option<BlastPlan>, SimError> {
+    outcome.run.write(staging, outcome.coverage_summary())?;
+    staging.write(
+        record::folder::SCENARIO_TOML,
+        outcome.loaded.standalone().to_toml()?,
+    )?;
+    staging.write(
+        record::blast::BLAST_INPUTS_JSON,
+        outcome.blast_inputs()?.to_file().to_json()?,
+    )?;
+    // The maintenance plan over the map (Paul App. A): a nozzle pose for
+    // every disc in A2 that has one, each segment's targets ordered by the GA.
+    let plan = outcome.blast_plan(&BlastConfig::default())?;
+    if let Some(plan) = &plan {
+        staging.write(record::blast::BLAST_PLAN_JSON, plan.to_json()?)?;
+        staging.write(record::blast::BLAST_PLAN_CSV, plan.csv())?;
+    }
+    Ok(plan)
+}
+
+/// Files that mark another command's run folder.
+const FOLLOW_FILES: [&str; 2] = [
+    record::follow::STEPS_CSV,
+    record::follow::SURFACE_MODEL_JSON,
+];
+
+/// The whole `surveyor explore` job: check the output folder (not a file,
+/// not a `surveyor follow` run, holding a checkpoint when resuming), run the
+/// exploration of `loaded` with its checkpoint in `out`, stage the run
+/// folder ([`write_run`]), let `finish` add files to the staged folder
+/// (the report), and move everything into place, `run.json` last.
+pub fn explore(
+    loaded: &LoadedScenario,
+    options: &ExploreOptions,
+    out: &Path,
+    progress: &mut dyn FnMut(&record::ViewpointRecord),
+    finish: &mut dyn FnMut(&Staging) -> Result<(), String>,
+) -> Result<(ExploreOutcome, Option<BlastPlan>), SimError> {
+    let bad_out = |message: String| SimError::InvalidArgument {
+        what: out.display().to_string(),
+        message,
+    };
+    record::output::check_out_dir(out)?;
+    for foreign in FOLLOW_FILES {
+        if out.join(foreign).exists() {
+            return Err(bad_out(format!(
+                "holds a `surveyor follow` run ({foreign}); give another --out"
+            )));
+        }
+    }
+    let checkpoint = out.join(record::checkpoint::CHECKPOINT_JSON);
+    if options.resume && !checkpoint.is_file() {
+        return Err(bad_out(
+            "holds no checkpoint.json (no run to continue there; run without --resume)".into(),
+        ));
+    }
+    let options = ExploreOptions {
+        checkpoint: Some(checkpoint),
+        ..options.clone()
+    };
+    let sim = SimExplore::new(loaded, &options)?;
+    record::output::create_out_dir(out)?;
+    let outcome = sim.run(progress)?;
+    let staging = Staging::new(out)?;
+    let plan = write_run(&outcome, &staging)?;
+    finish(&staging).map_err(|message| SimError::InvalidArgument {
+        what: out.display().to_string(),
+        message,
+    })?;
+    staging.commit()?;
+    Ok((outcome, plan))
+}
+
+/// The blast plan of the `surveyor explore` run folder `dir` under `config`
+/// (what `surveyor plan-blast` makes): the robot, its placement and A2 from
+/// the folder's `scenario.toml`, the discs, segments, start joints and
+/// planning grid from its `blast_inputs.json`, both read through
+/// [`record::RunFolder`].
+pub fn plan_blast_run(dir: &Path, config: &BlastConfig) -> Result<BlastPlan, SimError> {
+    let needed = [
+        record::folder::SCENARIO_TOML,
+        record::blast::BLAST_INPUTS_JSON,
+    ];
+    if needed.iter().any(|n| !dir.join(n).is_file()) {
+        return Err(SimError::InvalidArgument {
+            what: dir.display().to_string(),
+            message: format!(
+                "expected {} and {} (with the rest of a run folder), as `surveyor explore --out DIR` writes them",
+                needed[0], needed[1]
+            ),
+        });
+    }
+    let folder = record::RunFolder::open(dir)?;
+    if folder.kind() != record::RunKind::Explore {
+        return Err(SimError::InvalidArgument {
+            what: dir.display().to_string(),
+            message: "not a `surveyor explore` run folder (it holds a `surveyor follow` run)"
+                .into(),
+        });
+    }
+    let scenario_path = folder.path(record::folder::SCENARIO_TOML);
+    let source = scenario_path.display().to_string();
+    let text = folder.scenario_toml()?.unwrap_or_default();
+    let loaded = LoadedScenario {
+        scenario: scenario::Scenario::from_toml(&text, &source)?,
+        base_dir: dir.to_owned(),
+    };
+    let Some(regions) = loaded.scenario.regions else {
+        return Err(SimError::InvalidArgument {
+            what: source,
+            message: "the scenario has no regions (A2 is where discs are blasted)".into(),
+        });
+    };
+    if loaded.scenario.name != folder.scenario() {
+        return Err(SimError::InvalidArgument {
+            what: source,
+            message: format!(
+                "the scenario is `{}`, but the run folder's run.json names `{}`: scenario.toml \
+                 belongs to another run",
+                loaded.scenario.name,
+                folder.scenario()
+            ),
+        });
+    }
+    let robot = loaded.build_robot()?;
+    let file = folder.blast_inputs::<map::Disc, map::OccupancyConfig>()?;
+    let inputs_path = folder.path(record::blast::BLAST_INPUTS_JSON);
+    let mismatch = |message: String| SimError::InvalidArgument {
+        what: inputs_path.display().to_string(),
+        message,
+    };
+    if file.grid.config.regions != regions {
+        return Err(mismatch(format!(
+            "its planning grid covers other regions than {source}'s: the two files belong to \
+             different runs"
+        )));
+    }
+    if let Some(q) = file.start_joints.iter().find(|q| q.len() != robot.dof()) {
+        return Err(mismatch(format!(
+            "a start pose of {} joints for {source}'s robot `{}` of {}: the two files belong \
+             to different runs",
+            q.len(),
+            robot.name,
+            robot.dof()
+        )));
+    }
+    let inputs = BlastInputs::from_file(
+        file,
+        &folder
+            .path(record::blast::BLAST_INPUTS_JSON)
+            .display()
+            .to_string(),
+    )?;
+    Ok(blast::plan_blast(
+        &inputs,
+        &robot,
+        loaded.scenario.world_from_base(),
+        &regions.a2,
+        config,
+    )?)
+}

@@ -1,0 +1,13 @@
+//! The sim crate's integration tests, one binary (a module per topic) so a test build links few executables.
+
+mod bounds;
+mod bridge_scan;
+mod follow_rig;
+mod follow_run;
+mod fuzz;
+mod mosd_follow;
+mod mosd_scenario;
+mod real_data;
+mod scan_check;
+mod surface_score;
+mod ur5_cube;

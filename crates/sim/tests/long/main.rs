@@ -1,0 +1,4 @@
+//! The sim crate's long tests (run in release by `.ci/run`), one binary (a module per topic) so a test build links few executables.
+
+mod explore_stage_one;
+mod follow_complete;

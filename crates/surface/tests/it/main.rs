@@ -1,0 +1,11 @@
+//! The surface crate's integration tests, one binary (a module per topic) so a test build links few executables.
+
+mod api;
+mod figures;
+mod follower_sets;
+mod fuzz;
+mod proptests;
+mod real_data;
+#[path = "../support/mod.rs"]
+mod support;
+mod sweeps;
