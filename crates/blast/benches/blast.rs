@@ -1,6 +1,6 @@
 //! Issue 11, acceptance 2: `plan-blast` for one segment of 500 discs in
 //! ≤ 2 s (Paul's system needed minutes). The workload is
-//! [`sim::blast::plan_blast_inputs`], what `surveyor plan-blast` runs: a
+//! [`blast::plan_blast`], what `surveyor plan-blast` runs: a
 //! nozzle pose for every disc (App. A.1) and the segment's order by nearest
 //! neighbour, 2-opt and the GA (App. A.2).
 //!
@@ -11,10 +11,10 @@
 //! pointing up at the roof).
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
+use blast::{BlastConfig, BlastInputs, plan_blast};
 use criterion::{Criterion, criterion_group, criterion_main};
 use geom::{Isometry3, Point3, Real, UnitVector3, Vector3};
 use map::{OccupancyConfig, OccupancyGrid, RegionBox, RegionsConfig, VoxelKey};
-use sim::blast::{BlastConfig, BlastInputs, plan_blast_inputs};
 use std::hint::black_box;
 
 fn roof_segment() -> BlastInputs {
@@ -62,12 +62,15 @@ fn roof_segment() -> BlastInputs {
         .iter()
         .map(|d: &Real| d.to_radians())
         .collect();
-    BlastInputs {
-        start_joints: vec![start; discs.len()],
-        segments: vec![(0..discs.len()).map(map::DiscId).collect()],
+    let n = discs.len();
+    BlastInputs::new(
         discs,
+        vec![start; n],
+        vec![(0..n).map(map::DiscId).collect()],
         grid,
-    }
+        "roof segment",
+    )
+    .unwrap()
 }
 
 fn bench(c: &mut Criterion) {
@@ -78,7 +81,7 @@ fn bench(c: &mut Criterion) {
         max: [2.0, 2.0, 3.0],
     };
     let config = BlastConfig::default();
-    let plan = plan_blast_inputs(&inputs, &robot, Isometry3::identity(), &a2, &config).unwrap();
+    let plan = plan_blast(&inputs, &robot, Isometry3::identity(), &a2, &config).unwrap();
     let s = &plan.segments[0];
     eprintln!(
         "roof segment: {} of {} discs with a pose; path cost nearest neighbour {:.2}, 2-opt {:.2}, GA {:.2}",
@@ -93,7 +96,7 @@ fn bench(c: &mut Criterion) {
     group.bench_function("plan_blast_500_discs", |b| {
         b.iter(|| {
             black_box(
-                plan_blast_inputs(
+                plan_blast(
                     black_box(&inputs),
                     &robot,
                     Isometry3::identity(),

@@ -3,9 +3,9 @@
 //! planned in ≤ 2 s, poses included).
 #![allow(clippy::unwrap_used)] // benchmark setup may panic
 
+use blast::sequence::{GaConfig, Targets, Weights, genetic, nearest_neighbour, two_opt};
 use criterion::{Criterion, criterion_group, criterion_main};
 use geom::{Point3, Real};
-use plan::sequence::{GaConfig, Targets, Weights, genetic, nearest_neighbour, two_opt};
 use rand::{RngExt, SeedableRng};
 use std::hint::black_box;
 

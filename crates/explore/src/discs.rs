@@ -18,8 +18,8 @@ pub struct DiscMap {
     pub discs: Vec<map::Disc>,
     /// Per disc: the viewpoint (index into `viewpoints`) that saw it.
     pub viewpoint: Vec<usize>,
-    /// Per disc: its segment (index into `segments`).
-    pub segment: Vec<usize>,
+    /// Per disc: its segment (into `segments`).
+    pub segment: Vec<map::SegmentId>,
     /// The segments: disc indices, ascending.
     pub segments: Vec<Vec<map::DiscId>>,
     /// Per disc: the material of the nearest true surface (index into the
@@ -84,7 +84,7 @@ impl DiscMap {
                     points: d.points,
                 })
                 .collect(),
-            segment: self.segment.clone(),
+            segment: self.segment.iter().map(|s| s.0).collect(),
             viewpoint: self.viewpoint.clone(),
             true_material: self.true_material.clone(),
             material_names: self.material_names.clone(),
@@ -109,11 +109,9 @@ impl DiscMap {
 /// `cloud`, and segmented with those viewpoints' joints as the pose graph.
 pub(crate) fn disc_map(
     mesh: &TriMesh,
-    cloud: &[SweepPoint],
-    cloud_viewpoint: &[usize],
+    (cloud, cloud_viewpoint): (&[SweepPoint], &[usize]),
     viewpoints: &[ViewpointRecord],
-    materials: &[scene::Material],
-    judge: &dyn Judge,
+    (materials, judge): (&[scene::Material], &dyn Judge),
     mapping: &MappingConfig,
     seed: u64,
 ) -> Result<DiscMap, ExploreError> {
@@ -158,10 +156,10 @@ pub(crate) fn disc_map(
         dof6.then_some(poses.as_slice()),
         &mapping.segment,
     )?;
-    let mut segment = vec![0; sld.discs.len()];
+    let mut segment = vec![map::SegmentId(0); sld.discs.len()];
     for (s, members) in segments.iter().enumerate() {
         for d in members {
-            segment[d.0] = s;
+            segment[d.0] = map::SegmentId(s);
         }
     }
     let true_material = sld

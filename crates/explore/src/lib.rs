@@ -1,18 +1,6 @@
-//! AXBAM two-stage exploration (SPEC §3.8; Paul ch. 3, 4, 6).
+#![doc = include_str!("../README.md")]
 //!
-//! Stage One ([`StageOne`], A§3.2): every sampled C-space node is a contending
-//! viewpoint; its tilt sweep's information is predicted by casting rays
-//! through the planning grid, and the objectives f1 (geometric information
-//! remaining, eq. 4.11), f2 (C-space information remaining, eq. 4.14), f3
-//! (joint travel, eq. 3.3) and f4 (`dist(Q)`, eq. 3.5) choose the next
-//! viewpoint on the Pareto front (eq. 3.8); A* through the roadmap reaches it
-//! through known free space; Stage One stops by the 1 % rule (A§3.2.4).
-//! Stage Two (A§3.3) aims the scanner at the discs whose material is least
-//! certain and identifies them with the LRC.
-//!
-//! [`run()`] is the episode over any hardware that implements the `hw`
-//! traits, from a [`Setup`], judged by a [`Judge`] when there is a ground
-//! truth; [`ExploreRun::write`] stages its run folder.
+//! # Map of the crate
 //!
 //! | module | entry points |
 //! |---|---|

@@ -149,11 +149,9 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
     let mesh = episode.tsdf.extract_mesh();
     let mut discs = disc_map(
         &mesh,
-        &episode.cloud,
-        &episode.cloud_viewpoint,
+        (&episode.cloud, &episode.cloud_viewpoint),
         &episode.viewpoints,
-        &episode.setup.materials,
-        &*episode.judge,
+        (&episode.setup.materials, &*episode.judge),
         &episode.setup.config.mapping,
         options.seed,
     )?;
@@ -512,6 +510,33 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         }
     }
 
+    /// Stage One's record of viewpoint `k` just taken, with the choice that
+    /// led there (none at the start).
+    fn stage_one_record(
+        &self,
+        k: usize,
+        taken: &Taken,
+        pending: Option<Pending>,
+    ) -> ViewpointRecord {
+        let mut record = self.record(k, 1, taken);
+        if let Some(p) = pending {
+            let c = &p.choice;
+            record.f = Some(c.candidate.f);
+            record.predicted_h1_weighted = Some(c.candidate.f[0]);
+            record.predicted_revealed = c.candidate.revealed;
+            record.candidates = p.scored.len();
+            record.front = p.front;
+            record.unreachable = p.unreachable;
+            record.joint_travel = c.path.joint_travel();
+            record.waypoints = c.path.waypoints.len();
+            record.path.clone_from(&c.path.waypoints);
+            record.scored = p.scored;
+            record.decision_ms = p.decision_ms;
+            record.plan_ms = p.plan_ms;
+        }
+        record
+    }
+
     /// Put the arm where a replayed viewpoint stood.
     fn stand_at(&mut self, r: &ViewpointRecord) -> Result<(), ExploreError> {
         self.hw.move_to(&r.joints)?;
@@ -539,27 +564,10 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             let (sweep, taken) = self.take_viewpoint(k, replayed.is_some(), None)?;
             self.sweeps.push(sweep);
             let was_replayed = replayed.is_some();
-            let record = match replayed {
-                Some(r) => r,
-                None => {
-                    let mut record = self.record(k, 1, &taken);
-                    if let Some(p) = pending.take() {
-                        let c = &p.choice;
-                        record.f = Some(c.candidate.f);
-                        record.predicted_h1_weighted = Some(c.candidate.f[0]);
-                        record.predicted_revealed = c.candidate.revealed;
-                        record.candidates = p.scored.len();
-                        record.front = p.front;
-                        record.unreachable = p.unreachable;
-                        record.joint_travel = c.path.joint_travel();
-                        record.waypoints = c.path.waypoints.len();
-                        record.path.clone_from(&c.path.waypoints);
-                        record.scored = p.scored;
-                        record.decision_ms = p.decision_ms;
-                        record.plan_ms = p.plan_ms;
-                    }
-                    record
-                }
+            let record = if let Some(r) = replayed {
+                r
+            } else {
+                self.stage_one_record(k, &taken, pending.take())
             };
             progress(&record);
             self.viewpoints.push(record);
@@ -634,26 +642,23 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             // A replayed viewpoint: the arm is put where it stood (its
             // record and audit come from the checkpoint).
             let replayed = replay.pop_front();
-            let aim = match &replayed {
-                Some(r) => {
-                    self.stand_at(r)?;
-                    None
-                }
-                None => {
-                    let t = Instant::now();
-                    let found = aimer.choose(self, m, discs, &mut tried, k)?;
-                    let decision_ms = self.timed(t);
-                    let Some((target, path, ranked)) = found else {
-                        return Ok("no_targetable_disc");
-                    };
-                    self.move_along(k, &path.waypoints)?;
-                    Some(Aim {
-                        target,
-                        path,
-                        decision_ms,
-                        ranked,
-                    })
-                }
+            let aim = if let Some(r) = &replayed {
+                self.stand_at(r)?;
+                None
+            } else {
+                let t = Instant::now();
+                let found = aimer.choose(self, m, discs, &mut tried, k)?;
+                let decision_ms = self.timed(t);
+                let Some((target, path, ranked)) = found else {
+                    return Ok("no_targetable_disc");
+                };
+                self.move_along(k, &path.waypoints)?;
+                Some(Aim {
+                    target,
+                    path,
+                    decision_ms,
+                    ranked,
+                })
             };
             let (_, taken) = self.take_viewpoint(k, replayed.is_some(), Some((m, discs)))?;
             let record = match (replayed, aim) {

@@ -14,7 +14,7 @@ use crate::pareto::{self, Sense};
 use crate::{ExploreConfig, ExploreError};
 use geom::{Isometry3, Point3, Real, UnitVector3};
 use map::{IntegrationStats, OccupancyConfig, OccupancyGrid, VoxelKey};
-use plan::{CspaceModel, Path, Safety, interfering_voxels};
+use plan::{CspaceModel, NodeId, Path, Safety, interfering_voxels};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -36,9 +36,9 @@ const SAME_POSE_RAD: Real = 1e-9;
 /// One contending viewpoint's scores.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Candidate {
-    /// Roadmap node index, or `None` for a candidate sampled around the
+    /// The roadmap node, or `None` for a candidate sampled around the
     /// current pose.
-    pub node: Option<usize>,
+    pub node: Option<NodeId>,
     /// The pose.
     pub q: Vec<Real>,
     /// `[f1, f2, f3, f4]`: weighted geometric information predicted to remain,
@@ -371,12 +371,11 @@ impl StageOne {
     /// `m` joints (`m` uniform in 1..=dof, the joints drawn at random), each
     /// uniformly by up to `local_reach_m / wᵢ`, clamped to its limits; seeded
     /// by the plan seed and the number of sweeps so far.
-    pub fn contenders(&self, q: &[Real]) -> Vec<(Option<usize>, Vec<Real>)> {
+    pub fn contenders(&self, q: &[Real]) -> Vec<(Option<NodeId>, Vec<Real>)> {
         let map = self.model.roadmap();
-        let mut out: Vec<(Option<usize>, Vec<Real>)> = map
-            .nodes()
-            .enumerate()
-            .map(|(i, n)| (Some(i), n.to_vec()))
+        let mut out: Vec<(Option<NodeId>, Vec<Real>)> = map
+            .node_ids()
+            .map(|i| (Some(i), map.node(i).to_vec()))
             .collect();
         let seed = self.config.plan.seed
             ^ 0x9e37_79b9_7f4a_7c15_u64.wrapping_mul(self.sweeps() as u64 + 1);

@@ -17,6 +17,10 @@ use follow::{FollowConfig, Mode};
 use geom::Real;
 use std::collections::BTreeMap;
 
+#[allow(
+    clippy::too_many_lines,
+    reason = "a development aid's one loop with its optional printouts, each a few lines"
+)]
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let scene_name = args.get(1).map_or("cube", String::as_str);

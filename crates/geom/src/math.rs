@@ -62,6 +62,29 @@ pub fn any_perpendicular(n: &UnitVector3) -> UnitVector3 {
     UnitVector3::new_normalize(c)
 }
 
+/// Two unit vectors `(u, v)` spanning the plane normal to the unit `n`,
+/// `(u, v, n)` right-handed: `u = n × x̂` normalised (`n × ŷ` when `n` is
+/// within about 26° of the x axis), `v = n × u`. Unlike
+/// [`crate::PlaneFrame::new`] (the least-aligned axis), the helper axis
+/// changes at one fixed cone; the report's drawings use it.
+///
+/// ```
+/// use geom::Vector3;
+/// let n = Vector3::new(0.0, 0.6, 0.8);
+/// let (u, v) = geom::math::basis_from_normal(&n);
+/// assert!(u.dot(&n).abs() < 1e-12 && v.dot(&n).abs() < 1e-12 && u.dot(&v).abs() < 1e-12);
+/// assert!((u.cross(&v) - n).norm() < 1e-12);
+/// ```
+pub fn basis_from_normal(n: &Vector3) -> (Vector3, Vector3) {
+    let helper = if n.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let u = unit(n.cross(&helper)).map_or_else(Vector3::x, UnitVector3::into_inner);
+    (u, n.cross(&u))
+}
+
 /// `true` when every coordinate of `p` is finite.
 #[inline]
 pub fn is_finite_point(p: &Point3) -> bool {

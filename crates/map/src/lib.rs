@@ -16,7 +16,7 @@
 //! | [`pipeline`] | [`Mapper`], [`build_from_scans`], [`MapConfig`]: `surveyor map` |
 //! | [`sld`] | [`generate_discs`], [`SldConfig`], [`Disc`]: Scale-Like Discs (A§5.2) |
 //! | [`sld_io`] | disc CSV files, [`sld_io::load_points`]: the clouds discs are made from |
-//! | [`segment`] | [`segment_discs`], [`SegmentConfig`]: map segmentation (A§5.3, Algorithm 1) |
+//! | [`segment`] | [`segment_discs`], [`SegmentConfig`], [`SegmentId`]: map segmentation (A§5.3, Algorithm 1) |
 //! | [`segment_io`] | `SEGMENTS.json` and `POSES.csv` files |
 //! | [`material`] | [`MaterialBelief`], [`MaterialConfig`]: per-voxel material belief, H3 (A§4.4) |
 
@@ -46,7 +46,7 @@ pub use occupancy::{
 };
 pub use pipeline::{MapConfig, MapOutputs, Mapper, SweepSummary, build_from_scans};
 pub use regions::{Region, RegionBox, RegionsConfig};
-pub use segment::{SegmentConfig, segment_discs};
+pub use segment::{SegmentConfig, SegmentId, segment_discs};
 pub use sld::{Disc, DiscId, Orientation, SldConfig, SldResult, generate_discs};
 pub use stats::{OccupancyReport, RegionReport};
 pub use sweep::range_jumps;

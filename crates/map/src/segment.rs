@@ -374,6 +374,24 @@ fn components_of(uf: &mut UnionFind, n: usize) -> Vec<Vec<usize>> {
     out
 }
 
+/// A map segment: its position in the segments [`segment_discs`] returns
+/// (ordered by their smallest disc).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    PartialOrd,
+    Ord,
+    Hash,
+    serde::Serialize,
+    serde::Deserialize,
+)]
+#[serde(transparent)]
+pub struct SegmentId(pub usize);
+
 /// Segment the map: the connected components of `B = δθB ∧ δdB ∧ δpB ∧ δqB ∧
 /// ¬I` (Paul eq. 5.18, Algorithm 1). `poses`, when given, holds one joint
 /// pose per disc and enables `δqB`. Returns the segments as lists of disc

@@ -888,8 +888,8 @@ impl<'a> PoseSelector<'a> {
     fn residuals(&self, x: &[Real], target: &Target, view: &ViewGeometry, dist: Real) -> Residuals {
         let g = self.costs(x, view, dist);
         let r = |i: usize| g[i] - self.config.desired[i];
-        let e1 = geom::math::any_perpendicular(&target.normal).into_inner();
-        let e2 = target.normal.cross(&e1);
+        let frame = geom::PlaneFrame::new(target.centre, target.normal);
+        let (e1, e2) = (frame.u.into_inner(), frame.v.into_inner());
         let (u1, u2) = match view.hit {
             Some(h) if h.rho_m > 0.0 => {
                 let v = (h.point - target.centre) / h.rho_m;
@@ -1007,12 +1007,12 @@ impl<'a> PoseSelector<'a> {
     /// `φ_max/2`, the turns measured from the direction toward the shoulder.
     fn aim_rays(&self, target: &Target, shoulder: &Point3) -> Vec<Vector3> {
         let n = target.normal.into_inner();
-        let toward = shoulder - target.centre;
-        let in_plane = toward - n * n.dot(&toward);
-        let u = geom::unit(in_plane)
-            .unwrap_or_else(|| geom::math::any_perpendicular(&target.normal))
-            .into_inner();
-        let w = n.cross(&u);
+        let frame = geom::PlaneFrame::with_u_axis(
+            target.centre,
+            target.normal,
+            &(shoulder - target.centre),
+        );
+        let (u, w) = (frame.u.into_inner(), frame.v.into_inner());
         let beta = 0.5 * self.config.phi_max_deg.to_radians();
         std::iter::once(-n)
             .chain(AIM_TURNS_DEG.iter().map(|psi| {

@@ -82,13 +82,37 @@ impl<C: MotionChecker> MotionChecker for MemoChecker<C> {
     }
 }
 
-/// One roadmap edge: node indices `a < b` and the joint-weighted distance.
+/// A roadmap node: its index in the roadmap's node order (stored as a bare
+/// number, so the cache file holds plain indices).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct NodeId(pub u32);
+
+impl NodeId {
+    /// The node's position in the roadmap's node order.
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+
+    fn of(i: usize) -> Self {
+        // A roadmap holds at most `PlanConfig`'s n_Q ceiling of nodes.
+        Self(u32::try_from(i).unwrap_or(u32::MAX))
+    }
+}
+
+impl std::fmt::Display for NodeId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+/// One roadmap edge: nodes `a < b` and the joint-weighted distance.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Edge {
-    /// Lower node index.
-    pub a: u32,
-    /// Higher node index.
-    pub b: u32,
+    /// Lower node.
+    pub a: NodeId,
+    /// Higher node.
+    pub b: NodeId,
     /// Joint-weighted distance between the two nodes.
     pub cost: Real,
 }
@@ -100,7 +124,7 @@ pub struct Path {
     /// The configurations passed, start first, goal last.
     pub waypoints: Vec<Vec<Real>>,
     /// Roadmap nodes used, in order (empty for a direct motion).
-    pub nodes: Vec<usize>,
+    pub nodes: Vec<NodeId>,
     /// Joint-weighted length.
     pub cost: Real,
 }
@@ -191,7 +215,7 @@ impl Roadmap {
         let n = nodes.len();
         if let Some(e) = edges
             .iter()
-            .find(|e| e.a >= e.b || e.b as usize >= n || !(e.cost.is_finite() && e.cost >= 0.0))
+            .find(|e| e.a >= e.b || e.b.index() >= n || !(e.cost.is_finite() && e.cost >= 0.0))
         {
             return Err(format!(
                 "edge {}–{}: expected a < b < {n} and a finite cost",
@@ -219,8 +243,8 @@ impl Roadmap {
         }
         for e in &edges {
             graph.add_edge(
-                NodeIndex::new(e.a as usize),
-                NodeIndex::new(e.b as usize),
+                NodeIndex::new(e.a.index()),
+                NodeIndex::new(e.b.index()),
                 e.cost,
             );
         }
@@ -248,9 +272,15 @@ impl Roadmap {
         self.dof
     }
 
-    /// The configuration of node `i`.
-    pub fn node(&self, i: usize) -> &[Real] {
+    /// The configuration of node `id` (of this roadmap).
+    pub fn node(&self, id: NodeId) -> &[Real] {
+        let i = id.index();
         &self.nodes[i * self.dof..(i + 1) * self.dof]
+    }
+
+    /// Every node, in index order.
+    pub fn node_ids(&self) -> impl ExactSizeIterator<Item = NodeId> + use<> {
+        (0..self.len()).map(NodeId::of)
     }
 
     /// Every node's configuration, in index order.
@@ -274,11 +304,11 @@ impl Roadmap {
     }
 
     /// The `k` nodes nearest to `q` (ties by index), nearest first.
-    pub fn nearest(&self, q: &[Real], k: usize) -> Vec<(usize, Real)> {
-        let mut all: Vec<(usize, Real)> = self
+    pub fn nearest(&self, q: &[Real], k: usize) -> Vec<(NodeId, Real)> {
+        let mut all: Vec<(NodeId, Real)> = self
             .nodes()
             .enumerate()
-            .map(|(i, n)| (i, self.distance(q, n)))
+            .map(|(i, n)| (NodeId::of(i), self.distance(q, n)))
             .collect();
         let k = k.min(all.len());
         if k == 0 {
@@ -325,14 +355,14 @@ impl Roadmap {
         let start = graph.add_node(());
         let goal = graph.add_node(());
         for (i, d) in self.nearest(from, link_k) {
-            graph.add_edge(start, NodeIndex::new(i), d);
+            graph.add_edge(start, NodeIndex::new(i.index()), d);
         }
         for (i, d) in self.nearest(to, link_k) {
-            graph.add_edge(goal, NodeIndex::new(i), d);
+            graph.add_edge(goal, NodeIndex::new(i.index()), d);
         }
         let config = |v: NodeIndex| -> &[Real] {
             match v.index() {
-                i if i < n => self.node(i),
+                i if i < n => self.node(NodeId::of(i)),
                 i if i == n => from,
                 _ => to,
             }
@@ -362,7 +392,12 @@ impl Roadmap {
         }
         Some(Path {
             waypoints: route.iter().map(|&v| config(v).to_vec()).collect(),
-            nodes: route.iter().map(|v| v.index()).filter(|&i| i < n).collect(),
+            nodes: route
+                .iter()
+                .map(|v| v.index())
+                .filter(|&i| i < n)
+                .map(NodeId::of)
+                .collect(),
             cost: total,
         })
     }
@@ -541,8 +576,8 @@ fn connect(nodes: &[Real], weights: &[Real], k: usize) -> Vec<Edge> {
             }
             d.truncate(k);
             d.into_iter().map(move |(j, cost)| Edge {
-                a: i.min(j) as u32,
-                b: i.max(j) as u32,
+                a: NodeId::of(i.min(j)),
+                b: NodeId::of(i.max(j)),
                 cost,
             })
         })
@@ -565,8 +600,8 @@ fn connect(nodes: &[Real], weights: &[Real], k: usize) -> Vec<Edge> {
             in_tree[v] = true;
             let (cost, u) = best[v];
             edges.push(Edge {
-                a: u.min(v) as u32,
-                b: u.max(v) as u32,
+                a: NodeId::of(u.min(v)),
+                b: NodeId::of(u.max(v)),
                 cost,
             });
             for j in 0..n {
@@ -761,18 +796,18 @@ mod tests {
         let nodes = vec![vec![0.0], vec![1.0], vec![2.0], vec![3.0]];
         let edges = vec![
             Edge {
-                a: 0,
-                b: 1,
+                a: NodeId(0),
+                b: NodeId(1),
                 cost: 1.0,
             },
             Edge {
-                a: 1,
-                b: 2,
+                a: NodeId(1),
+                b: NodeId(2),
                 cost: 1.0,
             },
             Edge {
-                a: 2,
-                b: 3,
+                a: NodeId(2),
+                b: NodeId(3),
                 cost: 1.0,
             },
         ];
@@ -813,8 +848,8 @@ mod tests {
             row[i] = 0.0;
         }
         for e in &edges {
-            d[e.a as usize][e.b as usize] = e.cost;
-            d[e.b as usize][e.a as usize] = e.cost;
+            d[e.a.index()][e.b.index()] = e.cost;
+            d[e.b.index()][e.a.index()] = e.cost;
         }
         for k in 0..n {
             for i in 0..n {
@@ -842,7 +877,7 @@ mod tests {
                     let u = edges
                         .iter()
                         .filter_map(|e| {
-                            let (x, y) = (e.a as usize, e.b as usize);
+                            let (x, y) = (e.a.index(), e.b.index());
                             let u = if x == v {
                                 y
                             } else if y == v {
@@ -884,8 +919,8 @@ mod tests {
             nodes: vec![vec![0.0], vec![1.0]],
             weights: vec![1.0],
             edges: vec![Edge {
-                a: 1,
-                b: 5,
+                a: NodeId(1),
+                b: NodeId(5),
                 cost: 1.0,
             }],
         };

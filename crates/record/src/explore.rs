@@ -169,7 +169,7 @@ impl ExploreCoverage {
     /// The coverage of A1, A2, A3 from their reports, and per region the
     /// observable samples and the covered ones among them (`None` when not
     /// measured).
-    pub fn new(reports: [CoverageReport; 3], observable: &[(usize, usize)]) -> Self {
+    pub fn new(reports: &[CoverageReport; 3], observable: &[(usize, usize)]) -> Self {
         let share = |k: usize| {
             observable.get(k).map(|(n, c)| {
                 if *n == 0 {
@@ -179,7 +179,7 @@ impl ExploreCoverage {
                 }
             })
         };
-        let [a1, a2, a3] = &reports;
+        let [a1, a2, a3] = reports;
         Self {
             a1: a1.fraction(),
             a2: a2.fraction(),

@@ -45,6 +45,11 @@ impl Table {
         self.rows.len()
     }
 
+    /// Number of columns.
+    pub fn width(&self) -> usize {
+        self.header.len()
+    }
+
     /// No records.
     pub fn is_empty(&self) -> bool {
         self.rows.is_empty()

@@ -199,7 +199,9 @@ pub fn path_csv(viewpoints: &[ViewpointRecord]) -> String {
 /// The joint columns `q1..q{dof}` of `table`, each required, as one vector
 /// per row; `dof` is the number of `q` columns in the header.
 pub fn joint_columns(table: &Table) -> Result<Vec<Vec<Real>>, RecordError> {
-    let dof = (1..).take_while(|j| table.has(&format!("q{j}"))).count();
+    let dof = (1..=table.width())
+        .take_while(|j| table.has(&format!("q{j}")))
+        .count();
     let columns = (1..=dof)
         .map(|j| table.numbers(&format!("q{j}")))
         .collect::<Result<Vec<_>, _>>()?;

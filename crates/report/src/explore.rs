@@ -465,9 +465,17 @@ fn blast_traces(plan: &BlastPlan<serde_json::Value>, traces: &mut Vec<Box<dyn Tr
     );
 }
 
+/// The plots of the run's series: Figs 6.6, 6.12 and 4.10, coverage and
+/// effort, times.
 fn information_plots(page: &mut Page, vp: &[ViewpointRecord]) {
-    let k: Vec<usize> = vp.iter().map(|r| r.k).collect();
-    // Fig. 6.6: the objectives of every candidate per decision.
+    candidate_plots(page, vp);
+    information_plot(page, vp);
+    prediction_plot(page, vp);
+    effort_plots(page, vp);
+}
+
+/// Fig. 6.6: the objectives of every candidate per Stage One decision.
+fn candidate_plots(page: &mut Page, vp: &[ViewpointRecord]) {
     page.heading("Objectives of the candidates, per Stage One decision (Paul Fig. 6.6)");
     {
         let mut ck = Vec::new();
@@ -521,8 +529,11 @@ fn information_plots(page: &mut Page, vp: &[ViewpointRecord]) {
             );
         }
     }
+}
 
-    // Fig. 6.12: information remaining over viewpoints, each relative to its first value.
+/// Fig. 6.12: information remaining over viewpoints, each relative to its first value.
+fn information_plot(page: &mut Page, vp: &[ViewpointRecord]) {
+    let k: Vec<usize> = vp.iter().map(|r| r.k).collect();
     page.heading("Information remaining over viewpoints (Paul Fig. 6.12)");
     let mut traces: Vec<Box<dyn Trace>> = Vec::new();
     let series: [(&[Option<Real>], &str); 3] = [
@@ -567,8 +578,11 @@ fn information_plots(page: &mut Page, vp: &[ViewpointRecord]) {
         400,
         "xy",
     );
+}
 
-    // Fig. 4.10: predicted against obtained.
+/// Fig. 4.10: the information predicted to remain against what remained.
+fn prediction_plot(page: &mut Page, vp: &[ViewpointRecord]) {
+    let k: Vec<usize> = vp.iter().map(|r| r.k).collect();
     page.heading("Predicted and obtained information (Paul Fig. 4.10)");
     let predicted: Vec<Option<Real>> = vp.iter().map(|r| r.predicted_h1_weighted).collect();
     let actual: Vec<Real> = vp.iter().map(|r| r.h1_weighted).collect();
@@ -598,7 +612,11 @@ fn information_plots(page: &mut Page, vp: &[ViewpointRecord]) {
         400,
         "xy",
     );
+}
 
+/// Coverage of A1, joint travel and the times per viewpoint.
+fn effort_plots(page: &mut Page, vp: &[ViewpointRecord]) {
+    let k: Vec<usize> = vp.iter().map(|r| r.k).collect();
     page.heading("Coverage and effort");
     let cov: Vec<Option<Real>> = vp.iter().map(|r| r.coverage_a1).collect();
     let (xc, yc): (Vec<usize>, Vec<Real>) = k
@@ -630,7 +648,7 @@ fn information_plots(page: &mut Page, vp: &[ViewpointRecord]) {
     page.plot("coverage", &plot_of(traces, layout), 400, "xy");
 
     let mut traces: Vec<Box<dyn Trace>> = Vec::new();
-    let times: [(fn(&ViewpointRecord) -> Real, &str); 4] = [
+    let times: [Series; 4] = [
         (|r| r.decision_ms, "decision"),
         (|r| r.plan_ms, "of it, choice and path planning"),
         (|r| r.sweep_ms, "sweep"),
@@ -642,3 +660,6 @@ fn information_plots(page: &mut Page, vp: &[ViewpointRecord]) {
     let layout = xy_layout("Time per viewpoint", "viewpoint k", "ms").bar_mode(BarMode::Group);
     page.plot("timings", &plot_of(traces, layout), 400, "xy");
 }
+
+/// A per-viewpoint series of the time plots and its label.
+type Series = (fn(&ViewpointRecord) -> Real, &'static str);

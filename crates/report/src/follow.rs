@@ -112,6 +112,57 @@ enum Initial {
     Omit,
 }
 
+/// The shared edges (thick) and corner vertices (diamonds) of a model;
+/// with [`Initial::Omit`], only those between non-initial segments.
+fn relation_traces(model: &ModelJson, initial: Initial, legend: bool) -> Vec<Box<dyn Trace>> {
+    let mut traces: Vec<Box<dyn Trace>> = Vec::new();
+    let non_initial = |id: u32| {
+        model.segments.iter().any(|s| match s {
+            SegmentJson::Polygon {
+                id: i, initial: x, ..
+            } => *i == id && !*x,
+            SegmentJson::Point { .. } => false,
+        })
+    };
+    let (shared, corners) = shared_edges_and_corners(model);
+    let mut shared_lines = Polylines::default();
+    let mut drawn = 0usize;
+    for e in &shared {
+        if initial == Initial::Omit && !(non_initial(e.segment) && non_initial(e.neighbour)) {
+            continue;
+        }
+        shared_lines.push(&e.ends);
+        drawn += 1;
+    }
+    if !shared_lines.is_empty() {
+        let [x, y, z] = shared_lines.xyz;
+        traces.push(
+            Scatter3D::new(x, y, z)
+                .mode(Mode::Lines)
+                .name(format!("shared edges ({} pairs)", drawn / 2))
+                .connect_gaps(false)
+                .show_legend(legend)
+                .line(Line::new().color(SHARED_COLOUR).width(7.0)),
+        );
+    }
+    if !corners.is_empty() {
+        let [x, y, z] = columns(&corners);
+        traces.push(
+            Scatter3D::new(x, y, z)
+                .mode(Mode::Markers)
+                .name(format!("corner vertices ({})", corners.len()))
+                .show_legend(legend)
+                .marker(
+                    Marker::new()
+                        .size(5)
+                        .symbol(MarkerSymbol::Diamond)
+                        .color(CORNER_COLOUR),
+                ),
+        );
+    }
+    traces
+}
+
 /// The traces of a model: polygons (one colour per segment), their
 /// outlines, shared edges, corner vertices and point segments; `legend`
 /// shows their legend entries.
@@ -221,50 +272,7 @@ fn model_traces(model: &ModelJson, initial: Initial, legend: bool) -> Vec<Box<dy
                 .line(Line::new().color("#303030").width(2.0)),
         );
     }
-    let non_initial = |id: u32| {
-        model.segments.iter().any(|s| match s {
-            SegmentJson::Polygon {
-                id: i, initial: x, ..
-            } => *i == id && !*x,
-            SegmentJson::Point { .. } => false,
-        })
-    };
-    let (shared, corners) = shared_edges_and_corners(model);
-    let mut shared_lines = Polylines::default();
-    let mut drawn = 0usize;
-    for e in &shared {
-        if initial == Initial::Omit && !(non_initial(e.segment) && non_initial(e.neighbour)) {
-            continue;
-        }
-        shared_lines.push(&e.ends);
-        drawn += 1;
-    }
-    if !shared_lines.is_empty() {
-        let [x, y, z] = shared_lines.xyz;
-        traces.push(
-            Scatter3D::new(x, y, z)
-                .mode(Mode::Lines)
-                .name(format!("shared edges ({} pairs)", drawn / 2))
-                .connect_gaps(false)
-                .show_legend(legend)
-                .line(Line::new().color(SHARED_COLOUR).width(7.0)),
-        );
-    }
-    if !corners.is_empty() {
-        let [x, y, z] = columns(&corners);
-        traces.push(
-            Scatter3D::new(x, y, z)
-                .mode(Mode::Markers)
-                .name(format!("corner vertices ({})", corners.len()))
-                .show_legend(legend)
-                .marker(
-                    Marker::new()
-                        .size(5)
-                        .symbol(MarkerSymbol::Diamond)
-                        .color(CORNER_COLOUR),
-                ),
-        );
-    }
+    traces.extend(relation_traces(model, initial, legend));
     if !points.is_empty() {
         let [x, y, z] = columns(&points);
         traces.push(
@@ -554,7 +562,7 @@ fn step_plots(page: &mut Page, steps: &[StepRow]) {
 
     page.heading("Step times");
     let mut traces: Vec<Box<dyn Trace>> = Vec::new();
-    let parts: [(fn(&record::StepTimes) -> Real, &str); 3] = [
+    let parts: [Part; 3] = [
         (|t| t.update_us, "surface model update"),
         (|t| t.direction_us, "direction (mode) choice"),
         (|t| t.kinematics_us, "actuator changes (kinematics)"),
@@ -621,6 +629,9 @@ fn step_plots(page: &mut Page, steps: &[StepRow]) {
     );
     page.plot("sensing", &plot_of(traces, layout), 400, "xy");
 }
+
+/// A part of a step's time and its label.
+type Part = (fn(&record::StepTimes) -> Real, &'static str);
 
 #[cfg(test)]
 mod tests {

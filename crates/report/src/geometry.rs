@@ -116,38 +116,17 @@ pub fn simplify(mesh: &TriMesh, max_triangles: usize) -> (TriMesh, Real) {
     }
 }
 
-/// Two unit vectors spanning the plane normal to `n`.
-pub fn plane_basis(n: &Vector3) -> (Vector3, Vector3) {
-    let helper = if n.x.abs() < 0.9 {
-        Vector3::x()
-    } else {
-        Vector3::y()
-    };
-    let u = geom::unit(n.cross(&helper)).map_or_else(Vector3::x, geom::UnitVector3::into_inner);
-    (u, n.cross(&u))
-}
-
-/// Twice the signed area of a 2-D polygon (positive when anticlockwise).
-pub fn signed_area_2x(poly: &[[Real; 2]]) -> Real {
-    let n = poly.len();
-    (0..n)
-        .map(|i| {
-            let (a, b) = (poly[i], poly[(i + 1) % n]);
-            a[0] * b[1] - b[0] * a[1]
-        })
-        .sum()
-}
+pub use geom::math::basis_from_normal as plane_basis;
 
 /// Triangles (indices into `poly`, anticlockwise) covering a simple 2-D
 /// polygon of either orientation: `geom`'s ear clipping on the polygon made
 /// anticlockwise.
 pub fn triangulate(poly: &[[Real; 2]]) -> Vec<[usize; 3]> {
     let n = poly.len();
-    let reversed = signed_area_2x(poly) < 0.0;
+    let flat: Vec<geom::Point2> = poly.iter().map(|p| geom::Point2::new(p[0], p[1])).collect();
+    let reversed = geom::polygon2::signed_area(&flat) < 0.0;
     let at = |k: usize| if reversed { n - 1 - k } else { k };
-    let pts: Vec<geom::Point2> = (0..n)
-        .map(|k| geom::Point2::new(poly[at(k)][0], poly[at(k)][1]))
-        .collect();
+    let pts: Vec<geom::Point2> = (0..n).map(|k| flat[at(k)]).collect();
     geom::primitives::triangulate(&pts)
         .into_iter()
         .map(|t| t.map(|k| at(k as usize)))
@@ -177,7 +156,8 @@ mod tests {
         tris.iter()
             .map(|t| {
                 let tri = [poly[t[0]], poly[t[1]], poly[t[2]]];
-                let a = signed_area_2x(&tri);
+                let a =
+                    2.0 * geom::polygon2::signed_area(&tri.map(|p| geom::Point2::new(p[0], p[1])));
                 assert!(a > 0.0, "a triangle is not anticlockwise: {t:?}");
                 0.5 * a
             })
@@ -206,7 +186,16 @@ mod tests {
         }
         comb.push([0.0, 3.0]);
         for (poly, area) in [(l, 4.0), (comb, 21.0 - 3.0 * 2.5)] {
-            assert!((0.5 * signed_area_2x(&poly) - area).abs() < 1e-12);
+            assert!(
+                (geom::polygon2::signed_area(
+                    &poly
+                        .iter()
+                        .map(|p| geom::Point2::new(p[0], p[1]))
+                        .collect::<Vec<_>>()
+                ) - area)
+                    .abs()
+                    < 1e-12
+            );
             let tris = triangulate(&poly);
             assert!((area_of(&poly, &tris) - area).abs() < 1e-9, "{tris:?}");
             // Every triangle lies inside: its centroid is not in a notch.

@@ -1,10 +1,12 @@
-//! Run reports: one self-contained HTML page per run folder, with a WebGL
-//! 3-D view and the plots the theses draw, made with plotly.js embedded in
-//! the page (no network request of any kind).
+#![doc = include_str!("../README.md")]
 //!
-//! The folder is read through [`record::RunFolder`] (its format version is
-//! checked there): a `surveyor explore` run gets the view of Paul ch. 6, a
-//! `surveyor follow` run the view of Pudney's Figs 44–47.
+//! # Map of the crate
+//!
+//! [`write()`] (and [`write_staged`] for a folder being staged) opens the
+//! folder through [`record::RunFolder`] (its format version checked there): a
+//! `surveyor explore` run gets the page of [`explore`] (Paul ch. 6), a
+//! `surveyor follow` run the page of [`follow`] (Pudney's Figs 44–47); the
+//! page ([`page`]) embeds plotly.js, so it opens offline.
 
 pub mod error;
 pub mod explore;

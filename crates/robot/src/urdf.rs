@@ -264,6 +264,10 @@ impl<'a, 'input> Parser<'a, 'input> {
         }
     }
 
+    #[allow(
+        clippy::too_many_lines,
+        reason = "reads the URDF document in its own order (links, joints, the chain to the tip, limits, collision shapes), each error naming its element and line; split, the steps would pass the half-built robot between them"
+    )]
     fn robot(&mut self, tip: Option<&str>) -> Result<Robot, RobotError> {
         let root = self.doc.root_element();
         if root.tag_name().name() != "robot" {

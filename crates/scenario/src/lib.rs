@@ -4,7 +4,7 @@
 //!
 //! | module | entry points |
 //! |---|---|
-//! | [`file`] | [`Scenario`] (TOML), [`LoadedScenario`] (a scenario and its folder): build its robot and world |
+//! | [`file`](mod@file) | [`Scenario`] (TOML), [`LoadedScenario`] (a scenario and its folder): build its robot and world |
 //! | [`builtin`] | [`builtin_scenario`], [`BUILTIN_NAMES`] |
 //! | [`robots`] | [`RobotChoice`]: a built-in robot or a URDF file, the one parser every command uses; [`mount_scanner`] |
 //! | [`range_sensors`] | [`range_sensors::RangeSensorsSpec`]: a scenario's range finders (single and rings) and range noise |

@@ -234,17 +234,17 @@ impl RangeSensorsSpec {
 }
 
 impl SensorRingSpec {
-    /// The reference direction `e₁` and `e₂ = â × e₁` of a ring about `axis`.
+    /// The reference direction `e₁` and `e₂ = â × e₁` of a ring about `axis`:
+    /// the in-plane axes of [`geom::PlaneFrame::with_u_axis`] with the link's
+    /// x axis (its y axis within 1° of x) as the first.
     pub fn basis(axis: &UnitVector3) -> (UnitVector3, UnitVector3) {
         let reference = if axis.x.abs() < 1f64.to_radians().cos() {
             Vector3::x()
         } else {
             Vector3::y()
         };
-        let e1 = unit(reference - axis.into_inner() * axis.dot(&reference))
-            .unwrap_or_else(|| geom::math::any_perpendicular(axis));
-        let e2 = UnitVector3::new_normalize(axis.cross(&e1));
-        (e1, e2)
+        let f = geom::PlaneFrame::with_u_axis(Point3::origin(), *axis, &reference);
+        (f.u, f.v)
     }
 
     /// The ring's mounts on link index `link`; `what` names the ring in errors.

@@ -2,7 +2,7 @@
 //! and scanner as a [`SimRig`] in its ground-truth world, the loop of
 //! `explore` ([`explore::run()`]) driving it, and an [`ExploreJudge`] that
 //! checks every executed motion against the truth (contacts, clearance)
-//! and measures what the sweeps cover. [`explore`] is the whole
+//! and measures what the sweeps cover. [`explore()`] is the whole
 //! `surveyor explore` job: the run, then its run folder staged with the
 //! blast plan (Paul App. A), written whole or not at all.
 
@@ -396,7 +396,7 @@ impl ExploreOutcome {
     /// The coverage as `run.json` holds it.
     pub fn coverage_summary(&self) -> Option<ExploreCoverage> {
         self.coverage
-            .clone()
+            .as_ref()
             .map(|c| ExploreCoverage::new(c, &self.observable))
     }
 

@@ -8,7 +8,7 @@
 //!   into a rig and a follower from [`FollowRunOptions`]; [`FollowSetup::run`]
 //!   runs the episode and scores the model ([`FollowRun`]).
 //! * [`FollowRun::write`] stages the run folder (`surface_model.json`/`.obj`,
-//!   `steps.csv`, `path.ply`, `run.json`, `model_snapshots.json`); [`follow`]
+//!   `steps.csv`, `path.ply`, `run.json`, `model_snapshots.json`); [`follow()`]
 //!   is the whole `surveyor follow` job.
 //!
 //! Determinism: the rig's noise is seeded and the follower is deterministic, so
@@ -126,7 +126,7 @@ impl Default for FollowRunOptions {
 pub enum FollowRunError {
     /// The scenario, world, robot or rig.
     #[error(transparent)]
-    Sim(#[from] SimError),
+    Sim(Box<SimError>),
     /// The follower (configuration, robot without control-point sensors, a
     /// refused step).
     #[error(transparent)]
@@ -528,7 +528,7 @@ impl FollowSetup {
         )?)
     }
 
-    /// Run the episode (see [`run_episode`]) and score the model against the
+    /// Run the episode (see [`follow::run_episode`]) and score the model against the
     /// ground truth when the world is a mesh scene; when it is a point cloud,
     /// measure the links' clearance from the scan points at every pose and
     /// the model polygons' distances to the scan ([`model_to_scan`], with the
@@ -698,15 +698,22 @@ fn scene_world(path: &Path, scale: Real) -> Result<World, FollowRunError> {
     }
 }
 
+// Boxed: a simulation error is large, and every setup step returns this type.
+impl From<SimError> for FollowRunError {
+    fn from(e: SimError) -> Self {
+        Self::Sim(Box::new(e))
+    }
+}
+
 impl From<scenario::ScenarioError> for FollowRunError {
     fn from(e: scenario::ScenarioError) -> Self {
-        Self::Sim(SimError::from(e))
+        Self::from(SimError::from(e))
     }
 }
 
 impl From<SceneError> for FollowRunError {
     fn from(e: SceneError) -> Self {
-        Self::Sim(SimError::from(e))
+        Self::from(SimError::from(e))
     }
 }
 

@@ -4,7 +4,7 @@
 //!
 //! * **clearance**: the smallest distance from the robot's link capsules to any
 //!   scan point ([`ScanIndex::capsule_distance`], [`scan_clearance`]), taken
-//!   at every pose of a run by [`crate::follow_run::run_episode`];
+//!   at every pose of a run by [`crate::follow_job::FollowJudge`];
 //! * **model accuracy**: for every non-initial polygon of a surface model, the
 //!   largest distance from the polygon (sampled densely over its interior and
 //!   perimeter, plus its vertices) to the nearest scan point, and the share of
@@ -123,7 +123,7 @@ impl ScanIndex {
 /// mounted on the scene) to the scan, at the given link frames
 /// (`base_from_link`, from forward kinematics); `None` when no such link has a
 /// capsule (mesh-shaped links are not measured, as in
-/// [`crate::safety::min_clearance`]).
+/// [`plan::contact::min_clearance`]).
 pub fn scan_clearance(
     robot: &Robot,
     base_from_link: &[Isometry3],

@@ -464,6 +464,10 @@ fn estimated_samples(area: Real, spacing: Real) -> Real {
 ///
 /// Errors: a config failing [`SurfaceScoreConfig::validate`], or more than
 /// [`MAX_SCORE_SAMPLES`] samples needed.
+#[allow(
+    clippy::too_many_lines,
+    reason = "SPEC §6's scoring in its sections (the model's polygons on the true faces, faces, edges, corners, strays, vertex accuracy), each a few lines over the same face and polygon tables"
+)]
 pub fn score_surface_model(
     scene: &Scene,
     model: &SurfaceModel,

@@ -106,6 +106,10 @@ impl SurfaceModel {
     }
 
     /// [`Self::check_segment`] limited to `scope`.
+    #[allow(
+        clippy::too_many_lines,
+        reason = "one checker listing a segment's invariants in the order P§2 states them; each check is a few lines and none is reused"
+    )]
     pub(crate) fn check_segment_scoped(
         &self,
         id: SegmentId,

@@ -169,6 +169,10 @@ struct SubEdge {
 }
 
 /// Overlay two perimeters and trace the boundary of their union.
+#[allow(
+    clippy::too_many_lines,
+    reason = "one boundary-tracing algorithm (split the edges, classify the pieces, trace the union, collect the holes) over shared working arrays"
+)]
 fn overlay(a: &Poly2, b: &Poly2, eps: Real) -> Overlay {
     let polys = [a, b];
     let pts = [a.points(), b.points()];

@@ -64,6 +64,10 @@ impl SurfaceModel {
         self.set_flag(Flag::Pending, s, false);
     }
 
+    #[allow(
+        clippy::too_many_lines,
+        reason = "the repositioning of P§2.8 step by step, each step reading and changing the same perimeter and relations"
+    )]
     fn reposition_inner(&mut self, s: SegmentId) -> bool {
         let tol = self.tol;
         let Some(poly) = self.poly(s) else {

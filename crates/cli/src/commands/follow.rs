@@ -81,7 +81,7 @@ pub struct FollowArgs {
     /// Most sensor sets to take (one per step).
     #[arg(long, default_value_t = DEFAULT_MAX_SETS)]
     max_sets: u64,
-    /// Parameters (TOML): a [follow] table (FollowConfig: desired_distance_m,
+    /// Parameters (TOML): a `[follow]` table (FollowConfig: desired_distance_m,
     /// max_step_m, ...) and a [surface] table (SurfaceConfig: lambda, mu_deg, ...).
     #[arg(long)]
     config: Option<PathBuf>,

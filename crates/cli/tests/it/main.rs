@@ -1,5 +1,7 @@
 //! The cli crate's integration tests, one binary (a module per topic) so a test build links few executables.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests may panic
 
+mod architecture;
 mod bad_input;
 mod commands;
 mod follow;

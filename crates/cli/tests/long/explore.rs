@@ -261,19 +261,60 @@ fn plan_blast_on_an_explore_run_gives_the_plan_explore_wrote() {
     ]);
     let v: serde_json::Value = serde_json::from_str(&read(a.join("blast_plan.json"))).unwrap();
     assert_eq!(v["tool"]["phi_max_deg"].as_f64(), Some(25.0));
-    // A damaged inputs file (beside the run's scenario, in a copy: the run
-    // is shared) is named, not a panic.
+    // A damaged inputs file (in a copy of the run folder: the run is
+    // shared) is named, not a panic.
     let damaged = dir.path().join("damaged");
-    std::fs::create_dir_all(&damaged).unwrap();
-    std::fs::copy(
-        run.whole.join("scenario.toml"),
-        damaged.join("scenario.toml"),
-    )
-    .unwrap();
+    copy_folder(&run.whole, &damaged);
+    let d = damaged.to_str().unwrap();
     std::fs::write(damaged.join("blast_inputs.json"), "{\"format\": 1").unwrap();
     fails_with(
-        &["plan-blast", "--run", damaged.to_str().unwrap(), "--out", o],
+        &["plan-blast", "--run", d, "--out", o],
         &["blast_inputs.json"],
+    );
+    std::fs::copy(
+        run.whole.join("blast_inputs.json"),
+        damaged.join("blast_inputs.json"),
+    )
+    .unwrap();
+    // Issue 23: a folder of an older format (run.json without its version)
+    // is refused, naming the version; so is a scenario.toml of another run.
+    let run_json = read(run.whole.join("run.json"));
+    let old: String = run_json
+        .lines()
+        .filter(|l| !l.contains("\"format_version\""))
+        .fold(String::new(), |mut acc, l| {
+            acc.push_str(l);
+            acc.push('\n');
+            acc
+        });
+    std::fs::write(damaged.join("run.json"), old).unwrap();
+    fails_with(
+        &["plan-blast", "--run", d, "--out", o],
+        &["format version 1", "reads version 2"],
+    );
+    std::fs::write(damaged.join("run.json"), &run_json).unwrap();
+    let scenario = read(run.whole.join("scenario.toml"));
+    std::fs::write(
+        damaged.join("scenario.toml"),
+        scenario.replacen("name = \"bridge1\"", "name = \"bridge2\"", 1),
+    )
+    .unwrap();
+    fails_with(
+        &["plan-blast", "--run", d, "--out", o],
+        &["scenario.toml", "`bridge2`", "another run"],
+    );
+    std::fs::write(damaged.join("scenario.toml"), &scenario).unwrap();
+    let mut inputs: serde_json::Value =
+        serde_json::from_str(&read(run.whole.join("blast_inputs.json"))).unwrap();
+    inputs["grid"]["config"]["regions"]["a1"]["max"][0] = serde_json::json!(0.5);
+    std::fs::write(
+        damaged.join("blast_inputs.json"),
+        serde_json::to_string(&inputs).unwrap(),
+    )
+    .unwrap();
+    fails_with(
+        &["plan-blast", "--run", d, "--out", o],
+        &["blast_inputs.json", "other regions", "different runs"],
     );
     // Segments that leave discs out (here: none at all) are refused; the plan
     // was of 0 segments with every disc posed.
@@ -286,7 +327,7 @@ fn plan_blast_on_an_explore_run_gives_the_plan_explore_wrote() {
     )
     .unwrap();
     fails_with(
-        &["plan-blast", "--run", damaged.to_str().unwrap(), "--out", o],
+        &["plan-blast", "--run", d, "--out", o],
         &["blast_inputs.json", "disc 0 is in no segment"],
     );
 }
@@ -381,4 +422,15 @@ fn mapping_parameters_come_from_the_scenario() {
         .collect();
     assert!(radii.len() > 100, "{} discs", radii.len());
     assert!(radii.iter().all(|r| (r - 0.06).abs() < 1e-12), "{radii:?}");
+}
+
+/// Copy the files of `from` into a new folder `to`.
+fn copy_folder(from: &std::path::Path, to: &std::path::Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        if e.file_type().unwrap().is_file() {
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+    }
 }

@@ -1,4 +1,5 @@
 //! The cli crate's long tests (run in release by `.ci/run`), one binary so a test build links few executables.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests may panic
 
 mod explore;
 #[path = "../support/mod.rs"]

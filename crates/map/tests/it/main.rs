@@ -1,4 +1,5 @@
 //! The map crate's integration tests, one binary (a module per topic) so a test build links few executables.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests may panic
 
 mod fused_map;
 mod fuzz;

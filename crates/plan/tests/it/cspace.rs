@@ -239,7 +239,8 @@ fn planned_paths_pass_only_through_known_free_space() {
     // space beyond it.
     let g = explored_grid(|c| c.x > 0.7);
     let map = model.roadmap();
-    let safe: Vec<usize> = (0..map.len())
+    let safe: Vec<plan::NodeId> = map
+        .node_ids()
         .filter(|&i| safety.dist(&g, map.node(i)).unwrap() > 1.0)
         .collect();
     assert!(safe.len() > 20, "{}", safe.len());

@@ -259,6 +259,10 @@ impl Drop for DevTools {
 /// exactly the plots `expected` (div ids) drawn, `plot-view3d` a WebGL view
 /// with coloured pixels, no console error, no request but the page; keeps
 /// `run/report_screenshot.png`.
+#[allow(
+    clippy::too_many_lines,
+    reason = "one browser session, step by step: load, wait for the plots, read the logs, screenshot, count pixels"
+)]
 fn check_report_in_chromium(run: &Path, expected_ids: &[String]) {
     let html = report::write(run).unwrap();
     let size_mb = std::fs::metadata(&html).unwrap().len() as f64 / 1e6;

@@ -1,4 +1,5 @@
 //! The robot crate's integration tests, one binary (a module per topic) so a test build links few executables.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests may panic
 
 #[path = "../common/mod.rs"]
 mod common;

@@ -152,6 +152,10 @@ fn le<const N: usize>(b: &[u8]) -> [u8; N] {
     a
 }
 
+#[allow(
+    clippy::too_many_lines,
+    reason = "the PCD header line by line in the order the format fixes (VERSION, FIELDS, SIZE, TYPE, COUNT, WIDTH, HEIGHT, VIEWPOINT, POINTS, DATA), each error naming its line"
+)]
 fn parse_header(bytes: &[u8], path: &Path) -> Result<Parsed, SceneError> {
     let err = |line: usize, msg: String| SceneError::parse(path, Some(line), msg);
     if bytes.is_empty() {

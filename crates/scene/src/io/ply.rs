@@ -491,6 +491,10 @@ struct Header {
     lines: usize,
 }
 
+#[allow(
+    clippy::too_many_lines,
+    reason = "the PLY header line by line (format, comments, elements and their properties), each error naming its line"
+)]
 fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, SceneError> {
     let err = |line: usize, msg: String| SceneError::parse(path, Some(line), msg);
     if bytes.is_empty() {

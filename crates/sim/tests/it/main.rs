@@ -1,4 +1,5 @@
 //! The sim crate's integration tests, one binary (a module per topic) so a test build links few executables.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests may panic
 
 mod bounds;
 mod bridge_scan;
@@ -8,6 +9,7 @@ mod fuzz;
 mod mosd_follow;
 mod mosd_scenario;
 mod real_data;
+mod replay;
 mod scan_check;
 mod surface_score;
 mod ur5_cube;

@@ -173,7 +173,7 @@ fn stage_one_moves_only_through_known_free_space_and_reduces_information() {
     for (s, members) in d.segments.iter().enumerate() {
         for m in members {
             seen[m.0] += 1;
-            assert_eq!(d.segment[m.0], s);
+            assert_eq!(d.segment[m.0], map::SegmentId(s));
         }
     }
     assert!(seen.iter().all(|n| *n == 1));
@@ -551,4 +551,82 @@ fn check_blast_plan(outcome: &ExploreOutcome) {
     }
     // Every disc in A2 is in the plan, with a pose or listed without one.
     assert_eq!(listed, plan.discs_in_scope);
+}
+
+/// Issue 23 acceptance 2: the exploration loop (both stages) on hardware
+/// that is not the simulator. A session of the simulated arm and scanner is
+/// recorded ([`hw::script::Recorder`]), kept as JSON, and played back by a
+/// [`hw::script::Replay`], which answers every command with what was
+/// recorded and refuses any other: the run on the replay is the run on the
+/// simulator, viewpoint for viewpoint and point for point.
+#[test]
+#[ignore = "seconds in release; run by .ci/run"]
+fn exploration_on_a_replayed_session_repeats_the_simulated_run() {
+    use hw::LineScanner;
+    use hw::script::{Event, Recorder, Replay, Script};
+    use record::viewpoints::{candidates_csv, path_csv, viewpoints_csv};
+    let loaded = Scenario::load("bridge1").unwrap();
+    let mut config = loaded.scenario.explore.clone().unwrap();
+    config.max_viewpoints = 40;
+    config.stage_two_max_viewpoints = 2;
+    let options = ExploreOptions {
+        seed: 2,
+        config: Some(config),
+        stage_two: true,
+        cspace_cache: Some(ExploreOptions::default_cspace_cache(&loaded).unwrap()),
+        ..ExploreOptions::default()
+    };
+    let SimExplore {
+        setup,
+        rig,
+        run_options,
+        ..
+    } = SimExplore::new(&loaded, &options).unwrap();
+    let bearings = rig.bearings_rad().to_vec();
+    let mut recorder = Recorder::new(rig, bearings);
+    let a = explore::run(
+        setup,
+        &mut recorder,
+        &mut explore::NoJudge,
+        &run_options,
+        &mut |_| {},
+    )
+    .unwrap();
+    let (_, script) = recorder.into_parts();
+    let scans = script
+        .events
+        .iter()
+        .filter(|e| matches!(e, Event::Scanned(_)))
+        .count();
+    let script: Script = serde_json::from_str(&serde_json::to_string(&script).unwrap()).unwrap();
+    let (setup, _) = sim::explore_job::explore_setup(&loaded, &options).unwrap();
+    let mut replay = Replay::new(script);
+    let b = explore::run(
+        setup,
+        &mut replay,
+        &mut explore::NoJudge,
+        &run_options,
+        &mut |_| {},
+    )
+    .unwrap();
+    println!(
+        "replayed {} viewpoints ({} in Stage Two), {scans} scans, {} points",
+        b.viewpoints.len(),
+        b.viewpoints.iter().filter(|r| r.stage == 2).count(),
+        b.cloud.len()
+    );
+    assert_eq!(replay.remaining(), 0);
+    assert!(b.viewpoints.iter().any(|r| r.stage == 2));
+    for csv in [viewpoints_csv, candidates_csv, path_csv] {
+        assert_eq!(csv(&a.viewpoints), csv(&b.viewpoints));
+    }
+    assert_eq!(a.cloud, b.cloud);
+    assert_eq!(a.mesh, b.mesh);
+    assert_eq!(
+        a.discs.table().to_csv().unwrap(),
+        b.discs.table().to_csv().unwrap()
+    );
+    assert_eq!(a.stage_two_termination, b.stage_two_termination);
+    assert_eq!(a.unsafe_configurations, b.unsafe_configurations);
+    assert_eq!(b.tally, explore::SafetyTally::default());
 }
