@@ -35,9 +35,11 @@ use serde::{Deserialize, Serialize};
 pub struct BlastTool {
     /// Nozzle tip in the tool-link frame, metres; the stream leaves it along
     /// the nozzle frame's `z` axis.
+    #[serde(deserialize_with = "geom::exact::array")]
     pub translation_m: [Real; 3],
     /// Nozzle orientation in the tool-link frame: roll, pitch, yaw, degrees
     /// (URDF convention).
+    #[serde(deserialize_with = "geom::exact::array")]
     pub rpy_deg: [Real; 3],
     /// Largest angle between the stream and the surface normal, `φ_max`.
     pub phi_max_deg: Real,

@@ -6,7 +6,10 @@
 macro_rules! say {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        writeln!(std::io::stdout(), $($arg)*)
+        anyhow::Context::context(
+            writeln!(std::io::stdout(), $($arg)*),
+            "writing to standard output",
+        )
     }};
 }
 
@@ -14,7 +17,19 @@ macro_rules! say {
 macro_rules! put {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        write!(std::io::stdout(), $($arg)*)
+        anyhow::Context::context(
+            write!(std::io::stdout(), $($arg)*),
+            "writing to standard output",
+        )
+    }};
+}
+
+/// `eprintln!` that ignores a closed or full stderr (nobody is left to
+/// tell).
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
     }};
 }
 
@@ -35,7 +50,7 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("error: {}", message(&e));
+            note!("error: {}", message(&e));
             ExitCode::FAILURE
         }
     }

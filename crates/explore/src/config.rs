@@ -39,6 +39,17 @@ pub struct MappingConfig {
     pub segment: map::SegmentConfig,
 }
 
+/// Largest [`ExploreConfig::local_reach_m`], metres.
+pub const MAX_LOCAL_REACH_M: Real = 10.0;
+/// Most [`ExploreConfig::local_candidates`].
+pub const MAX_LOCAL_CANDIDATES: usize = 10_000;
+/// Most viewpoints of either stage.
+pub const MAX_VIEWPOINTS: usize = 1000;
+/// Most plan attempts per decision, and Stage Two targets tried.
+pub const MAX_ATTEMPTS: usize = 10_000;
+/// Most nodes a motion's ends are joined to.
+pub const MAX_LINK_K: usize = 100;
+
 /// Parameters of Stage One (A§3.2).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -56,6 +67,7 @@ pub struct ExploreConfig {
     #[serde(skip)]
     pub sweep: SweepConfig,
     /// Region weights `{c_w1, c_w2, c_w3}` of eq. 4.11 (Table 6.1).
+    #[serde(deserialize_with = "geom::exact::array")]
     pub weights: [Real; 3],
     /// Ray subsampling of the information prediction.
     pub prediction: PredictionConfig,
@@ -166,8 +178,10 @@ impl ExploreConfig {
                 self.prediction.tilt_step_deg,
             ),
         ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(bad(field, "a positive angle", v.to_string()));
+            // The scanner's own steps are 0.36° and 0.4°: a finer prediction
+            // casts rays the scanner never has.
+            if !(v.is_finite() && (0.1..=90.0).contains(&v)) {
+                return Err(bad(field, "an angle from 0.1 to 90 degrees", v.to_string()));
             }
         }
         if !(self.stop_fraction.is_finite() && (0.0..1.0).contains(&self.stop_fraction)) {
@@ -177,17 +191,64 @@ impl ExploreConfig {
                 self.stop_fraction.to_string(),
             ));
         }
-        if !(self.local_reach_m.is_finite() && self.local_reach_m >= 0.0) {
+        if !(self.local_reach_m.is_finite()
+            && (0.0..=MAX_LOCAL_REACH_M).contains(&self.local_reach_m))
+        {
             return Err(bad(
                 "explore.local_reach_m",
-                "a non-negative length",
+                "a length from 0 to 10 metres",
                 self.local_reach_m.to_string(),
             ));
         }
-        if !(self.stage_two_clearance_m.is_finite() && self.stage_two_clearance_m >= 0.0) {
+        if self.local_candidates > MAX_LOCAL_CANDIDATES {
+            return Err(bad(
+                "explore.local_candidates",
+                "at most 10000 (each is scored like a roadmap node)",
+                self.local_candidates.to_string(),
+            ));
+        }
+        if !(self.significant_h3.is_finite() && (0.0..=1.0).contains(&self.significant_h3)) {
+            return Err(bad(
+                "explore.significant_h3",
+                "a fraction in [0, 1]",
+                self.significant_h3.to_string(),
+            ));
+        }
+        for (field, v) in [
+            ("explore.max_viewpoints", self.max_viewpoints),
+            (
+                "explore.stage_two_max_viewpoints",
+                self.stage_two_max_viewpoints,
+            ),
+        ] {
+            if v > MAX_VIEWPOINTS {
+                return Err(bad(field, "at most 1000 viewpoints", v.to_string()));
+            }
+        }
+        for (field, v) in [
+            ("explore.max_plan_attempts", self.max_plan_attempts),
+            (
+                "explore.stage_two_target_attempts",
+                self.stage_two_target_attempts,
+            ),
+        ] {
+            if v > MAX_ATTEMPTS {
+                return Err(bad(field, "at most 10000", v.to_string()));
+            }
+        }
+        if self.link_k > MAX_LINK_K {
+            return Err(bad(
+                "explore.link_k",
+                "at most 100",
+                self.link_k.to_string(),
+            ));
+        }
+        if !(self.stage_two_clearance_m.is_finite()
+            && (0.0..=1.0).contains(&self.stage_two_clearance_m))
+        {
             return Err(bad(
                 "explore.stage_two_clearance_m",
-                "a non-negative length",
+                "a length from 0 to 1 metre",
                 self.stage_two_clearance_m.to_string(),
             ));
         }

@@ -178,3 +178,61 @@ pub(crate) fn disc_map(
         ..DiscMap::default()
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use geom::{Point3, UnitVector3, Vector3};
+
+    /// `discs.csv` of a run starts with the disc-file contract of
+    /// `map::sld_io`, value for value: the same discs give the same columns.
+    #[test]
+    fn the_run_table_extends_map_s_disc_file() {
+        let discs = vec![
+            map::Disc {
+                centre: Point3::new(0.1, -0.25, 1.52),
+                normal: UnitVector3::new_normalize(Vector3::new(0.1, 0.2, -0.97)),
+                radius_m: 0.04,
+                points: 11,
+            },
+            map::Disc {
+                centre: Point3::new(-0.7, 0.75, 1.0),
+                normal: -Vector3::y_axis(),
+                radius_m: 0.04,
+                points: 8,
+            },
+        ];
+        let d = DiscMap {
+            discs: discs.clone(),
+            viewpoint: vec![0, 3],
+            segment: vec![map::SegmentId(0), map::SegmentId(1)],
+            segments: vec![vec![map::DiscId(0)], vec![map::DiscId(1)]],
+            true_material: vec![Some(1), None],
+            material_names: vec!["painted_metal".into(), "timber".into()],
+            posterior: vec![vec![0.5, 0.5], vec![0.1, 0.9]],
+            h3: vec![0.69, 0.33],
+            observations: vec![0, 2],
+            h3_total: Some(1.02),
+        };
+        let run = d.table().to_csv().unwrap();
+        let mut contract = Vec::new();
+        map::sld_io::write_discs_csv(&mut contract, &discs, &[]).unwrap();
+        let contract = String::from_utf8(contract).unwrap();
+        for (a, b) in run.lines().zip(contract.lines()) {
+            assert!(a.starts_with(b), "{a} / {b}");
+            assert_eq!(a.as_bytes().get(b.len()), Some(&b','));
+        }
+        let read = map::sld_io::parse_discs_csv(&run, "discs.csv").unwrap();
+        for (r, d) in read.iter().zip(&discs) {
+            assert_eq!(
+                (r.centre, r.radius_m, r.points),
+                (d.centre, d.radius_m, d.points)
+            );
+            assert!((r.normal.into_inner() - d.normal.into_inner()).norm() < 1e-15);
+        }
+        assert_eq!(
+            d.segments_file().to_json().unwrap(),
+            "{\"segments\":[[0],[1]]}\n"
+        );
+    }
+}

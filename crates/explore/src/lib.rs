@@ -23,7 +23,10 @@ pub mod run;
 pub mod setup;
 pub mod stage_one;
 
-pub use config::{ExploreConfig, MappingConfig, PredictionConfig};
+pub use config::{
+    ExploreConfig, MAX_ATTEMPTS, MAX_LINK_K, MAX_LOCAL_CANDIDATES, MAX_LOCAL_REACH_M,
+    MAX_VIEWPOINTS, MappingConfig, PredictionConfig,
+};
 pub use discs::DiscMap;
 pub use error::ExploreError;
 pub use judge::{Judge, NoJudge, SafetyTally};

@@ -24,6 +24,7 @@
 pub mod aabb;
 pub mod capsule;
 pub mod ellipsoid;
+pub mod exact;
 pub mod line;
 pub mod math;
 pub mod mesh;

@@ -153,6 +153,7 @@ pub struct OccupancyConfig {
     /// Regions of interest; the grid covers A3.
     pub regions: RegionsConfig,
     /// Region weights `{c_w1, c_w2, c_w3}` of eq. 4.11 (A Table 6.1).
+    #[serde(deserialize_with = "geom::exact::array")]
     pub weights: [Real; 3],
     /// Occlusion importance.
     pub occlusion: OcclusionConfig,

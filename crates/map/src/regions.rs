@@ -51,8 +51,10 @@ impl Region {
 #[serde(deny_unknown_fields)]
 pub struct RegionBox {
     /// Lowest corner.
+    #[serde(deserialize_with = "geom::exact::array")]
     pub min: [Real; 3],
     /// Highest corner.
+    #[serde(deserialize_with = "geom::exact::array")]
     pub max: [Real; 3],
 }
 

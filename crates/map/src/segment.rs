@@ -72,6 +72,7 @@ pub struct SegmentConfig {
     pub tau_p_m: Real,
     /// `τq`: largest difference per joint between linked poses, degrees
     /// (8, 10, 14, 20, 20, 20).
+    #[serde(deserialize_with = "geom::exact::array")]
     pub tau_q_deg: [Real; 6],
 }
 

@@ -142,8 +142,12 @@ impl SldConfig {
     pub fn validate(&self) -> Result<(), MapError> {
         let bad =
             |field, expected, got: String| Err(MapError::stage_config("SLD", field, expected, got));
-        if !(self.radius_m.is_finite() && self.radius_m > 0.0) {
-            return bad("radius_m", "a positive distance", self.radius_m.to_string());
+        if !(self.radius_m.is_finite() && self.radius_m > 0.0 && self.radius_m <= MAX_RADIUS_M) {
+            return bad(
+                "radius_m",
+                "a distance in (0, 10] metres",
+                self.radius_m.to_string(),
+            );
         }
         if self.min_points < 3 {
             return bad(
@@ -175,6 +179,10 @@ impl SldConfig {
 )]
 #[serde(transparent)]
 pub struct DiscId(pub usize);
+
+/// Largest disc radius μ accepted, metres (Paul's is 0.04; a disc metres
+/// wide no longer follows a surface).
+pub const MAX_RADIUS_M: Real = 10.0;
 
 /// One Scale-Like Disc `{P̂, n⃗}` (Paul Fig. 5.6).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

@@ -4,6 +4,15 @@ use crate::PlanError;
 use geom::Real;
 use serde::{Deserialize, Serialize};
 
+/// Most roadmap nodes `n_Q` (Paul's 1571 is a thirteenth of it).
+pub const MAX_N_Q: usize = 20_000;
+/// Most neighbours a node is joined to.
+pub const MAX_NEIGHBOURS: usize = 100;
+/// Smallest step at which motions are checked, metres.
+pub const MIN_CHECK_STEP_M: Real = 0.001;
+/// Largest step at which motions are checked, metres.
+pub const MAX_CHECK_STEP_M: Real = 1.0;
+
 /// Parameters of the C-space model and of motion checks. `Default` is Paul's
 /// (Table 6.1: n_Q = 1571) where the thesis gives a value; the rest are ours and
 /// say why in their field docs.
@@ -51,11 +60,17 @@ impl Default for PlanConfig {
 impl PlanConfig {
     /// Check every field against a robot with `dof` joints.
     pub fn validate(&self, dof: usize) -> Result<(), PlanError> {
-        if self.n_q < 2 {
-            return Err(PlanError::config("plan.n_q", "at least 2", self.n_q));
+        // The likelihoods L(cᵢ) plan a path between every pair of nodes:
+        // n_Q² paths, the model's cost.
+        if !(2..=MAX_N_Q).contains(&self.n_q) {
+            return Err(PlanError::config("plan.n_q", "2 to 20000", self.n_q));
         }
-        if self.neighbours == 0 {
-            return Err(PlanError::config("plan.neighbours", "at least 1", 0));
+        if !(1..=MAX_NEIGHBOURS).contains(&self.neighbours) {
+            return Err(PlanError::config(
+                "plan.neighbours",
+                "1 to 100",
+                self.neighbours,
+            ));
         }
         if !self.joint_weights.is_empty()
             && (self.joint_weights.len() != dof
@@ -70,17 +85,21 @@ impl PlanConfig {
                 format!("{:?} for a robot with {dof} joints", self.joint_weights),
             ));
         }
-        if !(self.check_step_m.is_finite() && self.check_step_m > 0.0) {
+        // A motion is checked every check_step_m of weighted distance: the
+        // floor bounds the configurations one motion costs.
+        if !(self.check_step_m.is_finite()
+            && (MIN_CHECK_STEP_M..=MAX_CHECK_STEP_M).contains(&self.check_step_m))
+        {
             return Err(PlanError::config(
                 "plan.check_step_m",
-                "a positive length",
+                "a length from 0.001 to 1 metres",
                 self.check_step_m,
             ));
         }
-        if !(self.safety_cap.is_finite() && self.safety_cap > 1.0) {
+        if !(self.safety_cap.is_finite() && self.safety_cap > 1.0 && self.safety_cap <= 100.0) {
             return Err(PlanError::config(
                 "plan.safety_cap",
-                "a finite value above 1",
+                "a value in (1, 100]",
                 self.safety_cap,
             ));
         }

@@ -20,7 +20,7 @@ pub mod pose;
 pub mod roadmap;
 pub mod safety;
 
-pub use config::PlanConfig;
+pub use config::{MAX_CHECK_STEP_M, MAX_N_Q, MAX_NEIGHBOURS, MIN_CHECK_STEP_M, PlanConfig};
 pub use error::PlanError;
 pub use interference::{Interference, interfering_voxels};
 pub use model::{CacheOutcome, CspaceModel, MAX_INTERFERENCE_PAIRS};

@@ -217,6 +217,7 @@ pub struct PoseConfig {
     /// `‖∇g‖∞ = ‖2 Jᵀ r‖∞` falls to it, `g` being eq. 3.20's objective.
     pub gradient_tolerance: Real,
     /// Desired values `ĝ₁ … ĝ₆` (A eq. 3.20: all zero).
+    #[serde(deserialize_with = "geom::exact::array")]
     pub desired: [Real; 6],
     /// Scale of `g₁`'s sigmoid, degrees: `g₁ = σ((φ − φ_max)/s)`. 2°: a view
     /// 9° inside `φ_max` costs 0.01.

@@ -452,3 +452,125 @@ pub fn write_cloud(path: &Path, cloud: &[SweepPoint]) -> Result<(), RecordError>
 pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<(), RecordError> {
     Ok(scene::io::write_mesh_ply(path, mesh)?)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::coverage::MaterialCoverage;
+
+    fn summary() -> ExploreSummary {
+        let report = CoverageReport {
+            samples: 10,
+            covered: 4,
+            covered_within_m: 0.01,
+            region: None,
+            samples_per_m2: 40_000.0,
+            density_capped: false,
+            per_material: vec![MaterialCoverage {
+                material: "timber".into(),
+                samples: 10,
+                covered: 4,
+            }],
+        };
+        ExploreSummary {
+            format_version: crate::FORMAT_VERSION,
+            scenario: "bridge1".into(),
+            viewpoints: StageCounts {
+                stage_one: 3,
+                stage_two: 1,
+            },
+            termination: "information_converged".into(),
+            stage_two_termination: None,
+            collisions: Some(0),
+            unsafe_configurations: 0,
+            unsafe_configuration_list: vec![],
+            min_clearance_m: Some(0.05),
+            initial_information: InitialInformation {
+                h1_weighted: 2.5,
+                h2: 96.0,
+            },
+            points: 7,
+            mesh_triangles: 2,
+            discs: 1,
+            segments: 1,
+            materials: vec!["timber".into()],
+            coverage: Some(ExploreCoverage::new(
+                &[report.clone(), report.clone(), report],
+                &[(5, 2)],
+            )),
+            material_accuracy: None,
+            discs_observed_by_lrc: 0,
+            h3: Some(0.5),
+            decision_ms: Spread::of(vec![3.0, 1.0, 2.0]),
+            stage_two_decision_ms: Spread::default(),
+            wall_s: 0.0,
+        }
+    }
+
+    /// Every object's keys in `text`'s order, at every level, are sorted.
+    fn keys_sorted(v: &serde_json::Value) -> bool {
+        match v {
+            serde_json::Value::Object(m) => {
+                let keys: Vec<&String> = m.keys().collect();
+                keys.windows(2).all(|w| w[0] < w[1]) && m.values().all(keys_sorted)
+            }
+            serde_json::Value::Array(a) => a.iter().all(keys_sorted),
+            _ => true,
+        }
+    }
+
+    #[test]
+    fn the_summary_is_written_with_sorted_keys_and_read_back() {
+        let s = summary();
+        let text = s.to_json().unwrap();
+        assert!(text.ends_with("}\n"));
+        // The keys as the text has them (the order the reader sees).
+        let order: Vec<&str> = text
+            .lines()
+            .filter(|l| l.starts_with("  \"") && !l.starts_with("   "))
+            .map(|l| l.trim().split('"').nth(1).unwrap())
+            .collect();
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert_eq!(order, sorted);
+        assert!(order.contains(&"format_version"));
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert!(keys_sorted(&v));
+        let back: ExploreSummary = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, s);
+        assert_eq!(
+            back.decision_ms,
+            Spread {
+                median: 2.0,
+                max: 3.0
+            }
+        );
+        assert_eq!(back.coverage.unwrap().observable.a1, Some(0.4));
+    }
+
+    #[test]
+    fn disc_tables_round_trip() {
+        let table = DiscTable {
+            discs: vec![DiscRecord {
+                centre: Point3::new(0.1, -0.2, 1.5),
+                normal: UnitVector3::new_normalize(Vector3::new(0.0, 0.6, 0.8)),
+                radius_m: 0.04,
+                points: 9,
+            }],
+            segment: vec![0],
+            viewpoint: vec![2],
+            true_material: vec![None],
+            material_names: vec!["timber".into(), "concrete".into()],
+            posterior: Some(vec![vec![0.25, 0.75]]),
+            h3: Some((vec![0.56], vec![1])),
+        };
+        let text = table.to_csv().unwrap();
+        assert!(text.starts_with(
+            "cx,cy,cz,nx,ny,nz,radius,points,segment,viewpoint,true_material,p_timber,p_concrete,h3,lrc_observations\n"
+        ));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(DISCS_CSV);
+        std::fs::write(&path, &text).unwrap();
+        assert_eq!(DiscTable::read(&path).unwrap(), table);
+    }
+}

@@ -332,3 +332,68 @@ impl RunFolder {
             .map_err(|e| RecordError::file(&path, e))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn a_staging_dropped_without_commit_leaves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("new");
+        {
+            let s = Staging::new(&out).unwrap();
+            s.write("cloud.ply", b"partial").unwrap();
+            s.write(RUN_JSON, b"{}").unwrap();
+            assert!(out.exists());
+        }
+        assert!(!out.exists(), "the folder it made is removed");
+        // Over an older run: the older files stay as they were.
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join(RUN_JSON), "old").unwrap();
+        {
+            let s = Staging::new(&out).unwrap();
+            s.write(RUN_JSON, b"new").unwrap();
+        }
+        assert_eq!(names(&out), vec![RUN_JSON.to_owned()]);
+        assert_eq!(std::fs::read_to_string(out.join(RUN_JSON)).unwrap(), "old");
+    }
+
+    #[test]
+    fn a_commit_moves_run_json_last_and_a_failed_one_leaves_no_run_json() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("run");
+        let s = Staging::new(&out).unwrap();
+        for name in ["a.csv", RUN_JSON, "z.ply"] {
+            s.write(name, name.as_bytes()).unwrap();
+        }
+        s.commit().unwrap();
+        assert_eq!(names(&out), vec!["a.csv", RUN_JSON, "z.ply"]);
+        // A commit that fails half-way (here a file cannot take the place of
+        // a folder of the same name) has removed the older run.json and not
+        // moved the new one: the folder does not look finished.
+        std::fs::remove_file(out.join("z.ply")).unwrap();
+        std::fs::create_dir(out.join("z.ply")).unwrap();
+        std::fs::write(out.join("z.ply").join("keep"), "x").unwrap();
+        let s = Staging::new(&out).unwrap();
+        for name in ["a.csv", RUN_JSON, "z.ply"] {
+            s.write(name, b"second").unwrap();
+        }
+        assert!(s.commit().is_err());
+        assert!(!out.join(RUN_JSON).exists());
+        assert!(
+            !names(&out)
+                .iter()
+                .any(|n| n.starts_with(".surveyor-staging"))
+        );
+    }
+}

@@ -37,6 +37,7 @@ pub struct Scenario {
     /// A-priori planar polygons for the surface model (P§4.3), vertices in the
     /// world frame, anticlockwise about the outward normal.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(deserialize_with = "geom::exact::vec_of_vec_of_arrays")]
     pub initial_segments: Vec<Vec<[Real; 3]>>,
     /// How results are scored against the ground truth.
     #[serde(default)]

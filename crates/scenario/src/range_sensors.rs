@@ -39,6 +39,12 @@ use serde::{Deserialize, Serialize};
 /// Most mounts one ring may expand to (refused before anything is allocated).
 pub const MAX_RING_COUNT: u32 = 10_000;
 
+/// Largest range-noise σ, metres: noise of a metre makes every reading noise.
+pub const MAX_NOISE_SIGMA_M: Real = 1.0;
+
+/// Longest range of a range finder, metres.
+pub const MAX_RANGE_M: Real = 1000.0;
+
 /// The `[range_sensors]` table of a scenario.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -61,8 +67,10 @@ pub struct RangeSensorSpec {
     /// Name of the link carrying the sensor (URDF link name, or a built-in's).
     pub link: String,
     /// Sensor origin in the link frame, metres.
+    #[serde(deserialize_with = "geom::exact::array")]
     pub origin: [Real; 3],
     /// Sensing direction in the link frame (normalised on expansion).
+    #[serde(deserialize_with = "geom::exact::array")]
     pub axis: [Real; 3],
     /// Sensing range, metres.
     pub max_range_m: Real,
@@ -76,8 +84,10 @@ pub struct SensorRingSpec {
     /// Name of the link carrying the ring.
     pub link: String,
     /// Centre of the ring in the link frame, metres.
+    #[serde(deserialize_with = "geom::exact::array")]
     pub centre: [Real; 3],
     /// Axis of the ring in the link frame (normalised on expansion).
+    #[serde(deserialize_with = "geom::exact::array")]
     pub axis: [Real; 3],
     /// Radius of the ring, metres (0: every sensor at the centre).
     #[serde(default)]
@@ -100,11 +110,11 @@ fn finite3(v: &[Real; 3]) -> bool {
 }
 
 fn check_range(what: &str, r: Real) -> Result<(), String> {
-    if r.is_finite() && r > 0.0 {
+    if r.is_finite() && r > 0.0 && r <= MAX_RANGE_M {
         Ok(())
     } else {
         Err(format!(
-            "{what}.max_range_m: expected a finite distance > 0 (metres), got {r}"
+            "{what}.max_range_m: expected a distance in (0, 1000] metres, got {r}"
         ))
     }
 }
@@ -141,9 +151,11 @@ impl RangeSensorsSpec {
     /// `[0, 180]`°, phase finite. Errors name the field by its TOML path
     /// (`range_sensors.rings[1].count: ...`).
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.noise_sigma_m.is_finite() && self.noise_sigma_m >= 0.0) {
+        if !(self.noise_sigma_m.is_finite()
+            && (0.0..=MAX_NOISE_SIGMA_M).contains(&self.noise_sigma_m))
+        {
             return Err(format!(
-                "range_sensors.noise_sigma_m: expected a finite standard deviation ≥ 0 (metres), got {}",
+                "range_sensors.noise_sigma_m: expected a standard deviation from 0 to 1 metre, got {}",
                 self.noise_sigma_m
             ));
         }

@@ -104,6 +104,7 @@ pub const MAX_FIXTURE_RAYS: usize = 10_000_000;
 /// let err = scene::fixtures::incoherent_rays_checked(100_000_000_000, 1).unwrap_err();
 /// assert!(err.to_string().starts_with("rays: expected at most 10000000"));
 /// assert_eq!(scene::fixtures::incoherent_rays_checked(3, 1).unwrap().len(), 3);
+/// assert!(scene::fixtures::incoherent_rays_checked(0, 1).is_err());
 /// ```
 pub fn incoherent_rays_checked(n: usize, seed: u64) -> Result<Vec<[f32; 6]>, SceneError> {
     if n > MAX_FIXTURE_RAYS {
@@ -112,6 +113,12 @@ pub fn incoherent_rays_checked(n: usize, seed: u64) -> Result<Vec<[f32; 6]>, Sce
             format!(
                 "expected at most {MAX_FIXTURE_RAYS} rays (MAX_FIXTURE_RAYS, 24 bytes each), got {n}"
             ),
+        ));
+    }
+    if n == 0 {
+        return Err(SceneError::invalid(
+            "rays",
+            "expected at least 1 ray (a file of none is no workload), got 0",
         ));
     }
     Ok(incoherent_rays(n, seed))

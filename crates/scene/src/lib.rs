@@ -35,8 +35,8 @@ pub use geom::mesh::{self, TriMesh};
 pub use geom::primitives;
 pub use material::{Material, MaterialId, default_materials};
 pub use sampling::{
-    DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLE_CHUNK, SamplingConfig, SurfaceSample, SurfaceSampler,
-    sample_surfaces,
+    DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLE_CHUNK, MAX_SAMPLES_CEILING, SamplingConfig, SurfaceSample,
+    SurfaceSampler, sample_surfaces,
 };
 pub use spec::{
     CloudSpec, MAX_COORDINATE_M, MAX_PRIMITIVE_SEGMENTS, ObjectSpec, PoseSpec, SceneSpec,

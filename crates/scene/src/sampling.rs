@@ -30,6 +30,11 @@ pub struct SurfaceSample {
 /// of coverage scoring on two cores and 250 m² at the SPEC §6 density.
 pub const DEFAULT_MAX_SAMPLES: usize = 10_000_000;
 
+/// Most samples [`SamplingConfig::max_samples`] may allow: scoring (a
+/// nearest-point query per sample) stays within minutes, and a coverage
+/// tracker holding them within a few gigabytes.
+pub const MAX_SAMPLES_CEILING: usize = 50_000_000;
+
 /// Samples a [`SurfaceSampler`] draws per chunk unless told otherwise (about
 /// 16 MB of [`SurfaceSample`]s).
 pub const DEFAULT_SAMPLE_CHUNK: usize = 1 << 18;
@@ -92,10 +97,13 @@ impl SamplingConfig {
                 ));
             }
         }
-        if self.max_samples == 0 {
+        if self.max_samples == 0 || self.max_samples > MAX_SAMPLES_CEILING {
             return Err(SceneError::invalid(
                 "sampling.max_samples",
-                "expected at least 1 sample, got 0",
+                format!(
+                    "expected 1 to {MAX_SAMPLES_CEILING} samples, got {}",
+                    self.max_samples
+                ),
             ));
         }
         Ok(())

@@ -60,9 +60,11 @@ pub struct ObjectSpec {
 pub struct PoseSpec {
     /// Translation, metres.
     #[serde(default)]
+    #[serde(deserialize_with = "geom::exact::array")]
     pub translation: [Real; 3],
     /// Roll, pitch, yaw in degrees.
     #[serde(default)]
+    #[serde(deserialize_with = "geom::exact::array")]
     pub rpy_deg: [Real; 3],
 }
 
@@ -80,10 +82,10 @@ impl PoseSpec {
             }
         }
         for (i, a) in self.rpy_deg.iter().enumerate() {
-            if !a.is_finite() {
+            if !(a.is_finite() && a.abs() <= 360.0) {
                 return Err(SceneError::invalid(
                     format!("{what}: rpy_deg[{i}]"),
-                    format!("expected a finite angle in degrees, got {a}"),
+                    format!("expected an angle within ±360 degrees, got {a}"),
                 ));
             }
         }
@@ -103,18 +105,23 @@ pub enum ShapeSpec {
     /// The axis-aligned box `[min, max]`.
     Box {
         /// Lowest corner.
+        #[serde(deserialize_with = "geom::exact::array")]
         min: [Real; 3],
         /// Highest corner.
+        #[serde(deserialize_with = "geom::exact::array")]
         max: [Real; 3],
     },
     /// An I-beam; `from`/`to` are the middle of the bottom flange's outer face at
     /// the two ends, `up` points toward the top flange.
     IBeam {
         /// Start of the beam.
+        #[serde(deserialize_with = "geom::exact::array")]
         from: [Real; 3],
         /// End of the beam.
+        #[serde(deserialize_with = "geom::exact::array")]
         to: [Real; 3],
         /// Direction from bottom to top flange.
+        #[serde(deserialize_with = "geom::exact::array")]
         up: [Real; 3],
         /// Overall depth.
         depth: Real,
@@ -128,8 +135,10 @@ pub enum ShapeSpec {
     /// A closed cylinder.
     Cylinder {
         /// Centre of one end.
+        #[serde(deserialize_with = "geom::exact::array")]
         from: [Real; 3],
         /// Centre of the other end.
+        #[serde(deserialize_with = "geom::exact::array")]
         to: [Real; 3],
         /// Radius.
         radius: Real,
@@ -143,6 +152,7 @@ pub enum ShapeSpec {
         /// Extrusion axis.
         axis: Axis,
         /// Profile vertices.
+        #[serde(deserialize_with = "geom::exact::vec_of_arrays")]
         profile: Vec<[Real; 2]>,
         /// Extrusion start along the axis.
         from: Real,

@@ -134,28 +134,34 @@ impl ScannerConfig {
             self.min_range_m,
         )?;
         check(
-            self.max_range_m.is_finite() && self.max_range_m > self.min_range_m,
+            self.max_range_m.is_finite()
+                && self.max_range_m > self.min_range_m
+                && self.max_range_m <= 1000.0,
             "max_range_m",
-            "a distance greater than min_range_m",
+            "a distance greater than min_range_m, at most 1000 metres",
             self.max_range_m,
         )?;
         let n = self.noise;
+        // A range noise of a metre (or of the whole range) makes every
+        // return noise: the ceilings keep a scan a measurement.
         check(
-            n.sigma_near_m.is_finite() && n.sigma_near_m >= 0.0,
+            n.sigma_near_m.is_finite() && (0.0..=1.0).contains(&n.sigma_near_m),
             "noise.sigma_near_m",
-            "a finite standard deviation >= 0 (metres)",
+            "a standard deviation in [0, 1] metres",
             n.sigma_near_m,
         )?;
         check(
-            n.near_limit_m.is_finite() && n.near_limit_m >= 0.0,
+            n.near_limit_m.is_finite()
+                && n.near_limit_m >= 0.0
+                && n.near_limit_m <= self.max_range_m,
             "noise.near_limit_m",
-            "a finite distance >= 0",
+            "a distance in [0, max_range_m]",
             n.near_limit_m,
         )?;
         check(
-            n.relative_far.is_finite() && n.relative_far >= 0.0,
+            n.relative_far.is_finite() && (0.0..=0.5).contains(&n.relative_far),
             "noise.relative_far",
-            "a finite fraction of the range >= 0",
+            "a fraction of the range in [0, 0.5]",
             n.relative_far,
         )?;
         let r = &self.reflection;

@@ -159,11 +159,11 @@ impl FollowRunOptions {
             return Err(bad("max_sets", "expected at least 1 sensor set"));
         }
         if let Some(s) = self.noise_sigma_m
-            && !(s.is_finite() && s >= 0.0)
+            && !(s.is_finite() && (0.0..=scenario::range_sensors::MAX_NOISE_SIGMA_M).contains(&s))
         {
             return Err(bad(
                 "noise_sigma_m",
-                format!("expected a finite standard deviation ≥ 0 (metres), got {s}"),
+                format!("expected a standard deviation from 0 to 1 metre, got {s}"),
             ));
         }
         match &self.start {
@@ -319,6 +319,23 @@ fn check_start(
                     c.link.index(),
                     robot.links[c.link.index()].name,
                     scene.object(c.object).map_or("?", |o| o.name.as_str())
+                ),
+            ));
+        }
+        // A point robot has no link shapes: its control point itself must be
+        // outside every closed object.
+        let tool = robot.tool_pose(q).map_err(|e| bad(what, e.to_string()))?;
+        let control = world_from_base * Point3::from(tool.translation.vector);
+        if scene.is_inside_closed_object(&control, None) {
+            let object = scene
+                .closest_point(&control, Real::INFINITY)
+                .and_then(|(_, face, _)| scene.object(scene.triangle_object(face)))
+                .map_or("?", |o| o.name.as_str());
+            return Err(bad(
+                what,
+                format!(
+                    "the start puts the control point ({:.3}, {:.3}, {:.3}) inside object {object}; start outside it",
+                    control.x, control.y, control.z
                 ),
             ));
         }

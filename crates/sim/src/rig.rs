@@ -82,12 +82,12 @@ impl SimRig {
     /// RNG, so the same seed, poses and reads give the same readings. An error
     /// (σ not finite, or negative) leaves the rig unchanged.
     pub fn set_range_noise_sigma_m(&mut self, sigma_m: Real) -> Result<(), SimError> {
-        if !(sigma_m.is_finite() && sigma_m >= 0.0) {
+        if !(sigma_m.is_finite()
+            && (0.0..=scenario::range_sensors::MAX_NOISE_SIGMA_M).contains(&sigma_m))
+        {
             return Err(SimError::InvalidArgument {
                 what: "range noise σ (range_sensors.noise_sigma_m)".into(),
-                message: format!(
-                    "expected a finite standard deviation ≥ 0 (metres), got {sigma_m}"
-                ),
+                message: format!("expected a standard deviation from 0 to 1 metre, got {sigma_m}"),
             });
         }
         self.range_noise_sigma_m = sigma_m;

@@ -8,6 +8,15 @@ use serde::{Deserialize, Serialize};
 /// Default of [`SurfaceConfig::max_set_points`].
 pub const DEFAULT_MAX_SET_POINTS: usize = 4096;
 
+/// Most points [`SurfaceConfig::max_set_points`] may allow: a set's update
+/// grows with the square of its points (16 384 points update in seconds;
+/// 200 000 did not finish).
+pub const MAX_SET_POINTS_CEILING: usize = 16_384;
+
+/// Largest λ accepted, metres: the resolution of a model of a structure a
+/// robot follows, not of a landscape.
+pub const MAX_LAMBDA_M: Real = 10.0;
+
 /// Parameters of the surface model. Defaults are Pudney's (P§4.3): λ = 0.05,
 /// μ = 10°, ψ = 20, φ = 0.05.
 ///
@@ -79,8 +88,8 @@ impl SurfaceConfig {
                 expected,
             })
         };
-        if !(self.lambda.is_finite() && self.lambda > 0.0) {
-            return bad("lambda", self.lambda, "a finite length > 0");
+        if !(self.lambda.is_finite() && self.lambda > 0.0 && self.lambda <= MAX_LAMBDA_M) {
+            return bad("lambda", self.lambda, "a length in (0, 10] metres");
         }
         if !(self.mu_deg.is_finite() && self.mu_deg > 0.0 && self.mu_deg < 90.0) {
             return bad("mu_deg", self.mu_deg, "an angle in (0, 90) degrees");
@@ -101,11 +110,11 @@ impl SurfaceConfig {
                 "a fraction in (0, 1)",
             );
         }
-        if self.max_set_points == 0 {
+        if self.max_set_points == 0 || self.max_set_points > MAX_SET_POINTS_CEILING {
             return bad(
                 "max_set_points",
                 self.max_set_points as Real,
-                "a count >= 1",
+                "a count from 1 to 16384",
             );
         }
         Ok(())

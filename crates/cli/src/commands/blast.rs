@@ -32,7 +32,7 @@ pub struct PlanBlastArgs {
     #[arg(long)]
     tool: Option<PathBuf>,
     /// Seed of the GA (each segment mixes in its index).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<u64>, default_value_t = 0)]
     seed: u64,
     /// Output folder.
     #[arg(long)]

@@ -51,10 +51,10 @@ pub struct ExploreArgs {
     #[arg(long, requires = "robot")]
     scanner_link: Option<String>,
     /// Seed of the scanner noise.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<u64>, default_value_t = 0)]
     seed: u64,
     /// Most Stage One viewpoints (the start pose's sweep included).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<usize>)]
     max_viewpoints: Option<usize>,
     /// Stages to run: `one` (geometry) or `both` (then materials).
     #[arg(long, default_value = "both")]
@@ -131,7 +131,7 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         &options,
         &args.out,
         &mut |r| {
-            eprintln!(
+            note!(
                 "stage {}, viewpoint {:>2}: H1 {:>9.1} (weighted {:>8.1}), H2 {:>7.3}, H3 {}, revealed {:>6}, A1 covered {}, {} candidates, decision {:>6.0} ms",
                 r.stage,
                 r.k,
@@ -167,6 +167,24 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         ),
         run.cspace
     )?;
+    if summary.termination == explore::Termination::NoSafeCandidate.name() {
+        let local = loaded
+            .scenario
+            .explore
+            .as_ref()
+            .map_or(explore::ExploreConfig::default().local_candidates, |e| {
+                e.local_candidates
+            });
+        say!(
+            "no contending viewpoint had a safe sweep and a safe path from the arm's last pose{}",
+            if local == 0 {
+                ": [explore] local_candidates = 0 leaves only the roadmap's nodes (Paul's \
+                 method), whose sweeps from a crouched start reach space not yet seen"
+            } else {
+                ""
+            }
+        )?;
+    }
     if let Some(end) = &run.stage_two_termination {
         say!(
             "stage two ended ({end}) after {} viewpoints; material right on {} of the discs the LRC observed",

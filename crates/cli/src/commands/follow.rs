@@ -76,10 +76,10 @@ pub struct FollowArgs {
     #[arg(long, allow_negative_numbers = true)]
     noise_m: Option<Real>,
     /// Seed of the range noise.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<u64>, default_value_t = 0)]
     seed: u64,
     /// Most sensor sets to take (one per step).
-    #[arg(long, default_value_t = DEFAULT_MAX_SETS)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<u64>, default_value_t = DEFAULT_MAX_SETS)]
     max_sets: u64,
     /// Parameters (TOML): a `[follow]` table (FollowConfig: desired_distance_m,
     /// max_step_m, ...) and a [surface] table (SurfaceConfig: lambda, mu_deg, ...).
@@ -120,9 +120,9 @@ fn options(a: &FollowArgs, config: FollowRunConfig) -> Result<FollowRunOptions> 
         (None, None) => None,
     };
     if let Some(s) = a.noise_m
-        && !(s.is_finite() && s >= 0.0)
+        && !(s.is_finite() && (0.0..=scenario::range_sensors::MAX_NOISE_SIGMA_M).contains(&s))
     {
-        bail!("--noise-m {s}: expected a finite standard deviation ≥ 0 (metres)");
+        bail!("--noise-m {s}: expected a standard deviation from 0 to 1 metre");
     }
     if a.max_sets == 0 {
         bail!("--max-sets 0: expected at least 1 sensor set");
@@ -196,7 +196,7 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     {
         let stop = Arc::clone(&stop);
         if let Err(e) = ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed)) {
-            eprintln!("note: Ctrl-C will end the run without writing outputs ({e})");
+            note!("note: Ctrl-C will end the run without writing outputs ({e})");
         }
     }
     let pb = ProgressBar::new(opts.max_sets);

@@ -34,10 +34,10 @@ pub struct SldArgs {
     #[arg(long, allow_negative_numbers = true)]
     radius: Option<Real>,
     /// Points a disc needs, n_min [config: min_points].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<usize>)]
     min_points: Option<usize>,
     /// Seed of the home-point draws.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<u64>, default_value_t = 0)]
     seed: u64,
     /// Output CSV (`cx,cy,cz,nx,ny,nz,radius,points`).
     #[arg(long, required_unless_present = "print_config")]
@@ -138,6 +138,11 @@ pub fn segment(a: &SegmentArgs) -> Result<()> {
         put!("{}", config_toml(&cfg)?)?;
         return Ok(());
     }
+    if a.tau_q_deg.is_some() && a.poses.is_none() {
+        bail!(
+            "--tau-q-deg applies with --poses (τq compares the poses of two discs; without poses the pose graph is not used)"
+        );
+    }
     let (Some(discs_path), Some(out)) = (&a.discs, &a.out) else {
         bail!("--discs and --out are required");
     };
@@ -230,10 +235,10 @@ pub fn map(a: &MapArgs) -> Result<()> {
             summary.tsdf.voxel_updates
         )?;
         if sweep.is_empty() {
-            eprintln!("warning: {} holds no points", path.display());
+            note!("warning: {} holds no points", path.display());
         } else if summary.occupancy.rays_outside == sweep.len() {
             let b = mapper.occupancy().geometry().aabb();
-            eprintln!(
+            note!(
                 "warning: {}: all {} rays lie outside the occupancy map (A3 = [{:.2}, {:.2}] × [{:.2}, {:.2}] × [{:.2}, {:.2}] m): \
                  nothing was integrated into it (the TSDF mesh is not bounded by A3); check the scan's frame or pass --scenario with its regions",
                 path.display(),

@@ -104,6 +104,9 @@ impl JointArgs {
     /// (`robot` is built only then).
     fn values(&self, robot: impl FnOnce() -> Result<robot::Robot>) -> Result<Option<Vec<Real>>> {
         let Some(q) = &self.joints else {
+            if self.deg {
+                bail!("--deg applies to --joints, which is not given");
+            }
             return Ok(None);
         };
         if !self.deg {
@@ -176,7 +179,7 @@ struct ScanArgs {
     #[arg(long, allow_negative_numbers = true)]
     tilt_deg: Option<Real>,
     /// Seed of the sensor noise.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<u64>, default_value_t = 0)]
     seed: u64,
     /// Output PLY (vertex properties x y z intensity ox oy oz scan ray material;
     /// see `sensor::scan_file`). A missing folder is created.
@@ -196,12 +199,12 @@ struct RaycastArgs {
     #[arg(long)]
     out: PathBuf,
     /// Worker threads, 1 to 256 (default: all cores).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<usize>)]
     threads: Option<usize>,
-    /// Casts of the whole batch; the median time is reported (the protocol of
-    /// `../shared/bench/raycast_embree_dump.cpp`: median of 5 after the build),
-    /// 1 to 1000.
-    #[arg(long, default_value_t = 5)]
+    /// Casts of the whole batch; the median time is reported (median of 5
+    /// after the BVH build, the protocol the Embree comparison of the README
+    /// uses), 1 to 1000.
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<usize>, default_value_t = 5)]
     repeat: usize,
 }
 
@@ -211,11 +214,19 @@ struct FixtureArgs {
     #[arg(long)]
     out: PathBuf,
     /// Number of rays (at most scene::fixtures::MAX_FIXTURE_RAYS, 10 million).
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<usize>, default_value_t = 1_000_000)]
     rays: usize,
     /// Seed of the ray directions and origins.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<u64>, default_value_t = 1)]
     seed: u64,
+}
+
+/// A whole number ≥ 0 from the command line, refused with a message that
+/// says so (clap's own parser takes `-1` for another flag).
+pub(crate) fn whole<T: std::str::FromStr>(s: &str) -> Result<T, String> {
+    s.trim()
+        .parse::<T>()
+        .map_err(|_| format!("expected a whole number ≥ 0, got `{s}`"))
 }
 
 /// Most worker threads `raycast` starts.
@@ -288,7 +299,7 @@ struct LimitViolation {
 /// mesh not read) to stderr.
 fn warn_about(robot: &robot::Robot) {
     for w in &robot.warnings {
-        eprintln!("warning: {w}");
+        note!("warning: {w}");
     }
 }
 

@@ -3,6 +3,7 @@
 
 mod architecture;
 mod bad_input;
+mod campaign;
 mod commands;
 mod follow;
 mod plan_blast;

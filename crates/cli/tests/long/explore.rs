@@ -434,3 +434,97 @@ fn copy_folder(from: &std::path::Path, to: &std::path::Path) {
         }
     }
 }
+
+/// Issue 23: `surveyor report` refuses a run folder missing a file the run
+/// writes (it once drew a page without it), naming the file.
+#[test]
+#[ignore = "an exploration run (shared with the kill -9 test): run by .ci/run"]
+fn report_refuses_a_run_folder_missing_a_file() {
+    let run = stage_two_run();
+    let dir = tempfile::tempdir().unwrap();
+    for name in [
+        "cloud.ply",
+        "mesh.ply",
+        "discs.csv",
+        "blast_plan.json",
+        "path.csv",
+        "candidates.csv",
+        "scenario.toml",
+    ] {
+        let copy = dir.path().join(name.replace('.', "_"));
+        copy_folder(&run.whole, &copy);
+        std::fs::remove_file(copy.join("report.html")).unwrap();
+        std::fs::remove_file(copy.join(name)).unwrap();
+        fails_with(&["report", copy.to_str().unwrap()], &[name]);
+        assert!(!copy.join("report.html").exists(), "{name}");
+    }
+}
+
+/// Issue 23: a full disk while an exploration writes its outputs leaves no
+/// file cut short under its own name and no `run.json` (the checkpoint,
+/// rewritten whole after every viewpoint, stays for `--resume`).
+#[test]
+#[ignore = "an exploration run: run by .ci/run"]
+fn a_full_disk_while_explore_writes_leaves_no_partial_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let cache = dir.path().join("cspace.json");
+    let mut args = explore_args(&["--stages", "one", "--max-viewpoints", "2"], &cache, &out);
+    // Build the C-space cache first, so the limit hits the outputs only.
+    ok_owned(&explore_args(
+        &["--stages", "one", "--max-viewpoints", "1"],
+        &cache,
+        &dir.path().join("warm"),
+    ));
+    let script = "trap '' XFSZ; ulimit -f 2048; exec \"$0\" \"$@\"";
+    let surveyor = env!("CARGO_BIN_EXE_surveyor");
+    args.insert(0, surveyor.to_owned());
+    let status = std::process::Command::new("sh")
+        .arg("-c")
+        .arg(script)
+        .args(&args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&status.stderr);
+    assert!(
+        !status.status.success() && !err.contains("panicked"),
+        "{err}"
+    );
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, vec!["checkpoint.json".to_owned()], "{err}");
+}
+
+/// Issue 23: `[explore] local_candidates = 0` (the roadmap's nodes only,
+/// Paul's own method) ends Stage One with `no_safe_candidate`, and the run
+/// says why.
+#[test]
+#[ignore = "an exploration run: run by .ci/run"]
+fn no_local_candidates_is_explained() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = dir.path().join("b.toml");
+    let text = ok(&["scenario", "show", "bridge1"])
+        .replace("local_candidates = 200", "local_candidates = 0");
+    assert!(text.contains("local_candidates = 0"));
+    std::fs::write(&scenario, text).unwrap();
+    let out = dir.path().join("run");
+    let said = ok(&[
+        "explore",
+        "--scenario",
+        scenario.to_str().unwrap(),
+        "--stages",
+        "one",
+        "--max-viewpoints",
+        "4",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        said.contains("(no_safe_candidate) after 1 viewpoints")
+            && said.contains("local_candidates = 0 leaves only the roadmap's nodes"),
+        "{said}"
+    );
+}

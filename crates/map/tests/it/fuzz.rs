@@ -7,8 +7,8 @@
 //! record per non-blank data line, with finite values, unit normals and
 //! positive radii.
 //!
-//! `cargo test -p map --test fuzz` runs 512 cases per reader;
-//! `cargo test -p map --test fuzz -- --ignored` runs 20 000.
+//! `cargo test -p map --test it fuzz` runs 512 cases per reader;
+//! `cargo test -p map --test it fuzz -- --ignored` runs 20 000.
 //! The mutator and runner are `testkit::fuzz` (`FUZZ_SEED=<n>` replays a run).
 
 #![allow(
@@ -106,7 +106,7 @@ fn fuzz_poses_csv() {
 }
 
 #[test]
-#[ignore = "long fuzz run (20 000 cases per reader): cargo test -p map --test fuzz -- --ignored"]
+#[ignore = "long fuzz run (20 000 cases per reader): cargo test -p map --test it fuzz -- --ignored"]
 fn fuzz_long() {
     fuzz(Run::Long(LONG_CASES), disc_seeds(), check_discs);
     fuzz(Run::Long(LONG_CASES), pose_seeds(), check_poses);

@@ -11,9 +11,9 @@
 //!
 //! ```text
 //! cargo run --release -- explore --scenario bridge1 --out /tmp/run
-//! SURVEYOR_REPORT_RUN=/tmp/run cargo test -p report --test browser explore -- --ignored --nocapture
+//! SURVEYOR_REPORT_RUN=/tmp/run cargo test -p report --test it browser explore -- --ignored --nocapture
 //! cargo run --release -- follow --scenario block1 --robot arm4 --out /tmp/follow
-//! SURVEYOR_REPORT_FOLLOW_RUN=/tmp/follow cargo test -p report --test browser follow -- --ignored --nocapture
+//! SURVEYOR_REPORT_FOLLOW_RUN=/tmp/follow cargo test -p report --test it browser follow -- --ignored --nocapture
 //! ```
 
 #![allow(

@@ -6,8 +6,8 @@
 //! files are not read). Nothing may panic; every `Ok` robot must pass
 //! [`Robot::validate`] and give finite forward kinematics inside its limits.
 //!
-//! `cargo test -p robot --test fuzz` runs 128 cases;
-//! `cargo test -p robot --test fuzz -- --ignored` runs 20 000.
+//! `cargo test -p robot --test it fuzz` runs 128 cases;
+//! `cargo test -p robot --test it fuzz -- --ignored` runs 20 000.
 //! The mutator and runner are `testkit::fuzz` (`FUZZ_SEED=<n>` replays a run).
 
 #![allow(
@@ -100,7 +100,7 @@ fn fuzz_urdf() {
 }
 
 #[test]
-#[ignore = "long fuzz run (20 000 cases, about 14 min in debug): cargo test -p robot --test fuzz -- --ignored"]
+#[ignore = "long fuzz run (20 000 cases, about 14 min in debug): cargo test -p robot --test it fuzz -- --ignored"]
 fn fuzz_urdf_long() {
     fuzz(Run::Long(LONG_CASES), seeds(), check);
 }

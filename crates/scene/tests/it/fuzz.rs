@@ -7,8 +7,8 @@
 //! accepts them. Nothing may panic, and every `Ok` must be self-consistent and
 //! agree with the file's own size fields (no silent truncation).
 //!
-//! `cargo test -p scene --test fuzz` runs 512 cases per format;
-//! `cargo test -p scene --test fuzz -- --ignored` runs 20 000 per format.
+//! `cargo test -p scene --test it fuzz` runs 512 cases per format;
+//! `cargo test -p scene --test it fuzz -- --ignored` runs 20 000 per format.
 //! The mutator and runner are `testkit::fuzz` (`FUZZ_SEED=<n>` replays a run).
 
 #![allow(
@@ -377,7 +377,7 @@ fn fuzz_rays() {
 }
 
 #[test]
-#[ignore = "long fuzz run (20 000 cases per format, minutes in debug): cargo test -p scene --test fuzz -- --ignored"]
+#[ignore = "long fuzz run (20 000 cases per format, minutes in debug): cargo test -p scene --test it fuzz -- --ignored"]
 fn fuzz_long() {
     fuzz(Run::Long(LONG_CASES), ply_seeds(), via_file(check_ply));
     fuzz(Run::Long(LONG_CASES), pcd_seeds(), via_file(check_pcd));

@@ -311,7 +311,7 @@ fn ply_mesh_vertices_carry_face_normals() {
 }
 
 /// Load times of the real files (release build: `cargo test --release -p scene
-/// --test io_real_files -- --ignored --nocapture`). Prints, asserts nothing.
+/// --test it io_real_files -- --ignored --nocapture`). Prints, asserts nothing.
 #[test]
 #[ignore = "timing report, run by hand in release mode"]
 fn load_timings() {

@@ -6,8 +6,8 @@
 //! panic; an error names the source; an `Ok` scenario writes back to TOML that
 //! parses to the same TOML again.
 //!
-//! `cargo test -p sim --test fuzz` runs 512 cases;
-//! `cargo test -p sim --test fuzz -- --ignored` runs 20 000.
+//! `cargo test -p sim --test it fuzz` runs 512 cases;
+//! `cargo test -p sim --test it fuzz -- --ignored` runs 20 000.
 //! The mutator and runner are `testkit::fuzz` (`FUZZ_SEED=<n>` replays a run).
 
 #![allow(
@@ -68,7 +68,7 @@ fn fuzz_scenario_toml() {
 }
 
 #[test]
-#[ignore = "long fuzz run (20 000 cases): cargo test -p sim --test fuzz -- --ignored"]
+#[ignore = "long fuzz run (20 000 cases): cargo test -p sim --test it fuzz -- --ignored"]
 fn fuzz_scenario_toml_long() {
     fuzz(Run::Long(LONG_CASES), seeds(), check);
 }

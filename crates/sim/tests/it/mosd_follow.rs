@@ -9,7 +9,7 @@
 //! the test is ignored by `cargo test`. It is not in `.ci/run` either, because
 //! the follower does not meet acceptance 5 yet (see the `#[ignore]` reason);
 //! run it with
-//! `cargo test --release -p sim --test mosd_follow -- --ignored --nocapture`.
+//! `cargo test --release -p sim --test it mosd_follow -- --ignored --nocapture`.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may panic
 
 use follow::RunEnd;

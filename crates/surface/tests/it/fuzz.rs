@@ -7,8 +7,8 @@
 //! self-consistent (one set per non-blank line, each set passing
 //! [`SensorSet::validate`]; segments of at least three finite vertices).
 //!
-//! `cargo test -p surface --test fuzz` runs 512 cases per reader;
-//! `cargo test -p surface --test fuzz -- --ignored` runs 20 000.
+//! `cargo test -p surface --test it fuzz` runs 512 cases per reader;
+//! `cargo test -p surface --test it fuzz -- --ignored` runs 20 000.
 //! The mutator and runner are `testkit::fuzz` (`FUZZ_SEED=<n>` replays a run).
 
 #![allow(
@@ -92,7 +92,7 @@ fn fuzz_initial_segments_json() {
 }
 
 #[test]
-#[ignore = "long fuzz run (20 000 cases per reader): cargo test -p surface --test fuzz -- --ignored"]
+#[ignore = "long fuzz run (20 000 cases per reader): cargo test -p surface --test it fuzz -- --ignored"]
 fn fuzz_long() {
     fuzz(Run::Long(LONG_CASES), set_seeds(), check_sets);
     fuzz(Run::Long(LONG_CASES), segment_seeds(), check_segments);

@@ -101,7 +101,7 @@ fn pc2beam_beams() {
 }
 
 /// All points of every scan, sets of 20 and 30, invariants after every update.
-/// Run with `cargo test -p surface --release --test real_data -- --ignored`.
+/// Run with `cargo test -p surface --release --test it real_data -- --ignored`.
 #[test]
 #[ignore = "long: full-resolution scans"]
 fn stress_full_scans() {

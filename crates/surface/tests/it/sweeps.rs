@@ -523,7 +523,7 @@ fn cylinder_sweep_noisy() {
 }
 
 /// Issue 9 on ten more seeds per scene. Run with
-/// `cargo test -p surface --release --test sweeps -- --ignored`.
+/// `cargo test -p surface --release --test it sweeps -- --ignored`.
 ///
 /// Known failures, left out of the assertion (and printed): block1 seed 14
 /// keeps two polygons tilted 15–20° off the step's riser next to its concave
@@ -549,7 +549,7 @@ fn noisy_sweeps_more_seeds() {
 }
 
 /// More sweeps (other seeds, noise levels and steps), invariants only. Run with
-/// `cargo test -p surface --release --test sweeps -- --ignored`.
+/// `cargo test -p surface --release --test it sweeps -- --ignored`.
 #[test]
 #[ignore = "long: extra seeds and steps"]
 fn stress_sweeps() {
