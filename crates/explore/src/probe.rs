@@ -71,20 +71,7 @@ impl LineScanner for MapProbe {
         let mount = self.robot.scanner.as_ref().ok_or(HwError::NoScanner)?;
         let pose = self.world_from_base * self.frames[mount.link.0] * mount.link_from_scanner;
         let scan = self.scanner.scan(self.world.as_ref(), &pose, &mut self.rng);
-        Ok(ScanReadings {
-            ranges_m: scan.returns.iter().map(|r| r.map(|r| r.range_m)).collect(),
-            intensities: scan
-                .returns
-                .iter()
-                .map(|r| r.map_or(0.0, |r| r.intensity))
-                .collect(),
-            truth_materials: Some(
-                scan.returns
-                    .iter()
-                    .map(|r| r.and_then(|r| r.material))
-                    .collect(),
-            ),
-        })
+        Ok(ScanReadings::of_simulated(&scan))
     }
 
     fn seed_noise(&mut self, seed: u64) {

@@ -5,7 +5,7 @@
 //! `#[serde(deserialize_with = "geom::exact::array")]`.
 //!
 //! ```
-//! #[derive(serde::Deserialize)]
+//! #[derive(Debug, serde::Deserialize)]
 //! struct Pose {
 //!     #[serde(deserialize_with = "geom::exact::array")]
 //!     translation: [f64; 3],

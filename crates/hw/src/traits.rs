@@ -24,6 +24,27 @@ pub struct ScanReadings {
     pub truth_materials: Option<Vec<Option<MaterialId>>>,
 }
 
+impl ScanReadings {
+    /// The readings of a scan simulated by `sensor::Scanner`, with the
+    /// material each return hit.
+    pub fn of_simulated(scan: &sensor::Scan) -> Self {
+        Self {
+            ranges_m: scan.returns.iter().map(|r| r.map(|r| r.range_m)).collect(),
+            intensities: scan
+                .returns
+                .iter()
+                .map(|r| r.map_or(0.0, |r| r.intensity))
+                .collect(),
+            truth_materials: Some(
+                scan.returns
+                    .iter()
+                    .map(|r| r.and_then(|r| r.material))
+                    .collect(),
+            ),
+        }
+    }
+}
+
 /// A 2-D line scanner taking a scan at the robot's current pose.
 pub trait LineScanner {
     /// Bearing of every slot, radians (scanner frame, A eq. 4.7).

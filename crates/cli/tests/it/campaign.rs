@@ -346,7 +346,7 @@ fn negative_counts_say_what_they_expected() {
     ] {
         let flag = args[args
             .iter()
-            .position(|a| a.starts_with("-") && a.as_bytes()[1].is_ascii_digit())
+            .position(|a| a.starts_with('-') && a.as_bytes()[1].is_ascii_digit())
             .unwrap()
             - 1];
         fails_with(&args, &[flag, "expected a whole number ≥ 0"]);

@@ -2,7 +2,7 @@
 //! surface-following scenes as ground truth, range finders measured by ray
 //! casting, and ground-truth collision checks of the robot's capsules.
 //! (The full runner with scenario files, safety checks between steps and run
-//! directories is `sim::follow_run`; this harness stays below `sim`.)
+//! directories is `sim::follow_job`; this harness stays below `sim`.)
 
 #![allow(dead_code, clippy::unwrap_used)]
 

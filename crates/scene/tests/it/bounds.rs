@@ -81,10 +81,11 @@ fn non_finite_and_huge_poses_and_coordinates_are_named() {
             "got -1000",
         ),
         ("{ rpy_deg = [0, nan, 0] }", "rpy_deg[1]", "got NaN"),
+        ("{ rpy_deg = [0, 0, 1e308] }", "rpy_deg[2]", "within ±360"),
     ] {
         let err = build_err(&object(pose));
         assert!(
-            err.starts_with(&format!("object `b` pose: {field}: expected a finite")),
+            err.starts_with(&format!("object `b` pose: {field}: expected a")),
             "{pose}: {err}"
         );
         assert!(err.contains(got), "{pose}: {err}");
