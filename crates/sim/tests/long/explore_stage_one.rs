@@ -13,8 +13,19 @@
 use hw::{Arm, tilt_sweep};
 use scenario::Scenario;
 use sim::SimRig;
-use sim::explore_job::{ExploreOptions, ExploreOutcome, SimExplore, run_exploration};
+use sim::explore_job::{ExploreOptions, ExploreOutcome, run_exploration};
 use std::sync::Arc;
+
+/// Options with the C-space model cached once for the long tests (each
+/// would otherwise build it again).
+fn cached() -> ExploreOptions {
+    ExploreOptions {
+        cspace_cache: Some(
+            std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("cspace-denso-vm6083.json"),
+        ),
+        ..ExploreOptions::default()
+    }
+}
 
 /// Ranks with ties averaged (1-based).
 fn ranks(v: &[f64]) -> Vec<f64> {
@@ -61,20 +72,25 @@ fn predicted_gain_ranks_candidates_like_the_gain_their_sweeps_bring() {
     // simulated in the true scene and integrated into a copy of the map:
     // the weighted H1 it really removes is the second method.
     let loaded = Scenario::load("bridge1").unwrap();
-    let SimExplore {
-        setup,
-        world,
-        mut rig,
-        ..
-    } = SimExplore::new(&loaded, &ExploreOptions::default()).unwrap();
+    let (setup, world) = sim::explore_job::explore_setup(&loaded, &cached()).unwrap();
     let explore::Setup {
         robot,
         world_from_base: wfb,
         config,
         mut stage,
+        start,
         ..
     } = setup;
     let scanner = sensor::Scanner::new(loaded.scenario.scanner.clone().unwrap().config).unwrap();
+    let mut rig = SimRig::new(
+        robot.clone(),
+        Arc::clone(&world),
+        wfb,
+        &start,
+        Some(scanner.clone()),
+        0,
+    )
+    .unwrap();
     for decision in 0..3 {
         let sweep = tilt_sweep(&mut rig, &robot, &wfb, &config.sweep, &mut |_, _| {}).unwrap();
         stage.integrate(&sweep);
@@ -118,7 +134,7 @@ fn run(seed: u64) -> ExploreOutcome {
     let options = ExploreOptions {
         seed,
         max_viewpoints: Some(8),
-        ..ExploreOptions::default()
+        ..cached()
     };
     run_exploration(&loaded, &options, &mut |_| {}).unwrap()
 }
@@ -277,7 +293,7 @@ fn stage_two_aims_at_discs_safely_and_lowers_the_material_information() {
         seed: 0,
         config: Some(config),
         stage_two: true,
-        ..ExploreOptions::default()
+        ..cached()
     };
     let outcome = run_exploration(&loaded, &options, &mut |_| {}).unwrap();
     let run = &outcome.run;
@@ -558,7 +574,8 @@ fn check_blast_plan(outcome: &ExploreOutcome) {
 /// recorded ([`hw::script::Recorder`]), kept as JSON, and played back by a
 /// [`hw::script::Replay`], which answers every command with what was
 /// recorded and refuses any other: the run on the replay is the run on the
-/// simulator, viewpoint for viewpoint and point for point.
+/// simulator, viewpoint for viewpoint and point for point (six Stage One
+/// viewpoints, then Stage Two's choice).
 #[test]
 #[ignore = "seconds in release; run by .ci/run"]
 fn exploration_on_a_replayed_session_repeats_the_simulated_run() {
@@ -567,21 +584,31 @@ fn exploration_on_a_replayed_session_repeats_the_simulated_run() {
     use record::viewpoints::{candidates_csv, path_csv, viewpoints_csv};
     let loaded = Scenario::load("bridge1").unwrap();
     let mut config = loaded.scenario.explore.clone().unwrap();
-    config.max_viewpoints = 40;
-    config.stage_two_max_viewpoints = 2;
+    config.max_viewpoints = 6;
+    config.stage_two_max_viewpoints = 1;
     let options = ExploreOptions {
         seed: 2,
         config: Some(config),
         stage_two: true,
-        cspace_cache: Some(ExploreOptions::default_cspace_cache(&loaded).unwrap()),
-        ..ExploreOptions::default()
+        ..cached()
     };
-    let SimExplore {
-        setup,
-        rig,
-        run_options,
-        ..
-    } = SimExplore::new(&loaded, &options).unwrap();
+    let (setup, world) = sim::explore_job::explore_setup(&loaded, &options).unwrap();
+    let scanner = sensor::Scanner::new(setup.scanner).unwrap();
+    let rig = SimRig::new(
+        setup.robot.clone(),
+        world,
+        setup.world_from_base,
+        &setup.start,
+        Some(scanner),
+        options.seed,
+    )
+    .unwrap();
+    let run_options = explore::RunOptions {
+        seed: options.seed,
+        timings: false,
+        stage_two: true,
+        ..explore::RunOptions::default()
+    };
     let bearings = rig.bearings_rad().to_vec();
     let mut recorder = Recorder::new(rig, bearings);
     let a = explore::run(
@@ -616,7 +643,8 @@ fn exploration_on_a_replayed_session_repeats_the_simulated_run() {
         b.cloud.len()
     );
     assert_eq!(replay.remaining(), 0);
-    assert!(b.viewpoints.iter().any(|r| r.stage == 2));
+    // Stage Two ran (its choice of a disc, on the replay as on the rig).
+    assert!(b.stage_two_termination.is_some());
     for csv in [viewpoints_csv, candidates_csv, path_csv] {
         assert_eq!(csv(&a.viewpoints), csv(&b.viewpoints));
     }
