@@ -10,7 +10,7 @@ use geom::{Isometry3, Real};
 use hw::{Arm, HwError, LineScanner, ScanReadings};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use robot::Robot;
+use robot::{Posture, Robot};
 use scene::World;
 use sensor::Scanner;
 use std::sync::Arc;
@@ -20,8 +20,7 @@ pub(crate) struct MapProbe {
     robot: Robot,
     world: Arc<World>,
     world_from_base: Isometry3,
-    q: Vec<Real>,
-    frames: Vec<Isometry3>,
+    posture: Posture,
     scanner: Scanner,
     rng: ChaCha8Rng,
 }
@@ -35,13 +34,11 @@ impl MapProbe {
         q: &[Real],
         scanner: Scanner,
     ) -> Result<Self, HwError> {
-        let frames = robot.forward_kinematics(q)?;
         Ok(Self {
+            posture: Posture::new(&robot, q)?,
             robot,
             world,
             world_from_base,
-            q: q.to_vec(),
-            frames,
             scanner,
             rng: ChaCha8Rng::seed_from_u64(0),
         })
@@ -50,15 +47,11 @@ impl MapProbe {
 
 impl Arm for MapProbe {
     fn joints(&self) -> Vec<Real> {
-        self.q.clone()
+        self.posture.joints().to_vec()
     }
 
     fn move_to(&mut self, q: &[Real]) -> Result<(), HwError> {
-        self.robot.check_within_limits(q)?;
-        self.robot.fk_into(q, &mut self.frames)?;
-        self.q.clear();
-        self.q.extend_from_slice(q);
-        Ok(())
+        Ok(self.posture.move_to(&self.robot, q)?)
     }
 }
 
@@ -68,8 +61,11 @@ impl LineScanner for MapProbe {
     }
 
     fn scan(&mut self) -> Result<ScanReadings, HwError> {
-        let mount = self.robot.scanner.as_ref().ok_or(HwError::NoScanner)?;
-        let pose = self.world_from_base * self.frames[mount.link.0] * mount.link_from_scanner;
+        let base_from_scanner = self
+            .posture
+            .base_from_scanner(&self.robot)
+            .ok_or(HwError::NoScanner)?;
+        let pose = self.world_from_base * base_from_scanner;
         let scan = self.scanner.scan(self.world.as_ref(), &pose, &mut self.rng);
         Ok(ScanReadings::of_simulated(&scan))
     }

@@ -154,7 +154,10 @@ impl CspaceModel {
         voxel_m: Real,
         config: &PlanConfig,
     ) -> Result<Self, String> {
-        let text = std::fs::read(path).map_err(|e| format!("cannot read it ({e})"))?;
+        let text = std::fs::read(path).map_err(|e| match e.kind() {
+            std::io::ErrorKind::NotFound => "no cache file yet".to_owned(),
+            _ => format!("cannot read it ({e})"),
+        })?;
         let file: CacheFile =
             serde_json::from_slice(&text).map_err(|e| format!("not a C-space cache ({e})"))?;
         if file.format != FORMAT {

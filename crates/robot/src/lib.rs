@@ -5,6 +5,7 @@
 //! | module | entry points |
 //! |---|---|
 //! | [`model`] | [`Robot`], [`Link`], [`Joint`], [`JointKind`], [`JointLimits`], [`CollisionShape`], [`RangeFinderMount`], [`ScannerMount`], [`PosedShape`]; [`Robot::fk_into`], [`Robot::jacobian_into`], [`Robot::min_algebraic_distance`] |
+//! | [`posture`] | [`Posture`]: joints and link frames kept in step |
 //! | [`dh`] | [`DhRow`], [`Robot::from_dh`] (standard DH, Corke convention; Paul Table C.1) |
 //! | [`urdf`] | [`Robot::from_urdf_file`], [`Robot::from_urdf_str`] |
 //! | [`mod@builtin`] | [`builtin()`], [`builtin_names`]: `denso-vm6083`, `point3`, `arm4` |
@@ -23,6 +24,7 @@ pub mod error;
 pub mod linalg;
 pub mod mesh;
 pub mod model;
+pub mod posture;
 pub mod urdf;
 
 pub use builtin::{builtin, builtin_names};
@@ -34,3 +36,4 @@ pub use model::{
     CollisionShape, Joint, JointKind, JointLimits, Link, LinkId, PosedShape, RangeFinderMount,
     Robot, ScannerMount,
 };
+pub use posture::Posture;

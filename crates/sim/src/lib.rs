@@ -73,17 +73,6 @@ pub enum SimError {
     /// A map refused a value.
     #[error(transparent)]
     Map(Box<map::MapError>),
-    /// A scan was requested from a robot without a scanner.
-    #[error("the robot carries no scanner")]
-    NoScanner,
-    /// The sweep's tilt joint does not exist.
-    #[error("tilt joint {joint} does not exist: the robot has {dof} joints")]
-    TiltJoint {
-        /// 1-based joint number asked for.
-        joint: usize,
-        /// Joints the robot has.
-        dof: usize,
-    },
 }
 
 // Boxed: the planning and exploration errors are large, and `SimError` is

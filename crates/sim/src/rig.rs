@@ -8,7 +8,7 @@ use geom::{Isometry3, Real};
 use hw::{Arm, HwError, LineScanner, RangeSensors, ScanReadings};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use robot::Robot;
+use robot::{Posture, Robot};
 use scenario::LoadedScenario;
 use scene::World;
 use sensor::{RangeFinder, Scanner, SensorPoint};
@@ -20,10 +20,9 @@ pub struct SimRig {
     robot: Robot,
     world: Arc<World>,
     world_from_base: Isometry3,
-    q: Vec<Real>,
+    posture: Posture,
     scanner: Option<Scanner>,
     rng: ChaCha8Rng,
-    frames: Vec<Isometry3>,
     range_noise_sigma_m: Real,
 }
 
@@ -57,15 +56,13 @@ impl SimRig {
         scanner: Option<Scanner>,
         seed: u64,
     ) -> Result<Self, SimError> {
-        let frames = robot.forward_kinematics(q)?;
         Ok(Self {
+            posture: Posture::new(&robot, q)?,
             robot,
             world,
             world_from_base,
-            q: q.to_vec(),
             scanner,
             rng: ChaCha8Rng::seed_from_u64(seed),
-            frames,
             range_noise_sigma_m: 0.0,
         })
     }
@@ -121,30 +118,28 @@ impl SimRig {
 
     /// `world_from_link` of every link at the current pose.
     pub fn world_frames(&self) -> Vec<Isometry3> {
-        self.frames
+        self.posture
+            .base_from_link()
             .iter()
             .map(|f| self.world_from_base * f)
             .collect()
     }
 
-    /// The scanner pose in the world at the current joints.
-    pub fn world_from_scanner(&self) -> Result<Isometry3, SimError> {
-        let mount = self.robot.scanner.as_ref().ok_or(SimError::NoScanner)?;
-        Ok(self.world_from_base * self.frames[mount.link.0] * mount.link_from_scanner)
+    /// The scanner pose in the world at the current joints; `None` when
+    /// the robot carries no scanner.
+    pub fn world_from_scanner(&self) -> Option<Isometry3> {
+        let base_from_scanner = self.posture.base_from_scanner(&self.robot)?;
+        Some(self.world_from_base * base_from_scanner)
     }
 }
 
 impl Arm for SimRig {
     fn joints(&self) -> Vec<Real> {
-        self.q.clone()
+        self.posture.joints().to_vec()
     }
 
     fn move_to(&mut self, q: &[Real]) -> Result<(), HwError> {
-        self.robot.check_within_limits(q)?;
-        self.robot.fk_into(q, &mut self.frames)?;
-        self.q.clear();
-        self.q.extend_from_slice(q);
-        Ok(())
+        Ok(self.posture.move_to(&self.robot, q)?)
     }
 }
 
@@ -154,7 +149,7 @@ impl LineScanner for SimRig {
     }
 
     fn scan(&mut self) -> Result<ScanReadings, HwError> {
-        let pose = self.world_from_scanner().map_err(|_| HwError::NoScanner)?;
+        let pose = self.world_from_scanner().ok_or(HwError::NoScanner)?;
         let scanner = self.scanner.as_ref().ok_or(HwError::NoScanner)?;
         let scan = scanner.scan(self.world.as_ref(), &pose, &mut self.rng);
         Ok(ScanReadings::of_simulated(&scan))
@@ -173,9 +168,10 @@ impl RangeSensors for SimRig {
             world,
             world_from_base,
             rng,
-            frames,
+            posture,
             ..
         } = self;
+        let frames = posture.base_from_link();
         // Sensors in mount order, one noise draw per hit: the readings are a
         // function of the seed and the sequence of poses and reads.
         robot
