@@ -42,8 +42,8 @@ fn ok_owned(args: &[String]) -> String {
 }
 
 /// A bridge1 run through both stages (budget of 3 Stage Two viewpoints, seed
-/// 4), made once for the tests that need one (the kill -9 test of Stage Two
-/// and plan-blast's): its arguments, C-space cache and folder.
+/// 4), made once for the tests that need one (both kill -9 tests, the resume
+/// refusals and plan-blast's): its arguments, C-space cache and folder.
 struct StageTwoRun {
     args: Vec<String>,
     cache: std::path::PathBuf,
@@ -136,29 +136,22 @@ fn kill_9_then_resume(
     }
 }
 
+/// Killed in Stage One of the shared run (two to four viewpoints recorded,
+/// none of Stage Two), resumed through both stages.
 #[cfg(unix)]
 #[test]
-#[ignore = "three exploration runs: seconds in release; run by .ci/run"]
+#[ignore = "an exploration run (shared with the other kill -9 test): run by .ci/run"]
 fn kill_9_in_stage_one_then_resume_gives_the_uninterrupted_outputs() {
-    let args = [
-        "--scenario",
-        "bridge1",
-        "--stages",
-        "one",
-        "--max-viewpoints",
-        "5",
-        "--seed",
-        "4",
-    ];
-    let dir = tempfile::tempdir().unwrap();
-    let (cache, whole) = (dir.path().join("cspace.json"), dir.path().join("whole"));
-    ok_owned(&explore_args(&args, &cache, &whole));
-    kill_9_then_resume(&args, &cache, &whole, |(one, _)| (2..5).contains(&one));
+    let run = stage_two_run();
+    let args: Vec<&str> = run.args.iter().map(String::as_str).collect();
+    kill_9_then_resume(&args, &run.cache, &run.whole, |(one, two)| {
+        (2..5).contains(&one) && two == 0
+    });
 }
 
 #[cfg(unix)]
 #[test]
-#[ignore = "exploration runs: a minute in release; run by .ci/run"]
+#[ignore = "an exploration run (shared with the other kill -9 test): run by .ci/run"]
 fn kill_9_in_stage_two_then_resume_gives_the_uninterrupted_outputs() {
     let run = stage_two_run();
     let args: Vec<&str> = run.args.iter().map(String::as_str).collect();

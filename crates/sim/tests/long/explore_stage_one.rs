@@ -227,23 +227,6 @@ fn stage_one_moves_only_through_known_free_space_and_reduces_information() {
         .filter(|(p, o)| **o > 0 && p.iter().any(|v| *v > 0.5))
         .count();
     assert!(sure * 2 >= observed, "{sure} of {observed}");
-    let dir = std::env::temp_dir().join(format!("surveyor-explore-test-{}", std::process::id()));
-    let staging = record::Staging::new(&dir).unwrap();
-    sim::explore_job::write_run(&outcome, &staging).unwrap();
-    staging.commit().unwrap();
-    for name in [
-        "viewpoints.csv",
-        "cloud.ply",
-        "mesh.ply",
-        "discs.csv",
-        "segments.json",
-        "run.json",
-    ] {
-        assert!(dir.join(name).exists(), "{name}");
-    }
-    let discs = map::sld_io::load_discs_csv(&dir.join("discs.csv")).unwrap();
-    assert_eq!(discs.len(), d.discs.len());
-    std::fs::remove_dir_all(&dir).unwrap();
     // The same seed gives the same outputs (timings off).
     let b = run(3);
     let csv = record::viewpoints::viewpoints_csv;
@@ -340,7 +323,29 @@ fn stage_two_aims_at_discs_safely_and_lowers_the_material_information() {
     // discs the LRC could classify (the ground truth is the scene's).
     let accuracy = run.discs.material_accuracy().unwrap();
     assert!(accuracy >= 0.9, "material accuracy {accuracy}");
-    check_blast_plan(&outcome);
+    // The run folder: every file, the discs read back, and the blast plan
+    // the folder holds checked.
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("run");
+    let staging = record::Staging::new(&folder).unwrap();
+    let t = std::time::Instant::now();
+    let plan = sim::explore_job::write_run(&outcome, &staging).unwrap();
+    let seconds = t.elapsed().as_secs_f64();
+    staging.commit().unwrap();
+    for name in [
+        "viewpoints.csv",
+        "cloud.ply",
+        "mesh.ply",
+        "discs.csv",
+        "segments.json",
+        "run.json",
+        "blast_plan.json",
+    ] {
+        assert!(folder.join(name).exists(), "{name}");
+    }
+    let discs = map::sld_io::load_discs_csv(&folder.join("discs.csv")).unwrap();
+    assert_eq!(discs.len(), run.discs.discs.len());
+    check_blast_plan(&outcome, &plan.unwrap(), seconds);
 }
 
 /// Which bridge1 surface a disc lies on, for issue 11's "roof and web
@@ -438,16 +443,13 @@ fn oracle_misses(
 /// seed gives the same plan is checked through the binary: `plan-blast` on
 /// the run folder reproduces `explore`'s plan byte for byte, cli's
 /// `plan_blast` test.)
-fn check_blast_plan(outcome: &ExploreOutcome) {
+fn check_blast_plan(outcome: &ExploreOutcome, plan: &blast::BlastPlan, seconds: f64) {
     use blast::BlastConfig;
     let (loaded, run) = (&outcome.loaded, &outcome.run);
     let robot = loaded.build_robot().unwrap();
     let wfb = loaded.scenario.world_from_base();
     let a2 = loaded.scenario.regions.unwrap().a2;
     let config = BlastConfig::default();
-    let t = std::time::Instant::now();
-    let plan = outcome.blast_plan(&config).unwrap().unwrap();
-    let seconds = t.elapsed().as_secs_f64();
     let nn: f64 = plan.segments.iter().map(|s| s.cost_nearest_neighbour).sum();
     let opt: f64 = plan.segments.iter().map(|s| s.cost_two_opt).sum();
     let ga: f64 = plan.segments.iter().map(|s| s.cost_ga).sum();
