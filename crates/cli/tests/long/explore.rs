@@ -77,6 +77,30 @@ fn stage_two_run() -> &'static StageTwoRun {
     })
 }
 
+/// A one-viewpoint Stage One run of bridge1, made once for the tests that
+/// need a run folder but not its contents (plan-blast's tool file, the full
+/// disk's C-space cache): its C-space cache and folder.
+struct SmallRun {
+    cache: std::path::PathBuf,
+    whole: std::path::PathBuf,
+}
+
+fn small_run() -> &'static SmallRun {
+    static RUN: std::sync::OnceLock<SmallRun> = std::sync::OnceLock::new();
+    RUN.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("explore-small");
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let (cache, whole) = (dir.join("cspace.json"), dir.join("whole"));
+        ok_owned(&explore_args(
+            &["--stages", "one", "--max-viewpoints", "1"],
+            &cache,
+            &whole,
+        ));
+        SmallRun { cache, whole }
+    })
+}
+
 /// Run `surveyor explore <args> --no-timings --out DIR` killed with `kill -9`
 /// once `kill_when` holds of its checkpoint, then resumed: every output must
 /// equal the uninterrupted run's in `whole` (same arguments and `cache`).
@@ -238,13 +262,14 @@ fn plan_blast_on_an_explore_run_gives_the_plan_explore_wrote() {
     );
     // A tool file changes the limits the plan records; --seed is taken
     // (determinism per seed is checked on the library, sim's blast test).
+    // On the small run's folder: its few discs plan in seconds.
     let tool = dir.path().join("tool.toml");
     std::fs::write(&tool, "phi_max_deg = 25.0\n").unwrap();
     let a = dir.path().join("a");
     ok(&[
         "plan-blast",
         "--run",
-        r,
+        small_run().whole.to_str().unwrap(),
         "--tool",
         tool.to_str().unwrap(),
         "--seed",
@@ -457,18 +482,14 @@ fn report_refuses_a_run_folder_missing_a_file() {
 /// file cut short under its own name and no `run.json` (the checkpoint,
 /// rewritten whole after every viewpoint, stays for `--resume`).
 #[test]
-#[ignore = "an exploration run: run by .ci/run"]
+#[ignore = "an exploration run (and the shared small one): run by .ci/run"]
 fn a_full_disk_while_explore_writes_leaves_no_partial_output() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    let cache = dir.path().join("cspace.json");
-    let mut args = explore_args(&["--stages", "one", "--max-viewpoints", "2"], &cache, &out);
-    // Build the C-space cache first, so the limit hits the outputs only.
-    ok_owned(&explore_args(
-        &["--stages", "one", "--max-viewpoints", "1"],
-        &cache,
-        &dir.path().join("warm"),
-    ));
+    // The small run built the C-space cache, so the limit hits the outputs
+    // only.
+    let cache = &small_run().cache;
+    let mut args = explore_args(&["--stages", "one", "--max-viewpoints", "2"], cache, &out);
     let script = "trap '' XFSZ; ulimit -f 2048; exec \"$0\" \"$@\"";
     let surveyor = env!("CARGO_BIN_EXE_surveyor");
     args.insert(0, surveyor.to_owned());
