@@ -78,13 +78,18 @@ impl Default for FollowConfig {
 impl FollowConfig {
     /// Check every field; the error names the field and what was expected.
     pub fn validate(&self) -> Result<(), FollowError> {
-        let positive = |name: &str, v: Real| {
+        let bad = |field: &'static str, expected: &'static str, got: String| {
+            Err(FollowError::Config {
+                field,
+                expected,
+                got,
+            })
+        };
+        let positive = |field: &'static str, v: Real| {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(FollowError::Config(format!(
-                    "{name}: expected a finite value > 0, got {v}"
-                )))
+                bad(field, "a finite value > 0", v.to_string())
             }
         };
         positive("desired_distance_m", self.desired_distance_m)?;
@@ -94,39 +99,37 @@ impl FollowConfig {
         positive("ceiling_revolute_deg", self.ceiling_revolute_deg)?;
         positive("influence_m", self.influence_m)?;
         if !(self.alpha.is_finite() && self.alpha >= 0.0) {
-            return Err(FollowError::Config(format!(
-                "alpha: expected a finite gain ≥ 0, got {}",
-                self.alpha
-            )));
+            return bad("alpha", "a finite gain ≥ 0", self.alpha.to_string());
         }
         if !(self.link_margin_m.is_finite() && self.link_margin_m >= 0.0) {
-            return Err(FollowError::Config(format!(
-                "link_margin_m: expected a finite distance ≥ 0, got {}",
-                self.link_margin_m
-            )));
+            return bad(
+                "link_margin_m",
+                "a finite distance ≥ 0",
+                self.link_margin_m.to_string(),
+            );
         }
         if !(self.damping.is_finite() && self.damping >= 0.0) {
-            return Err(FollowError::Config(format!(
-                "damping: expected a finite value ≥ 0, got {}",
-                self.damping
-            )));
+            return bad("damping", "a finite value ≥ 0", self.damping.to_string());
         }
         if self.exponent == 0 || self.exponent > 64 {
-            return Err(FollowError::Config(format!(
-                "exponent: expected an integer in 1..=64, got {}",
-                self.exponent
-            )));
+            return bad(
+                "exponent",
+                "an integer in 1..=64",
+                self.exponent.to_string(),
+            );
         }
         if self.progress_steps == 0 {
-            return Err(FollowError::Config(
-                "progress_steps: expected at least 1".into(),
-            ));
+            return bad("progress_steps", "at least 1", "0".into());
         }
         if self.stray_m <= self.desired_distance_m {
-            return Err(FollowError::Config(format!(
-                "stray_m ({}) must exceed desired_distance_m ({}): eq. 6 blends over δ < ‖v₁‖ < ρ",
-                self.stray_m, self.desired_distance_m
-            )));
+            return bad(
+                "stray_m",
+                "more than desired_distance_m (eq. 6 blends over δ < ‖v₁‖ < ρ)",
+                format!(
+                    "{} with desired_distance_m {}",
+                    self.stray_m, self.desired_distance_m
+                ),
+            );
         }
         Ok(())
     }
@@ -134,5 +137,42 @@ impl FollowConfig {
     /// γ_r in radians.
     pub fn ceiling_revolute_rad(&self) -> Real {
         self.ceiling_revolute_deg.to_radians()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An edit of the defaults, the field it breaks and the value it gives.
+    type Case = (fn(&mut FollowConfig), &'static str, &'static str);
+
+    /// Each bad field is named in a typed error, with what it accepts and
+    /// the value given.
+    #[test]
+    fn bad_fields_are_named() {
+        let cases: [Case; 6] = [
+            (|c| c.max_step_m = -1.0, "max_step_m", "-1"),
+            (|c| c.alpha = Real::NAN, "alpha", "NaN"),
+            (|c| c.link_margin_m = -0.5, "link_margin_m", "-0.5"),
+            (|c| c.exponent = 65, "exponent", "65"),
+            (|c| c.progress_steps = 0, "progress_steps", "0"),
+            (
+                |c| c.stray_m = 0.05,
+                "stray_m",
+                "0.05 with desired_distance_m 0.1",
+            ),
+        ];
+        assert!(FollowConfig::default().validate().is_ok());
+        for (edit, name, value) in cases {
+            let mut c = FollowConfig::default();
+            edit(&mut c);
+            match c.validate() {
+                Err(FollowError::Config { field, got, .. }) => {
+                    assert_eq!((field, got.as_str()), (name, value));
+                }
+                other => panic!("{name}: {other:?}"),
+            }
+        }
     }
 }

@@ -58,17 +58,12 @@ pub fn place_tool(
             q = robot.clamp_to_limits(&q);
         }
     }
-    Err(FollowError::Robot(format!(
-        "robot '{}' cannot place its control point at ({:.3}, {:.3}, {:.3}) with the tool axis along ({:.2}, {:.2}, {:.2}) from any of {} start guesses",
-        robot.name,
-        target.x,
-        target.y,
-        target.z,
-        axis.x,
-        axis.y,
-        axis.z,
-        seeds.len()
-    )))
+    Err(FollowError::Unplaceable {
+        robot: robot.name.clone(),
+        target: *target,
+        axis: axis.into_inner(),
+        guesses: seeds.len(),
+    })
 }
 
 #[cfg(test)]

@@ -813,8 +813,8 @@ impl FollowJudge {
     }
 }
 
-fn judge_error(e: impl std::fmt::Display) -> FollowError {
-    FollowError::Judge(e.to_string())
+fn judge_error(e: impl std::error::Error + Send + Sync + 'static) -> FollowError {
+    FollowError::Judge(Box::new(e))
 }
 
 impl follow::Judge for FollowJudge {

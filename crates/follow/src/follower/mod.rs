@@ -290,10 +290,11 @@ impl Follower {
             .map(|(i, _)| i)
             .collect();
         if cp_sensors.is_empty() {
-            return Err(FollowError::Robot(format!(
-                "robot '{}' has no range finder at its control point (on link {} within δ = {} m of the tool point)",
-                robot.name, tool_link, config.desired_distance_m
-            )));
+            return Err(FollowError::NoControlPointSensor {
+                robot: robot.name.clone(),
+                link: tool_link.index(),
+                within_m: config.desired_distance_m,
+            });
         }
         let sensing_range = cp_sensors
             .iter()
@@ -408,11 +409,10 @@ impl Follower {
     pub fn step(&mut self, q: &[Real], readings: &[Option<Point3>]) -> Result<Step, FollowError> {
         self.robot.check_joints(q)?;
         if readings.len() != self.robot.range_finders.len() {
-            return Err(FollowError::Robot(format!(
-                "expected {} readings (one per range finder), got {}",
-                self.robot.range_finders.len(),
-                readings.len()
-            )));
+            return Err(FollowError::Readings {
+                expected: self.robot.range_finders.len(),
+                got: readings.len(),
+            });
         }
         let t0 = Instant::now();
         let mut frames = Vec::with_capacity(self.robot.links.len());
@@ -800,6 +800,22 @@ mod tests {
             .map(surface::Segment::id)
             .unwrap();
         (f, poly)
+    }
+
+    /// A step with a reading count other than one per range finder is a
+    /// typed error that leaves the follower as it was.
+    #[test]
+    fn a_wrong_reading_count_is_refused_unchanged() {
+        let (mut f, _) = floor_follower();
+        let (steps, segments) = (f.steps(), f.model.segments().count());
+        let n = f.robot.range_finders.len();
+        match f.step(&[0.0, 0.0, 0.15], &vec![None; n - 1]) {
+            Err(FollowError::Readings { expected, got }) => {
+                assert_eq!((expected, got), (n, n - 1));
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!((f.steps(), f.model.segments().count()), (steps, segments));
     }
 
     /// P§3.4.6: a path whose target was merged keeps going to what the target
