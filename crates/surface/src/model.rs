@@ -88,6 +88,9 @@ pub struct SurfaceModel {
     pub(crate) updates: u64,
     pub(crate) journal: Option<Journal>,
     pub(crate) ctx: UpdateCtx,
+    /// The segments the last update deleted as redundant (P§2.9), as they
+    /// were when deleted.
+    pub(crate) last_deleted: Vec<Segment>,
 }
 
 impl SurfaceModel {
@@ -106,7 +109,17 @@ impl SurfaceModel {
             updates: 0,
             journal: None,
             ctx: UpdateCtx::default(),
+            last_deleted: Vec::new(),
         })
+    }
+
+    /// The segments the last [`update`](Self::update) deleted as redundant
+    /// (P§2.9), as they were when deleted, in the order of
+    /// [`ChangeLog::deleted`]. Their points are no longer represented in the
+    /// model, but the surface they stood for is still there: a surface
+    /// follower's safety guard keeps them.
+    pub fn deleted_by_last_update(&self) -> &[Segment] {
+        &self.last_deleted
     }
 
     /// The parameters.
@@ -473,6 +486,7 @@ impl SurfaceModel {
             }
             self.ctx.log.mergers.truncate(j.mergers_len);
             self.ctx.log.deleted.truncate(j.deleted_len);
+            self.last_deleted.truncate(j.deleted_len);
             self.points_deleted = j.points_deleted;
             for ((flag, id), was_set) in j.flags_before {
                 let set = match flag {

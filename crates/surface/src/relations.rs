@@ -378,6 +378,7 @@ impl SurfaceModel {
         if let Some(seg) = self.remove_segment(id) {
             self.points_deleted += seg.moments.m;
             self.ctx.log.deleted.push(id);
+            self.last_deleted.push(seg);
             self.set_flag(Flag::Modified, id, false);
             self.set_flag(Flag::Pending, id, false);
         }

@@ -58,6 +58,7 @@ impl SurfaceModel {
             first_new: self.ids.segment + 1,
             ..UpdateCtx::default()
         };
+        self.last_deleted.clear();
         // 1. A point segment per sensor point.
         let mut new_ids = Vec::with_capacity(set.len());
         for (p, a) in set.points.iter().zip(&set.axes) {

@@ -548,6 +548,16 @@ fn fig25_redundant_segment_deleted() {
     assert!(m.get(small).is_none(), "the redundant segment is deleted");
     assert!(m.get(big).is_some());
     assert_eq!(m.deleted_in_update(), &[small]);
+    // The deleted polygon is kept as it was (a follower's safety guard
+    // still needs the surface it stood for).
+    let gone = m.deleted_by_last_update();
+    assert_eq!(gone.len(), 1);
+    assert_eq!(gone[0].id(), small);
+    let corners: Vec<_> = gone[0].as_polygon().unwrap().vertices().collect();
+    assert_eq!(corners.len(), 4);
+    for c in [p(0.0, -0.02, -0.02), p(0.0, 0.02, 0.02)] {
+        assert!(corners.iter().any(|v| (v - c).norm() < 1e-9), "{c:?} kept");
+    }
     assert_eq!(m.points_deleted(), 5);
     m.check_invariants().unwrap();
     // With more points it is not redundant.
