@@ -89,6 +89,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "{:?} {:?} {:?}",
             step.mode, step.current_segment, step.current_edge
         );
+        if std::env::var("GUARD").is_ok() && step.guard != follow::GuardAction::Taken {
+            println!("  {k} guard {:?} {:?}", step.guard, step.mode);
+        }
         if (rle && key != last_key) || k % 100 == 0 {
             let c = step.control_point;
             println!(
@@ -158,7 +161,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let c = run.clearance();
         min_clear = min_clear.min(c);
-        if c < 0.0 {
+        let near: Real = std::env::var("CLEAR")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(0.0);
+        if c < near {
             collisions += 1;
             if std::env::var("COLL").is_ok() {
                 let cp = step.control_point;
@@ -173,7 +180,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     step.motion.norm()
                 );
                 if std::env::var("COLLX").is_ok() {
-                    run.explain_collision();
+                    run.explain_collision(near);
                 }
             }
         }
@@ -220,6 +227,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
     }
+    println!(
+        "guard: {:?}, {} deleted segments kept",
+        run.follower.guard_counts(),
+        run.follower.guard_ghosts()
+    );
     let st = run.follower.model().stats();
     println!(
         "model: {} segments, {} polygons, {} shared pairs, {} corners",

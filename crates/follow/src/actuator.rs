@@ -315,7 +315,12 @@ fn ceiling_factor(kinds: &[JointKind], dq: &DVector<Real>, config: &FollowConfig
 
 /// The one factor (≤ 1) that brings `dq` within the ceilings γ_r and γ_p
 /// (P§3.3) and keeps every joint within its limits.
-fn ceiling_scale(robot: &Robot, q: &[Real], dq: &DVector<Real>, config: &FollowConfig) -> Real {
+pub(crate) fn ceiling_scale(
+    robot: &Robot,
+    q: &[Real],
+    dq: &DVector<Real>,
+    config: &FollowConfig,
+) -> Real {
     let mut scale = ceiling_factor(&robot.joint_kinds(), dq, config);
     for (k, lim) in robot.limits().iter().enumerate() {
         if let (Some(lim), Some(&qk)) = (lim, q.get(k)) {

@@ -53,6 +53,19 @@ pub struct FollowConfig {
     /// brought closer by the control-point motion (our addition to P§3.3,
     /// see [`crate::actuator::actuator_change`]), metres.
     pub link_margin_m: Real,
+    /// The safety guard (our addition, [`crate::guard`]): every step's
+    /// motion is checked against the model, the segments it deleted and
+    /// the raw readings of the last sets before it is taken.
+    pub guard: bool,
+    /// The guard's margin: no link shape is brought closer than this to
+    /// known surface, metres.
+    pub guard_margin_m: Real,
+    /// How many of the last sensor sets the guard keeps as raw readings.
+    pub guard_recent_sets: u32,
+    /// The guard takes every unshared polygon edge to go on this far past
+    /// the polygon, in its plane, metres (0: the polygons as they are);
+    /// default λ/2 for Pudney's λ = 0.05 (see [`crate::guard`]).
+    pub guard_edge_extension_m: Real,
 }
 
 impl Default for FollowConfig {
@@ -71,6 +84,10 @@ impl Default for FollowConfig {
             target_patience_steps: 20,
             damping: 1e-3,
             link_margin_m: 0.05,
+            guard: true,
+            guard_margin_m: 0.02,
+            guard_recent_sets: 10,
+            guard_edge_extension_m: 0.025,
         }
     }
 }
@@ -106,6 +123,29 @@ impl FollowConfig {
                 "link_margin_m",
                 "a finite distance ≥ 0",
                 self.link_margin_m.to_string(),
+            );
+        }
+        if !(self.guard_margin_m.is_finite() && self.guard_margin_m >= 0.0) {
+            return bad(
+                "guard_margin_m",
+                "a finite distance ≥ 0",
+                self.guard_margin_m.to_string(),
+            );
+        }
+        if !(self.guard_edge_extension_m.is_finite()
+            && (0.0..=1.0).contains(&self.guard_edge_extension_m))
+        {
+            return bad(
+                "guard_edge_extension_m",
+                "a distance in 0..=1",
+                self.guard_edge_extension_m.to_string(),
+            );
+        }
+        if self.guard_recent_sets > 1000 {
+            return bad(
+                "guard_recent_sets",
+                "at most 1000 sets",
+                self.guard_recent_sets.to_string(),
             );
         }
         if !(self.damping.is_finite() && self.damping >= 0.0) {

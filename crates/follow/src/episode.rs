@@ -4,6 +4,7 @@
 //! with a [`Judge`] that checks every pose and motion where something knows
 //! the truth (a simulator; [`NoJudge`] for a real robot).
 
+use crate::guard::GuardCounts;
 use crate::{FollowError, Follower, Termination};
 use geom::{Point3, Real};
 use hw::{Arm, RangeSensors};
@@ -69,6 +70,8 @@ pub struct Episode {
     pub end: RunEnd,
     /// The joints at the end.
     pub end_joints: Vec<Real>,
+    /// What the follower's safety guard did.
+    pub guard: GuardCounts,
 }
 
 /// How [`run_episode`] runs.
@@ -155,5 +158,6 @@ pub fn run_episode<H: Arm + RangeSensors + ?Sized>(
         rows,
         end,
         end_joints: q,
+        guard: follower.guard_counts(),
     })
 }

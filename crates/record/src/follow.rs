@@ -217,6 +217,21 @@ impl StepTimeStats {
     }
 }
 
+/// What the surface follower's safety guard (`follow::guard`) did with the
+/// steps' actuator changes, counted over a run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GuardCounts {
+    /// Changes taken as they were.
+    pub taken: u64,
+    /// Changes scaled down.
+    pub scaled: u64,
+    /// Retreats instead of the change.
+    pub retreated: u64,
+    /// Steps held still.
+    pub held: u64,
+}
+
 /// `run.json` of a surface-following run. `O` is the run's options, `S` the
 /// model's score against a true scene and `M` its distances to a scan
 /// (`sim`'s types); a reader that only shows them takes the defaults,
@@ -268,6 +283,17 @@ pub struct FollowSummary<O = serde_json::Value, S = serde_json::Value, M = serde
     pub model_to_scan_within_lambda: Option<Real>,
     /// Configurations checked along the motions.
     pub motion_checks: usize,
+    /// What the safety guard did (all zero when it is off).
+    #[serde(default)]
+    pub guard: GuardCounts,
+    /// True surface area modelled: the counted faces' area within λ of a
+    /// model polygon, m² (mesh worlds).
+    #[serde(default)]
+    pub modelled_m2: Option<Real>,
+    /// Sets taken per square metre of true surface modelled
+    /// (`sets / modelled_m2`; `null` when nothing true is modelled).
+    #[serde(default)]
+    pub sets_per_m2: Option<Real>,
     /// Wall time per step (update + direction + kinematics), µs.
     pub step_us: StepTimeStats,
     /// Mean time of each part of a step, µs.

@@ -972,6 +972,13 @@ impl FollowRun {
             model_to_scan_max_m: self.scan_score.as_ref().and_then(|s| s.max_m),
             model_to_scan_within_lambda: self.scan_score.as_ref().map(|s| s.within_lambda_fraction),
             motion_checks: j.motion_checks,
+            guard: self.episode.guard,
+            modelled_m2: self.score.as_ref().map(|s| s.modelled_m2),
+            sets_per_m2: self
+                .score
+                .as_ref()
+                .filter(|s| s.modelled_m2 > 0.0)
+                .map(|s| rows.len() as Real / s.modelled_m2),
             step_us: StepTimeStats::from_micros(&self.step_micros()),
             part_mean_us: parts,
             modes,

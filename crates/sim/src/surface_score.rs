@@ -349,6 +349,8 @@ pub struct SurfaceScore {
     /// Area-weighted [`FaceScore::within_lambda_fraction`] of all counted
     /// faces, `[0, 1]`.
     pub within_lambda: Real,
+    /// The counted faces' area within λ of a model polygon, m².
+    pub modelled_m2: Real,
     /// Per true edge between counted faces.
     pub edges: Vec<EdgeScore>,
     /// Length-weighted shared-edge coverage of all those edges, `[0, 1]`
@@ -789,11 +791,16 @@ pub fn score_surface_model(
     let search = scene.bounding_box().extents().norm().max(1.0) + 1.0;
     let vertex_accuracy = crate::metrics::accuracy(scene, &vertices, search).distances;
 
+    let modelled_m2 = face_scores
+        .iter()
+        .map(|f| f.within_lambda_fraction * f.area_m2)
+        .sum();
     Ok(SurfaceScore {
         config: *cfg,
         faces: face_scores,
         coverage,
         within_lambda,
+        modelled_m2,
         edges: edge_scores,
         edge_coverage,
         corners,

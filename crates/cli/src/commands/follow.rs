@@ -21,6 +21,8 @@ Outputs in --out: surface_model.json and surface_model.obj (the model), steps.cs
 step: step, mode, x, y, z, q1..qn, set_size, update_us, direction_us, kinematics_us, \
 link_clearance_m, current_segment, current_edge), path.ply (the control-point path, vertices \
 and edges), run.json (sets, steps, completed, termination, collisions, min_clearance_m, \
+guard (what the safety guard did: taken, scaled, retreated, held), modelled_m2 and \
+sets_per_m2 (the true area within λ of the model, and sets per square metre of it), \
 step_us, modes, the score against the true scene, the options; for a point-cloud world, \
 which has no true surface, min_scan_clearance_m and scan_close_poses: the links' clearance \
 from the scan points and the poses closer than δ/2, and model_to_scan_max_m, \

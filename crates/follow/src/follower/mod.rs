@@ -11,6 +11,7 @@ use crate::actuator::{
     reconfiguration,
 };
 use crate::config::{FollowConfig, Objective};
+use crate::guard::{Guard, GuardAction, GuardCounts};
 use crate::motion::control_point_motion;
 use crate::path::{EdgePath, surface_edges};
 use crate::query::{EdgeRef, ModelPoint, closest_model_point, closest_on_segment};
@@ -113,6 +114,8 @@ pub struct Step {
     pub current_edge: Option<EdgeKey>,
     /// Set when following has finished.
     pub termination: Option<Termination>,
+    /// What the safety guard did with the actuator change.
+    pub guard: GuardAction,
     /// Timings.
     pub times: StepTimes,
 }
@@ -226,6 +229,10 @@ struct Progress {
     counter: u32,
     stored: Vec<Real>,
     reset_requested: bool,
+    /// The stall watch (our addition to P§3.4.7): steps since `watched`
+    /// was stored, never reset by a change of goal.
+    watch_counter: u32,
+    watched: Vec<Real>,
 }
 
 /// A direction with an optional step limit (P§3.4.3, P§3.4.5).
@@ -265,6 +272,7 @@ pub struct Follower {
     finished: Option<Termination>,
     frames: Vec<Isometry3>,
     jacobian: Matrix6xX<Real>,
+    guard: Guard,
 }
 
 impl Follower {
@@ -316,13 +324,27 @@ impl Follower {
                 counter: 0,
                 stored: Vec::new(),
                 reset_requested: true,
+                watch_counter: 0,
+                watched: Vec::new(),
             },
             last_points: Vec::new(),
             steps: 0,
             finished: None,
             frames: Vec::new(),
             jacobian: Matrix6xX::zeros(dof),
+            guard: Guard::new(&config),
         })
+    }
+
+    /// How often the safety guard took, scaled, replaced or held a change.
+    pub fn guard_counts(&self) -> GuardCounts {
+        self.guard.counts()
+    }
+
+    /// How many segments deleted as redundant (P§2.9) the safety guard
+    /// keeps as surface.
+    pub fn guard_ghosts(&self) -> usize {
+        self.guard.ghosts()
     }
 
     /// The surface model so far.
@@ -442,6 +464,7 @@ impl Follower {
             let set = SensorSet::new(points.clone(), axes)?;
             self.model.update(&set)?
         };
+        self.guard.remember(&self.model, &points);
         self.last_points = points;
         let t1 = Instant::now();
         let mut termination = self.finished;
@@ -468,6 +491,7 @@ impl Follower {
         let mut motion = Vector3::zeros();
         let mut dq = vec![0.0; self.robot.dof()];
         let mut link_clearance = None;
+        let mut guard = GuardAction::None;
         if termination.is_none()
             && let Some(c) = closest
         {
@@ -509,6 +533,17 @@ impl Follower {
                 &proximities,
                 &switches,
             );
+            if self.config.guard {
+                (dq, guard) = self.guard.check(
+                    &self.robot,
+                    &self.world_from_base,
+                    &self.bodies,
+                    &self.model,
+                    &self.config,
+                    q,
+                    dq,
+                );
+            }
             self.check_progress(q);
         }
         self.finished = termination;
@@ -526,6 +561,7 @@ impl Follower {
             current_segment: self.state.segment,
             current_edge: self.state.edge,
             termination,
+            guard,
             times: StepTimes {
                 update_us: us(t0, t1),
                 direction_us: us(t1, t2),

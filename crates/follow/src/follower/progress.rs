@@ -1,9 +1,12 @@
 //! Progress checks (P§3.4.7): every τ steps the follower compares where it
 //! is with where it was, and gives up what it cannot reach.
 
-use super::{Follower, Mode, Progress};
+use super::{Follower, Mode};
 use geom::Real;
 use robot::JointKind;
+
+/// How many progress periods (τ steps each) the stall watch spans.
+const STALL_CHECKS: u32 = 10;
 
 impl Follower {
     // ---- P§3.4.7: progress -------------------------------------------------
@@ -13,12 +16,14 @@ impl Follower {
     }
 
     pub(super) fn check_progress(&mut self, q: &[Real]) {
+        if self.stalled(q) {
+            self.give_up();
+            return;
+        }
         if self.progress.reset_requested || self.progress.stored.len() != q.len() {
-            self.progress = Progress {
-                counter: 0,
-                stored: q.to_vec(),
-                reset_requested: false,
-            };
+            self.progress.counter = 0;
+            self.progress.stored = q.to_vec();
+            self.progress.reset_requested = false;
             return;
         }
         self.progress.counter += 1;
@@ -26,9 +31,42 @@ impl Follower {
             return;
         }
         self.progress.counter = 0;
+        let insufficient = self.moved_too_little(q, &self.progress.stored);
+        self.progress.stored = q.to_vec();
+        if insufficient {
+            self.give_up();
+        }
+    }
+
+    /// The stall watch (our addition to P§3.4.7): every [`STALL_CHECKS`]
+    /// progress periods, whatever the goal did meanwhile, the joints must
+    /// have moved as much as one step's ceilings allow. P§3.4.7 restarts
+    /// its count whenever the goal changes; a robot standing still beside a
+    /// surface it re-senses every step sees its follow edge merged away and
+    /// chosen again each step, so the count never reached τ (point3 on the
+    /// cylinder's foot stood 72 000 sets at one place).
+    fn stalled(&mut self, q: &[Real]) -> bool {
+        let p = &mut self.progress;
+        if p.watched.len() != q.len() {
+            p.watched = q.to_vec();
+            p.watch_counter = 0;
+            return false;
+        }
+        p.watch_counter += 1;
+        if p.watch_counter < STALL_CHECKS * self.config.progress_steps {
+            return false;
+        }
+        let watched = std::mem::replace(&mut self.progress.watched, q.to_vec());
+        self.progress.watch_counter = 0;
+        self.moved_too_little(q, &watched)
+    }
+
+    /// P§3.4.7's test: the change from `before` to `q` is below the
+    /// ceilings γ_r (revolute joints) and γ_p (prismatic ones).
+    fn moved_too_little(&self, q: &[Real], before: &[Real]) -> bool {
         let kinds = self.robot.joint_kinds();
         let (mut rev, mut pri, mut has_rev, mut has_pri) = (0.0, 0.0, false, false);
-        for ((k, a), b) in kinds.iter().zip(q).zip(&self.progress.stored) {
+        for ((k, a), b) in kinds.iter().zip(q).zip(before) {
             match k {
                 JointKind::Revolute => {
                     rev += (a - b) * (a - b);
@@ -41,12 +79,8 @@ impl Follower {
                 JointKind::Fixed => {}
             }
         }
-        let insufficient = (!has_rev || rev.sqrt() < self.config.ceiling_revolute_rad())
-            && (!has_pri || pri.sqrt() < self.config.ceiling_prismatic_m);
-        self.progress.stored = q.to_vec();
-        if insufficient {
-            self.give_up();
-        }
+        (!has_rev || rev.sqrt() < self.config.ceiling_revolute_rad())
+            && (!has_pri || pri.sqrt() < self.config.ceiling_prismatic_m)
     }
 
     /// The give-up actions of P§3.4.7.

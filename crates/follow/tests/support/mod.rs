@@ -119,7 +119,16 @@ impl Run {
     /// The smallest signed distance between the robot's capsules (links ≥ 1)
     /// and the scene (negative: in collision), looking 0.3 m out.
     pub fn clearance(&self) -> Real {
+        self.clearance_outside_control_zone(0.0)
+    }
+
+    /// Like [`Run::clearance`], but of the links outside the control
+    /// point's zone (the ball of radius `exclusion` about it; 0: the whole
+    /// links): what eq. 4's link descriptions cover, so what redundancy
+    /// acts on (P§3.3).
+    pub fn clearance_outside_control_zone(&self, exclusion: Real) -> Real {
         let frames = self.robot.forward_kinematics(&self.q).unwrap();
+        let cp = self.follower.control_point(&self.q).unwrap();
         let mut best: Real = 0.3;
         for shape in self.robot.posed_collision_shapes(&frames) {
             if let PosedShape::Capsule { link, capsule } = shape {
@@ -127,9 +136,20 @@ impl Run {
                     continue;
                 }
                 let c = capsule.transformed(&self.base);
-                for face in self.scene.triangles_near(&c.bounding_box().loosened(best)) {
-                    let d = c.distance_to_triangle(&self.scene.mesh().triangle(face as usize));
-                    best = best.min(d);
+                let pieces = if exclusion > 0.0 {
+                    follow::actuator::outside_ball(&c.segment, &cp, exclusion)
+                } else {
+                    vec![c.segment]
+                };
+                for piece in pieces {
+                    let part = geom::Capsule::new(piece.a, piece.b, c.radius);
+                    for face in self
+                        .scene
+                        .triangles_near(&part.bounding_box().loosened(best))
+                    {
+                        let tri = self.scene.mesh().triangle(face as usize);
+                        best = best.min(part.distance_to_triangle(&tri));
+                    }
                 }
             }
         }
@@ -139,7 +159,7 @@ impl Run {
     /// Development aid: for each link touching the scene, where along its
     /// axis, the true distance there and the model's distance there.
     #[allow(dead_code)]
-    pub fn explain_collision(&self) {
+    pub fn explain_collision(&self, extra: Real) {
         let frames = self.robot.forward_kinematics(&self.q).unwrap();
         let cp = self.follower.control_point(&self.q).unwrap();
         for shape in self.robot.posed_collision_shapes(&frames) {
@@ -163,7 +183,7 @@ impl Run {
                                 .distance_to_point(&p),
                         );
                     }
-                    if d < c.radius {
+                    if d < c.radius + extra {
                         let m = follow::query::closest_model_point(self.follower.model(), &p, 1.0)
                             .map_or(Real::INFINITY, |m| m.distance);
                         println!(
