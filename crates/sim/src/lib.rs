@@ -15,6 +15,7 @@
 
 pub mod explore_job;
 pub mod follow_job;
+pub mod follow_reach;
 pub mod metrics;
 pub mod rig;
 pub mod scan_check;

@@ -422,7 +422,7 @@ fn is_on(
 /// Stratified uniform samples of a triangle: the centroids of its `k²`
 /// congruent sub-triangles, `k = ⌈√(area / spacing²)⌉`; each stands for
 /// `area / k²`.
-fn triangle_samples(tri: &geom::Triangle, spacing: Real, out: &mut Vec<(Point3, Real)>) {
+pub(crate) fn triangle_samples(tri: &geom::Triangle, spacing: Real, out: &mut Vec<(Point3, Real)>) {
     let area = tri.area();
     #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
     let k = ((area / (spacing * spacing)).sqrt().ceil() as usize).max(1);

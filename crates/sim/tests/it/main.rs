@@ -3,6 +3,7 @@
 
 mod bounds;
 mod bridge_scan;
+mod follow_reach;
 mod follow_rig;
 mod follow_run;
 mod fuzz;
