@@ -363,6 +363,11 @@ impl Motion<'_> {
     fn is_clear(&mut self, q: &[Real], dq: &[Real]) -> bool {
         let margin = self.guard.margin;
         let end_q: Vec<Real> = q.iter().zip(dq).map(|(a, d)| a + d).collect();
+        // A retreat along the last change can leave the limits the change
+        // kept (the joints moved since).
+        if !self.robot.within_limits(&end_q) {
+            return false;
+        }
         let Some(end) = self.place(&end_q) else {
             return false;
         };
@@ -648,6 +653,31 @@ mod tests {
             dq[2] > 0.0 && dq[0].abs() < 1e-9 && dq[1].abs() < 1e-9,
             "{dq:?}"
         );
+    }
+
+    /// No change the guard returns leaves the joint limits, a retreat
+    /// included: point3 just outside the margin of the floor, 10 mm from its
+    /// x limit, with a dive asked; the retreat along the last change taken
+    /// (−x) would go 40 mm past the limit, so the robot holds instead.
+    #[test]
+    fn a_retreat_stays_within_the_joint_limits() {
+        let robot = robot::builtin("point3").unwrap();
+        let model = floor(0.0, 20.0);
+        let mut guard = Guard::new(&FollowConfig::default());
+        let limit = robot.limits()[0].unwrap().max;
+        let (dq, action) = check(
+            &robot,
+            &mut guard,
+            &model,
+            &[limit - 0.01, 0.0, 0.1],
+            vec![-0.05, 0.0, 0.0],
+        );
+        assert_eq!((dq[0], action), (-0.05, GuardAction::Taken));
+        let q = [limit - 0.01, 0.0, 0.041];
+        let (dq, action) = check(&robot, &mut guard, &model, &q, vec![0.0, 0.0, -0.05]);
+        let end: Vec<Real> = q.iter().zip(&dq).map(|(a, d)| a + d).collect();
+        assert!(robot.within_limits(&end), "{action:?} to {end:?}");
+        assert_eq!(action, GuardAction::Held);
     }
 
     proptest! {

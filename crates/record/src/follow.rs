@@ -283,6 +283,10 @@ pub struct FollowSummary<O = serde_json::Value, S = serde_json::Value, M = serde
     pub model_to_scan_within_lambda: Option<Real>,
     /// Configurations checked along the motions.
     pub motion_checks: usize,
+    /// Outward normals of the true faces the robot cannot reach from where
+    /// it stands, given a priori as initial segments and not scored.
+    #[serde(default)]
+    pub a_priori_faces: Vec<[Real; 3]>,
     /// What the safety guard did (all zero when it is off).
     #[serde(default)]
     pub guard: GuardCounts,

@@ -17,6 +17,7 @@
 //! the step times of `run.json`; with [`FollowRunOptions::timings`] off those
 //! columns are written empty and those times are 0, so every file repeats.
 
+use crate::follow_reach::{AprioriFace, unreachable_faces};
 use crate::scan_check::{
     ModelScanConfig, ModelScanScore, ScanIndex, model_to_scan, scan_clearance,
 };
@@ -221,6 +222,10 @@ pub struct FollowSetup {
     /// Height of the support the objects stand on: true faces facing down at
     /// this height are not scored ([`not_resting_on`]).
     pub support_z: Real,
+    /// True faces (of [`crate::surface_score::true_faces`]) the robot cannot
+    /// reach, given a priori among the initial segments and not scored
+    /// ([`crate::follow_reach::unreachable_faces`]).
+    pub a_priori_faces: Vec<AprioriFace>,
     /// The options.
     pub options: FollowRunOptions,
 }
@@ -400,7 +405,7 @@ impl FollowSetup {
                 joints_for(&robot, &world_from_base, &target, None)?
             }
         };
-        let initial_segments = match &options.initial_segments {
+        let mut initial_segments = match &options.initial_segments {
             Some(v) => to_points(v),
             None => to_points(&s.initial_segments),
         };
@@ -411,6 +416,26 @@ impl FollowSetup {
             (&world, &world_from_base),
             &initial_segments,
         )?;
+        // arm4 on its post beside a scene written for another robot: the
+        // faces it cannot reach are given a priori, as Pudney gave his
+        // objects' occluded faces (P§4.3).
+        let mut a_priori_faces = Vec::new();
+        if !same_robot
+            && options.robot.as_deref() == Some("arm4")
+            && options.initial_segments.is_none()
+            && let Some(scene) = world.as_scene()
+        {
+            a_priori_faces = unreachable_faces(
+                scene,
+                &robot,
+                &world_from_base,
+                &[ARM4_SEED.to_vec()],
+                not_resting_on(0.0),
+            );
+            // Outlines of the true faces, anticlockwise about their outward
+            // normals, so not checked to face the robot: a far face never does.
+            initial_segments.extend(a_priori_faces.iter().map(|f| f.outline.clone()));
+        }
         let mut rig = SimRig::new(
             robot,
             world,
@@ -430,6 +455,7 @@ impl FollowSetup {
             start_joints,
             initial_segments,
             support_z: 0.0,
+            a_priori_faces,
             options: options.clone(),
         };
         // The initial segments are checked now, not when the run starts.
@@ -520,6 +546,7 @@ impl FollowSetup {
             start_joints,
             initial_segments,
             support_z: bounds.min.z,
+            a_priori_faces: Vec::new(),
             options: options.clone(),
         };
         setup.follower()?;
@@ -588,11 +615,15 @@ impl FollowSetup {
                     mu_deg: surface.mu_deg,
                     ..SurfaceScoreConfig::default()
                 };
+                let resting = not_resting_on(self.support_z);
+                let given = &self.a_priori_faces;
                 Some(score_surface_model(
                     scene,
                     follower.model(),
                     &cfg,
-                    &not_resting_on(self.support_z),
+                    &|f: &crate::surface_score::TrueFace| {
+                        resting(f) && !given.iter().any(|g| g.face == f.id)
+                    },
                 )?)
             }
             None => None,
@@ -621,6 +652,7 @@ impl FollowSetup {
             snapshots,
             score,
             scan_score,
+            a_priori_faces: self.a_priori_faces,
         })
     }
 }
@@ -907,6 +939,8 @@ pub struct FollowRun {
     pub score: Option<SurfaceScore>,
     /// The model's polygons against the scan points (point-cloud worlds only).
     pub scan_score: Option<ModelScanScore>,
+    /// True faces the robot cannot reach, given a priori and not scored.
+    pub a_priori_faces: Vec<AprioriFace>,
 }
 
 /// `run.json` of a simulated surface-following run.
@@ -972,6 +1006,7 @@ impl FollowRun {
             model_to_scan_max_m: self.scan_score.as_ref().and_then(|s| s.max_m),
             model_to_scan_within_lambda: self.scan_score.as_ref().map(|s| s.within_lambda_fraction),
             motion_checks: j.motion_checks,
+            a_priori_faces: self.a_priori_faces.iter().map(|f| f.normal).collect(),
             guard: self.episode.guard,
             modelled_m2: self.score.as_ref().map(|s| s.modelled_m2),
             sets_per_m2: self

@@ -21,7 +21,8 @@ Outputs in --out: surface_model.json and surface_model.obj (the model), steps.cs
 step: step, mode, x, y, z, q1..qn, set_size, update_us, direction_us, kinematics_us, \
 link_clearance_m, current_segment, current_edge), path.ply (the control-point path, vertices \
 and edges), run.json (sets, steps, completed, termination, collisions, min_clearance_m, \
-guard (what the safety guard did: taken, scaled, retreated, held), modelled_m2 and \
+a_priori_faces (the normals of the true faces given as initial segments because the robot \
+cannot reach them), guard (what the safety guard did: taken, scaled, retreated, held), modelled_m2 and \
 sets_per_m2 (the true area within λ of the model, and sets per square metre of it), \
 step_us, modes, the score against the true scene, the options; for a point-cloud world, \
 which has no true surface, min_scan_clearance_m and scan_close_poses: the links' clearance \
@@ -58,8 +59,12 @@ pub struct FollowArgs {
     #[arg(long)]
     initial: Option<PathBuf>,
     /// Another robot: point3, arm4 or a URDF file (FILE.urdf). On the built-in
-    /// scenes arm4 stands at (-1.6, 0, 0); without --start/--joints the robot
-    /// starts with its control point where the scenario's robot has it, tool down.
+    /// scenes arm4 stands at (-1.6, 0, 0), and unless --initial is given the
+    /// true faces it cannot bring its control point to from there (an
+    /// inverse-kinematics test, a few seconds) are given as initial segments
+    /// and left out of the score (run.json's a_priori_faces); without
+    /// --start/--joints the robot starts with its control point where the
+    /// scenario's robot has it, tool down.
     #[arg(long)]
     robot: Option<String>,
     /// Start with the control point here (world frame, metres), tool pointing down.

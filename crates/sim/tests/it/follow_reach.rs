@@ -45,3 +45,47 @@ fn arm4_on_its_post_reaches_every_face_of_the_cube_but_the_far_one() {
         }
     }
 }
+
+/// The outline of a true face is its boundary loop, anticlockwise about its
+/// outward normal, without collinear vertices: the cube's +x face is the
+/// square x = 0.5, y, z in [−0.5, 0.5] × [0, 1].
+#[test]
+fn a_face_outline_is_its_boundary_anticlockwise_about_its_normal() {
+    let world = Scenario::load("cube").unwrap().build_world().unwrap();
+    let scene = world.as_scene().unwrap();
+    let faces = sim::surface_score::true_faces(scene);
+    let plus_x = faces.iter().find(|f| f.normal.x > 0.99).unwrap();
+    let outline = sim::follow_reach::face_outline(scene, plus_x).unwrap();
+    assert_eq!(outline.len(), 4, "{outline:?}");
+    for p in &outline {
+        assert!(
+            (p.x - 0.5).abs() < 1e-9 && (p.y.abs() - 0.5).abs() < 1e-9,
+            "{p:?}"
+        );
+        assert!(p.z.abs() < 1e-9 || (p.z - 1.0).abs() < 1e-9, "{p:?}");
+    }
+    // Anticlockwise about +x: the signed area's normal points along +x.
+    let mut n = geom::Vector3::zeros();
+    for i in 0..4 {
+        n += outline[i].coords.cross(&outline[(i + 1) % 4].coords);
+    }
+    assert!(n.x > 1.9, "{n:?}");
+}
+
+/// `surveyor follow --scenario cube --robot arm4` gives the +x face, out of
+/// arm4's reach from its post, as an initial segment beside the table.
+#[test]
+fn arm4_on_the_cube_is_given_the_far_face() {
+    let loaded = Scenario::load("cube").unwrap();
+    let options = sim::follow_job::FollowRunOptions {
+        robot: Some("arm4".to_owned()),
+        ..sim::follow_job::FollowRunOptions::default()
+    };
+    let setup = sim::follow_job::FollowSetup::from_scenario(&loaded, &options).unwrap();
+    assert_eq!(setup.a_priori_faces.len(), 1);
+    assert_eq!(setup.a_priori_faces[0].normal, [1.0, 0.0, 0.0]);
+    assert_eq!(
+        setup.initial_segments.len(),
+        loaded.scenario.initial_segments.len() + 1
+    );
+}
