@@ -41,8 +41,8 @@ pub use error::{IoOp, MapError};
 pub use key::{BlockKey, VoxelKey};
 pub use material::{MaterialBelief, MaterialConfig};
 pub use occupancy::{
-    GridGeometry, IntegrationStats, OcclusionConfig, OccupancyConfig, OccupancyGrid, RegionCounts,
-    UnknownRun, VoxelState, h2_term,
+    GridGeometry, IntegrationStats, NotFree, OcclusionConfig, OccupancyConfig, OccupancyGrid,
+    RegionCounts, UnknownRun, VoxelState, h2_term,
 };
 pub use pipeline::{MapConfig, MapOutputs, Mapper, SweepSummary, build_from_scans};
 pub use regions::{Region, RegionBox, RegionsConfig};

@@ -84,6 +84,7 @@ use geom::{Aabb, Point3, Real, UnitVector3, Vector3};
 use rayon::prelude::*;
 use sensor::Sweep;
 use serde::{Deserialize, Serialize};
+use std::sync::OnceLock;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 /// The state of a voxel (A§4.2: probability of occupancy 0.5, 0, 1).
@@ -642,6 +643,47 @@ pub struct UnknownRun {
     pub blocked_by: Option<VoxelKey>,
 }
 
+/// The voxels of a grid that are not free (occupied or unknown; every voxel
+/// outside the grid is unknown), 64 voxels of a row along x at a time
+/// ([`OccupancyGrid::not_free`]).
+#[derive(Clone, Copy, Debug)]
+pub struct NotFree<'a> {
+    rows: &'a NotFreeRows,
+    key_min: [i64; 3],
+    dims: [i64; 3],
+}
+
+impl NotFree<'_> {
+    /// Bit `i` set when the voxel of key `(x0 + i, y, z)` is not free, for
+    /// `i` in `0..64`: what [`OccupancyGrid::state`] says of each.
+    #[inline]
+    pub fn row64(&self, y: i32, z: i32, x0: i32) -> u64 {
+        let cy = i64::from(y) - self.key_min[1];
+        let cz = i64::from(z) - self.key_min[2];
+        if cy < 0 || cy >= self.dims[1] || cz < 0 || cz >= self.dims[2] {
+            return u64::MAX;
+        }
+        let words = self.rows.words;
+        let row = &self.rows.bits[(cy + self.dims[1] * cz) as usize * words..][..words];
+        // Words before and after the row are all unknown; so are the bits
+        // past the grid's end in its last word.
+        let word = |w: i64| {
+            usize::try_from(w)
+                .ok()
+                .and_then(|w| row.get(w))
+                .copied()
+                .unwrap_or(u64::MAX)
+        };
+        let c = i64::from(x0) - self.key_min[0];
+        let (w, shift) = (c.div_euclid(64), c.rem_euclid(64));
+        if shift == 0 {
+            word(w)
+        } else {
+            (word(w) >> shift) | (word(w + 1) << (64 - shift))
+        }
+    }
+}
+
 /// The occupancy grid over A3 with region counts, occlusion flags and C-space
 /// probabilities. See the [module docs](self).
 pub struct OccupancyGrid {
@@ -657,6 +699,19 @@ pub struct OccupancyGrid {
     cspace: CspaceField,
     /// Some voxel has been flagged as occluded.
     any_flags: bool,
+    /// Per row of voxels along x, one bit per voxel that is not free, made
+    /// on first use and dropped when a state changes
+    /// ([`OccupancyGrid::not_free`]).
+    not_free: OnceLock<NotFreeRows>,
+}
+
+/// The voxels that are not free, one bit per voxel, row by row along x:
+/// row `y + ny·z` holds `words` words, bit `x` of the row in word `x / 64`;
+/// the bits past the row's end are set (outside the grid is unknown).
+#[derive(Clone, Debug)]
+struct NotFreeRows {
+    words: usize,
+    bits: Vec<u64>,
 }
 
 impl std::fmt::Debug for OccupancyGrid {
@@ -683,6 +738,7 @@ impl Clone for OccupancyGrid {
             counts: self.counts,
             cspace: self.cspace.clone(),
             any_flags: self.any_flags,
+            not_free: self.not_free.clone(),
         }
     }
 }
@@ -731,6 +787,7 @@ impl OccupancyGrid {
             counts,
             cspace,
             any_flags: false,
+            not_free: OnceLock::new(),
         })
     }
 
@@ -758,6 +815,37 @@ impl OccupancyGrid {
         }
     }
 
+    /// The voxels that are not free, row by row ([`NotFree::row64`]): what
+    /// [`Self::state`] says of each, 64 voxels at a time. Made on first use
+    /// after a change (a pass over the grid).
+    pub fn not_free(&self) -> NotFree<'_> {
+        let g = &self.geometry;
+        NotFree {
+            rows: self.not_free.get_or_init(|| self.not_free_rows()),
+            key_min: g.key_min.map(i64::from),
+            dims: g.dims.map(|d| d as i64),
+        }
+    }
+
+    fn not_free_rows(&self) -> NotFreeRows {
+        let g = &self.geometry;
+        let cells = self.cells();
+        let [nx, ny, nz] = g.dims;
+        let words = nx.div_ceil(64);
+        let mut bits = vec![0u64; words * ny * nz];
+        for z in 0..nz {
+            for y in 0..ny {
+                let row = &mut bits[(y + ny * z) * words..][..words];
+                for x in 0..words * 64 {
+                    if x >= nx || decode(cells.state_bits(g.index([x, y, z]))) != VoxelState::Free {
+                        row[x / 64] |= 1 << (x % 64);
+                    }
+                }
+            }
+        }
+        NotFreeRows { words, bits }
+    }
+
     /// The innermost region holding a voxel; `None` outside the grid.
     pub fn region_of(&self, key: VoxelKey) -> Option<Region> {
         let c = self.geometry.cell(key)?;
@@ -782,6 +870,9 @@ impl OccupancyGrid {
     }
 
     fn apply(&mut self, d: &Delta) {
+        // Every state change ends here: the rows of non-free voxels are
+        // made again when next asked for.
+        self.not_free = OnceLock::new();
         self.any_flags |= d.newly_important > 0;
         for s in 0..3 {
             let c = &mut self.counts[s];
@@ -1334,6 +1425,58 @@ mod tests {
             assert!(h > last);
             last = h;
         }
+    }
+
+    /// `not_free` marks exactly the voxels `state` calls not free,
+    /// rows and ends beyond the grid included, and follows every change.
+    #[test]
+    fn not_free_in_row_agrees_with_state() {
+        let g = OccupancyGrid::new(OccupancyConfig {
+            voxel_m: 0.1,
+            regions: RegionsConfig::around([0.0, 0.0, 0.0], [1.0, 2.0, 3.3]),
+            ..OccupancyConfig::default()
+        })
+        .unwrap();
+        let [nx, ny, nz] = g.geometry().dims();
+        assert!(nx > 64, "{nx}: rows of more than one word");
+        let k0 = g.geometry().key_min().coords();
+        let check = |g: &OccupancyGrid| {
+            for z in k0[2] - 1..=k0[2] + nz as i32 {
+                for y in k0[1] - 1..=k0[1] + ny as i32 {
+                    for x0 in [
+                        k0[0] - 70,
+                        k0[0] - 3,
+                        k0[0],
+                        k0[0] + 5,
+                        k0[0] + 64,
+                        k0[0] + 60,
+                    ] {
+                        let bits = g.not_free().row64(y, z, x0);
+                        let expected = (0..64).fold(0u64, |b, i| {
+                            let free = g.state(VoxelKey::new(x0 + i, y, z)) == VoxelState::Free;
+                            b | (u64::from(!free) << i)
+                        });
+                        assert_eq!(bits, expected, "row y {y} z {z} from x {x0}");
+                    }
+                }
+            }
+        };
+        check(&g);
+        // A pattern of the three states; then a change after a look.
+        let config = *g.config();
+        let mut g = OccupancyGrid::from_states(config, |k, _| match k % 7 {
+            0 | 3 => VoxelState::Unknown,
+            5 => VoxelState::Occupied,
+            _ => VoxelState::Free,
+        })
+        .unwrap();
+        check(&g);
+        assert!(g.not_free().row64(k0[1] + 1, k0[2] + 1, k0[0]).count_ones() > 10);
+        let key = VoxelKey::new(k0[0] + 65, k0[1] + 2, k0[2] + 3);
+        assert_eq!(g.state(key), VoxelState::Unknown, "{key:?}");
+        g.mark_free(key).unwrap();
+        check(&g);
+        check(&g);
     }
 
     #[test]

@@ -6,7 +6,7 @@
 use crate::roadmap::{MotionChecker, weighted_distance};
 use crate::{PlanConfig, PlanError};
 use geom::{Ellipsoid, Isometry3, Real};
-use map::{OccupancyGrid, VoxelKey, VoxelState};
+use map::{OccupancyGrid, VoxelKey};
 use robot::Robot;
 
 /// The ellipsoid safety measure of one robot placed in the world.
@@ -193,20 +193,42 @@ fn ellipsoid_dist(grid: &OccupancyGrid, e: &Ellipsoid, bound: Real, stop_at: Rea
         (inv * (p - geom::Point3::from(e.pose.translation.vector))).component_mul(&scale)
     };
     let step_x = (inv * geom::Vector3::new(v, 0.0, 0.0)).component_mul(&scale);
+    // Only the voxels that are not free count, found 64 at a time in a
+    // row's bits: a row holding none is skipped, and in the others `s` is
+    // still stepped voxel by voxel from the row's first, so every distance
+    // is the same number (to the bit) a scan of the whole box gives, and so
+    // is the first one at or below `stop_at` in scan order.
+    let not_free = grid.not_free();
     let mut best = bound;
     for z in lo[2]..=hi[2] {
         for y in lo[1]..=hi[1] {
-            let first = VoxelKey::new(lo[0], y, z);
-            let mut s = to_local(&first.center(v));
-            for x in lo[0]..=hi[0] {
-                let d = s.norm_squared();
-                if d < best && grid.state(VoxelKey::new(x, y, z)) != VoxelState::Free {
-                    best = d;
-                    if best <= stop_at {
-                        return best;
+            let mut row: Option<(geom::Vector3, i32)> = None;
+            let mut x0 = lo[0];
+            while x0 <= hi[0] {
+                let n = hi[0] - x0 + 1;
+                let mut bits = not_free.row64(y, z, x0);
+                if n < 64 {
+                    bits &= (1u64 << n) - 1;
+                }
+                while bits != 0 {
+                    let at = x0 + bits.trailing_zeros() as i32;
+                    bits &= bits - 1;
+                    let (s, x) = row.get_or_insert_with(|| {
+                        (to_local(&VoxelKey::new(lo[0], y, z).center(v)), lo[0])
+                    });
+                    while *x < at {
+                        *s += step_x;
+                        *x += 1;
+                    }
+                    let d = s.norm_squared();
+                    if d < best {
+                        best = d;
+                        if best <= stop_at {
+                            return best;
+                        }
                     }
                 }
-                s += step_x;
+                x0 = x0.saturating_add(64);
             }
         }
     }

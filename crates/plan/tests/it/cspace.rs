@@ -111,6 +111,83 @@ fn dist_matches_brute_force_over_every_unsafe_voxel() {
     assert!(below_one > 0 && below_one < 40, "{below_one}");
 }
 
+/// `dist` of one ellipsoid as eq. 3.5 is first written: every voxel of the
+/// ellipsoid's bounding box (scaled to `bound`) scanned in z, y, x order,
+/// the local coordinates stepped voxel by voxel along x, the first value at
+/// or below `stop_at` returned.
+fn dist_scanning_the_box(
+    grid: &OccupancyGrid,
+    e: &geom::Ellipsoid,
+    bound: Real,
+    stop_at: Real,
+) -> Real {
+    let v = grid.geometry().voxel_m();
+    let reach = geom::Ellipsoid::new(e.pose, e.radii * bound.sqrt()).bounding_box();
+    let (Some(lo), Some(hi)) = (
+        VoxelKey::of_point(&reach.min, v),
+        VoxelKey::of_point(&reach.max, v),
+    ) else {
+        return 0.0;
+    };
+    let (lo, hi) = (lo.coords(), hi.coords());
+    let inv = e.pose.rotation.inverse();
+    let scale = e.radii.map(|r| 1.0 / r);
+    let step_x = (inv * geom::Vector3::new(v, 0.0, 0.0)).component_mul(&scale);
+    let mut best = bound;
+    for z in lo[2]..=hi[2] {
+        for y in lo[1]..=hi[1] {
+            let first = VoxelKey::new(lo[0], y, z).center(v);
+            let mut s =
+                (inv * (first - Point3::from(e.pose.translation.vector))).component_mul(&scale);
+            for x in lo[0]..=hi[0] {
+                let d = s.norm_squared();
+                if d < best && grid.state(VoxelKey::new(x, y, z)) != VoxelState::Free {
+                    best = d;
+                    if best <= stop_at {
+                        return best;
+                    }
+                }
+                s += step_x;
+            }
+        }
+    }
+    best
+}
+
+/// `Safety::ellipsoid_dist` looks only at the voxels that are not free, yet
+/// gives the box scan's number to the bit, early stops included: the blast
+/// plans and Stage Two's poses, found by LM on it, stay the same.
+#[test]
+fn ellipsoid_dist_equals_the_box_scan_to_the_bit() {
+    let robot = vm6083();
+    let config = PlanConfig {
+        safety_cap: 4.0,
+        ..PlanConfig::default()
+    };
+    let safety = Safety::new(robot.clone(), Isometry3::identity(), &config, vec![1.0; 6]).unwrap();
+    let g = explored_grid(|c| c.z > 1.2 || (c - Point3::new(-0.4, 0.3, 0.3)).norm() < 0.2);
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    let (mut compared, mut stopped) = (0, 0);
+    for _ in 0..60 {
+        let q = random_q(&robot, &mut rng);
+        for (_, e) in safety.posed_links(&q).unwrap() {
+            // Some ellipsoids also beyond the grid's edge (all unknown there).
+            for shift in [0.0, 1.9] {
+                let mut e = e;
+                e.pose.translation.vector.x += shift;
+                for (bound, stop_at) in [(4.0, Real::NEG_INFINITY), (4.0, 1.0), (2.0, 0.3)] {
+                    let ours = safety.ellipsoid_dist(&g, &e, bound, stop_at);
+                    let scan = dist_scanning_the_box(&g, &e, bound, stop_at);
+                    assert_eq!(ours.to_bits(), scan.to_bits(), "q {q:?}: {ours} vs {scan}");
+                    compared += 1;
+                    stopped += usize::from(stop_at.is_finite() && ours <= stop_at);
+                }
+            }
+        }
+    }
+    assert!(compared > 1000 && stopped > 10, "{compared} {stopped}");
+}
+
 #[test]
 fn interfering_voxels_are_exactly_the_centres_inside_an_ellipsoid() {
     let robot = vm6083();
