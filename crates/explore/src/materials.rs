@@ -24,11 +24,16 @@ pub(crate) struct Materials {
     pub(crate) flat: Vec<bool>,
     pub(crate) patch_m: Real,
     reach_m: Real,
+    /// How the LRC was obtained: trained (and why the cache was not used)
+    /// or loaded from its cache.
+    pub(crate) obtained: String,
 }
 
 impl Materials {
     /// `None` without materials or without discs. The LRC is trained on
-    /// `materials` with the scanner model `scanner`.
+    /// `materials` with the scanner model `scanner`, or loaded from
+    /// `cache` when that file holds the model of the same inputs
+    /// ([`sensor::Lrc::load_or_train`]).
     pub(crate) fn new(
         d: &mut DiscMap,
         mesh: &TriMesh,
@@ -36,6 +41,7 @@ impl Materials {
         materials: &[scene::Material],
         scanner: &sensor::ScannerConfig,
         seed: u64,
+        cache: Option<&std::path::Path>,
     ) -> Result<Option<Self>, ExploreError> {
         use sensor::classifier::{LrcConfig, TrainingConfig};
         d.observations = vec![0; d.discs.len()];
@@ -54,8 +60,24 @@ impl Materials {
             observations_per_material: LRC_TRAINING_OBSERVATIONS,
             ..TrainingConfig::default()
         };
-        let lrc = sensor::Lrc::train(config, &training, materials, scanner, seed)
-            .map_err(|e| ExploreError::Classifier(e.to_string()))?;
+        let classifier = |e: sensor::LrcError| ExploreError::Classifier(e.to_string());
+        let (lrc, obtained) = match cache {
+            Some(path) => {
+                let (lrc, outcome) =
+                    sensor::Lrc::load_or_train(path, config, &training, materials, scanner, seed)
+                        .map_err(classifier)?;
+                let obtained = match outcome {
+                    sensor::classifier::LrcCacheOutcome::Loaded => "loaded from cache".to_owned(),
+                    sensor::classifier::LrcCacheOutcome::Trained(why) => format!("trained ({why})"),
+                };
+                (lrc, obtained)
+            }
+            None => (
+                sensor::Lrc::train(config, &training, materials, scanner, seed)
+                    .map_err(classifier)?,
+                "trained (no cache file)".to_owned(),
+            ),
+        };
         let mut belief = map::MaterialBelief::new(map::MaterialConfig {
             n_materials: materials.len(),
             ..map::MaterialConfig::default()
@@ -76,6 +98,7 @@ impl Materials {
             flat,
             patch_m,
             reach_m: config.max_range_m + patch_m,
+            obtained,
         }))
     }
 

@@ -55,6 +55,7 @@ impl ExploreRun {
             decision_ms: times(&|r| r.f.is_some()),
             stage_two_decision_ms: times(&|r| r.stage == 2),
             wall_s: self.wall_s,
+            timings: self.timings,
         }
     }
 

@@ -102,6 +102,9 @@ pub struct ExploreRun {
     pub initial_information: (Real, Real),
     /// How the C-space model was obtained.
     pub cspace: String,
+    /// How the LRC was obtained (`None`: no materials or no discs, so no
+    /// classifier).
+    pub lrc: Option<String>,
     /// Every measured point.
     pub cloud: Vec<SweepPoint>,
     /// The TSDF mesh.
@@ -115,6 +118,11 @@ pub struct ExploreRun {
     pub grid: map::OccupancyGrid,
     /// Wall time of the whole run, seconds (0 when timings are off).
     pub wall_s: Real,
+    /// Where the run's wall time went (`None` when timings are off): the
+    /// phases of [`run`] (stages, discs, LRC, final mesh; `total_s` is
+    /// [`Self::wall_s`]); a job around it, such as the simulator's, adds
+    /// its own (setup, blast plan, files, report) and its total.
+    pub timings: Option<record::explore::PhaseTimings>,
 }
 
 /// The noise seed of viewpoint `k`'s sweep.
@@ -138,6 +146,14 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
     progress: &mut dyn FnMut(&ViewpointRecord),
 ) -> Result<ExploreRun, ExploreError> {
     let t_run = Instant::now();
+    let mut phases = record::explore::PhaseTimings::default();
+    let mut clock = Instant::now();
+    // Seconds since the last lap.
+    let mut lap = || {
+        let s = clock.elapsed().as_secs_f64();
+        clock = Instant::now();
+        s
+    };
     let mut episode = Episode::new(setup, hw, judge, options)?;
     let restored = if options.resume {
         Some(episode.restore()?)
@@ -146,6 +162,7 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
     };
     let (mut replay_one, replay_two, tried_before) = restored.unwrap_or_default();
     let termination = episode.stage_one(&mut replay_one, progress)?;
+    phases.stage_one_s = lap();
     let mesh = episode.tsdf.extract_mesh();
     let mut discs = disc_map(
         &mesh,
@@ -155,6 +172,7 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
         &episode.setup.config.mapping,
         options.seed,
     )?;
+    phases.discs_s = lap();
     let mut materials = Materials::new(
         &mut discs,
         &mesh,
@@ -162,6 +180,7 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
         &episode.setup.materials,
         &episode.setup.scanner,
         options.seed,
+        episode.setup.lrc_cache.as_deref(),
     )?;
     if let Some(m) = &mut materials {
         for sweep in &std::mem::take(&mut episode.sweeps) {
@@ -173,6 +192,7 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
             last.h3 = Some(m.h3_total());
         }
     }
+    phases.lrc_s = lap();
     let mut stage_two_termination = None;
     if let (true, Some(m)) = (options.stage_two, materials.as_mut()) {
         let end = episode.stage_two(m, &mut discs, &mesh, &tried_before, replay_two, progress)?;
@@ -181,6 +201,8 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
     if let Some(m) = &materials {
         m.finish(&mut discs);
     }
+    let lrc = materials.map(|m| m.obtained);
+    phases.stage_two_s = lap();
     let Episode {
         setup,
         tsdf,
@@ -190,6 +212,10 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
         judge,
         ..
     } = episode;
+    let mesh = tsdf.extract_mesh();
+    phases.final_mesh_s = lap();
+    let wall_s = t_run.elapsed().as_secs_f64();
+    phases.total_s = wall_s;
     Ok(ExploreRun {
         scenario: options.identity.scenario.clone(),
         viewpoints,
@@ -199,15 +225,13 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
         tally: judge.tally(),
         initial_information: setup.stage.initial_information(),
         cspace: setup.cspace,
+        lrc,
         cloud,
-        mesh: tsdf.extract_mesh(),
+        mesh,
         discs,
         grid: setup.stage.grid().clone(),
-        wall_s: if options.timings {
-            t_run.elapsed().as_secs_f64()
-        } else {
-            0.0
-        },
+        wall_s: if options.timings { wall_s } else { 0.0 },
+        timings: options.timings.then_some(phases),
     })
 }
 

@@ -37,6 +37,8 @@ pub struct SetupInputs {
     pub materials: Vec<scene::Material>,
     /// Where the C-space model is cached (`None`: built every run).
     pub cspace_cache: Option<PathBuf>,
+    /// Where the trained LRC is cached (`None`: trained every run).
+    pub lrc_cache: Option<PathBuf>,
 }
 
 /// Everything a run starts from.
@@ -62,6 +64,8 @@ pub struct Setup {
     pub stage: StageOne,
     /// How the C-space model was obtained.
     pub cspace: String,
+    /// Where the trained LRC is cached (`None`: trained every run).
+    pub lrc_cache: Option<PathBuf>,
 }
 
 impl Setup {
@@ -78,6 +82,7 @@ impl Setup {
             start,
             materials,
             cspace_cache,
+            lrc_cache,
         } = inputs;
         config.sweep = sweep;
         // Rays without a return free space up to a little short of the range
@@ -123,6 +128,7 @@ impl Setup {
             materials,
             stage,
             cspace,
+            lrc_cache,
         })
     }
 }

@@ -78,6 +78,79 @@ pub struct ExploreSummary {
     pub stage_two_decision_ms: Spread,
     /// Wall time of the whole run, seconds (0 when timings are off).
     pub wall_s: Real,
+    /// Where the job's wall time went, per phase (absent when timings are
+    /// off, so such files stay the same byte for byte).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timings: Option<PhaseTimings>,
+}
+
+/// Where the wall time of a `surveyor explore` job went, seconds per phase
+/// (of this process: a resumed run's replay counts in its stages).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PhaseTimings {
+    /// The scenario's world, the C-space model (built or loaded), the
+    /// planning grid, the judge.
+    pub setup_s: Real,
+    /// Stage One: decisions, motions, sweeps, integration (a resumed run's
+    /// replayed viewpoints included).
+    pub stage_one_s: Real,
+    /// Stage One's TSDF mesh, its Scale-Like Discs and segments.
+    pub discs_s: Real,
+    /// The LRC trained (or loaded from its cache), the material belief, and
+    /// Stage One's sweeps classified.
+    pub lrc_s: Real,
+    /// Stage Two: decisions, motions, sweeps, classification.
+    pub stage_two_s: Real,
+    /// The TSDF mesh of both stages.
+    pub final_mesh_s: Real,
+    /// The blast plan (Paul App. A).
+    pub blast_planning_s: Real,
+    /// The run folder's files other than the report.
+    pub write_s: Real,
+    /// `report.html`.
+    pub report_s: Real,
+    /// The whole job.
+    pub total_s: Real,
+}
+
+impl PhaseTimings {
+    /// The phases in the order they run, with their names, seconds (the
+    /// total not among them).
+    pub fn phases(&self) -> [(&'static str, Real); 9] {
+        [
+            ("setup", self.setup_s),
+            ("stage one", self.stage_one_s),
+            ("mesh and discs", self.discs_s),
+            ("LRC", self.lrc_s),
+            ("stage two", self.stage_two_s),
+            ("final mesh", self.final_mesh_s),
+            ("blast planning", self.blast_planning_s),
+            ("files", self.write_s),
+            ("report", self.report_s),
+        ]
+    }
+
+    /// One line per phase, `name  seconds  share of the total`, then the
+    /// total and what no phase accounts for.
+    pub fn table(&self) -> String {
+        let mut out = String::new();
+        let total = self.total_s.max(1e-9);
+        let mut listed = 0.0;
+        for (name, s) in self.phases() {
+            listed += s;
+            let _ = writeln!(out, "  {name:<15} {s:>7.2} s {:>5.1} %", 100.0 * s / total);
+        }
+        let _ = writeln!(
+            out,
+            "  {:<15} {:>7.2} s {:>5.1} %",
+            "other",
+            (self.total_s - listed).max(0.0),
+            100.0 * (self.total_s - listed).max(0.0) / total
+        );
+        let _ = write!(out, "  {:<15} {:>7.2} s", "total", self.total_s);
+        out
+    }
 }
 
 /// Viewpoints per stage.
@@ -504,6 +577,7 @@ mod tests {
             decision_ms: Spread::of(vec![3.0, 1.0, 2.0]),
             stage_two_decision_ms: Spread::default(),
             wall_s: 0.0,
+            timings: None,
         }
     }
 
@@ -546,6 +620,41 @@ mod tests {
             }
         );
         assert_eq!(back.coverage.unwrap().observable.a1, Some(0.4));
+    }
+
+    /// Without timings `run.json` has no `timings` key (the same bytes as
+    /// before the key existed); with them every phase is written, sorted,
+    /// and read back, and the table lists each phase and the rest.
+    #[test]
+    fn timings_are_written_only_when_recorded() {
+        let mut s = summary();
+        assert!(!s.to_json().unwrap().contains("timings"));
+        let t = PhaseTimings {
+            setup_s: 1.0,
+            stage_one_s: 2.0,
+            discs_s: 0.25,
+            lrc_s: 0.5,
+            stage_two_s: 3.0,
+            final_mesh_s: 0.125,
+            blast_planning_s: 4.0,
+            write_s: 0.5,
+            report_s: 0.5,
+            total_s: 12.5,
+        };
+        s.timings = Some(t);
+        let text = s.to_json().unwrap();
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert!(keys_sorted(&v));
+        assert_eq!(v["timings"]["blast_planning_s"], 4.0);
+        let back: ExploreSummary = serde_json::from_str(&text).unwrap();
+        assert_eq!(back.timings, Some(t));
+        let table = t.table();
+        assert_eq!(table.lines().count(), 11, "{table}");
+        assert!(
+            table.contains("blast planning     4.00 s  32.0 %"),
+            "{table}"
+        );
+        assert!(table.contains("other              0.62 s"), "{table}");
     }
 
     #[test]

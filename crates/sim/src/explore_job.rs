@@ -21,6 +21,7 @@ use scene::{Scene, World};
 use sensor::{Scanner, Sweep};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Instant;
 
 /// How to run.
 #[derive(Clone, Debug, Default)]
@@ -31,6 +32,8 @@ pub struct ExploreOptions {
     pub max_viewpoints: Option<usize>,
     /// Where the C-space model is cached (`None`: built every run).
     pub cspace_cache: Option<PathBuf>,
+    /// Where the trained LRC is cached (`None`: trained every run).
+    pub lrc_cache: Option<PathBuf>,
     /// Stage One parameters instead of the scenario's `[explore]` table
     /// (`None`: the scenario's, or the defaults).
     pub config: Option<ExploreConfig>,
@@ -54,6 +57,13 @@ impl ExploreOptions {
     pub fn default_cspace_cache(loaded: &LoadedScenario) -> Result<PathBuf, SimError> {
         let name = loaded.robot_choice()?.short_name();
         Ok(std::env::temp_dir().join(format!("surveyor-cspace-{name}.json")))
+    }
+
+    /// The default LRC cache of a run seed (the training's seed): one file
+    /// per seed in the system's temporary folder, so runs that alternate
+    /// seeds do not retrain each other's model.
+    pub fn default_lrc_cache(seed: u64) -> PathBuf {
+        std::env::temp_dir().join(format!("surveyor-lrc-seed{seed}.json"))
     }
 }
 
@@ -292,6 +302,7 @@ pub fn explore_setup(
         start,
         materials,
         cspace_cache: options.cspace_cache.clone(),
+        lrc_cache: options.lrc_cache.clone(),
     })?;
     Ok((setup, world))
 }
@@ -455,6 +466,19 @@ pub fn write_run(
     outcome: &ExploreOutcome,
     staging: &Staging,
 ) -> Result<Option<BlastPlan>, SimError> {
+    // The maintenance plan over the map (Paul App. A): a nozzle pose for
+    // every disc in A2 that has one, each segment's targets ordered by the GA.
+    let plan = outcome.blast_plan(&BlastConfig::default())?;
+    stage_files(outcome, plan.as_ref(), staging)?;
+    Ok(plan)
+}
+
+/// [`write_run`] with the blast plan made already.
+fn stage_files(
+    outcome: &ExploreOutcome,
+    plan: Option<&BlastPlan>,
+    staging: &Staging,
+) -> Result<(), SimError> {
     outcome.run.write(staging, outcome.coverage_summary())?;
     staging.write(
         record::folder::SCENARIO_TOML,
@@ -464,14 +488,11 @@ pub fn write_run(
         record::blast::BLAST_INPUTS_JSON,
         outcome.blast_inputs()?.to_file().to_json()?,
     )?;
-    // The maintenance plan over the map (Paul App. A): a nozzle pose for
-    // every disc in A2 that has one, each segment's targets ordered by the GA.
-    let plan = outcome.blast_plan(&BlastConfig::default())?;
-    if let Some(plan) = &plan {
+    if let Some(plan) = plan {
         staging.write(record::blast::BLAST_PLAN_JSON, plan.to_json()?)?;
         staging.write(record::blast::BLAST_PLAN_CSV, plan.csv())?;
     }
-    Ok(plan)
+    Ok(())
 }
 
 /// Files that mark another command's run folder.
@@ -514,15 +535,41 @@ pub fn explore(
         checkpoint: Some(checkpoint),
         ..options.clone()
     };
+    let t_job = Instant::now();
+    let mut clock = Instant::now();
+    // Seconds since the last lap.
+    let mut lap = || {
+        let s = clock.elapsed().as_secs_f64();
+        clock = Instant::now();
+        s
+    };
     let sim = SimExplore::new(loaded, &options)?;
     record::output::create_out_dir(out)?;
-    let outcome = sim.run(progress)?;
+    let setup_s = lap();
+    let mut outcome = sim.run(progress)?;
+    lap();
+    let plan = outcome.blast_plan(&BlastConfig::default())?;
+    let blast_planning_s = lap();
+    if let Some(t) = &mut outcome.run.timings {
+        t.setup_s = setup_s;
+        t.blast_planning_s = blast_planning_s;
+    }
     let staging = Staging::new(out)?;
-    let plan = write_run(&outcome, &staging)?;
+    stage_files(&outcome, plan.as_ref(), &staging)?;
+    let write_s = lap();
     finish(&staging).map_err(|message| SimError::InvalidArgument {
         what: out.display().to_string(),
         message,
     })?;
+    let report_s = lap();
+    if let Some(t) = &mut outcome.run.timings {
+        t.write_s = write_s;
+        t.report_s = report_s;
+        t.total_s = t_job.elapsed().as_secs_f64();
+        // run.json again, with the whole job's times (the report read the
+        // times so far).
+        staging.write(record::explore::RUN_JSON, outcome.summary().to_json()?)?;
+    }
     staging.commit()?;
     Ok((outcome, plan))
 }

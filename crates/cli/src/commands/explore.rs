@@ -17,7 +17,7 @@ measured point with its ray origin), mesh.ply (the TSDF mesh), discs.csv (the Sc
 of the Stage One mesh with segment, viewpoint, true material, material posterior, H3 and LRC \
 observations), segments.json, run.json (viewpoints per stage, terminations, collisions, \
 unsafe_configurations with their dist(Q), min_clearance_m, coverage of A1, A2, A3, per \
-material and of the observable surfaces, material_accuracy, decision_ms, wall_s), and \
+material and of the observable surfaces, material_accuracy, decision_ms, wall_s, and timings: seconds per phase, which the command also prints at the end; absent with --no-timings), and \
 blast_plan.json and blast_plan.csv (Paul App. A: a nozzle pose for every disc in A2 that has one, \
 within the tool's angle, stream length and aim limits and dist(Q) > 1 on the final map, the discs \
 without one listed, each segment's targets ordered by the GA, with the nearest-neighbour and 2-opt \
@@ -64,6 +64,12 @@ pub struct ExploreArgs {
     /// differ.
     #[arg(long)]
     cspace_cache: Option<PathBuf>,
+    /// Where to cache the trained material classifier (LRC) [default: a
+    /// file in the system's temporary folder named after the seed]; it is
+    /// trained again when its inputs (materials, scanner, constraints,
+    /// seed) differ.
+    #[arg(long)]
+    lrc_cache: Option<PathBuf>,
     /// Write zeros in the time columns so outputs are byte-identical run to run.
     #[arg(long)]
     no_timings: bool,
@@ -112,19 +118,7 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     if loaded.scenario.robot.urdf.is_some() {
         super::warn_about(&loaded.build_robot()?);
     }
-    let cspace_cache = match &args.cspace_cache {
-        Some(path) => path.clone(),
-        None => ExploreOptions::default_cspace_cache(&loaded)?,
-    };
-    let options = ExploreOptions {
-        seed: args.seed,
-        max_viewpoints: args.max_viewpoints,
-        cspace_cache: Some(cspace_cache),
-        timings: !args.no_timings,
-        resume: args.resume,
-        stage_two,
-        ..ExploreOptions::default()
-    };
+    let options = run_options(args, &loaded, stage_two)?;
     let t = std::time::Instant::now();
     let (outcome, blast) = sim::explore_job::explore(
         &loaded,
@@ -167,6 +161,9 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         ),
         run.cspace
     )?;
+    if let Some(lrc) = &run.lrc {
+        say!("material classifier (LRC) {lrc}")?;
+    }
     if summary.termination == explore::Termination::NoSafeCandidate.name() {
         let local = loaded
             .scenario
@@ -223,5 +220,37 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         t.elapsed().as_secs_f64(),
         args.out.display()
     )?;
+    if let Some(timings) = &run.timings {
+        say!(
+            "where the time went (run.json's timings):\n{}",
+            timings.table()
+        )?;
+    }
     Ok(())
+}
+
+/// How to run: the caches (given, or the defaults), seed, budget, stages.
+fn run_options(
+    args: &ExploreArgs,
+    loaded: &scenario::LoadedScenario,
+    stage_two: bool,
+) -> Result<ExploreOptions> {
+    let cspace_cache = match &args.cspace_cache {
+        Some(path) => path.clone(),
+        None => ExploreOptions::default_cspace_cache(loaded)?,
+    };
+    Ok(ExploreOptions {
+        seed: args.seed,
+        max_viewpoints: args.max_viewpoints,
+        cspace_cache: Some(cspace_cache),
+        lrc_cache: Some(
+            args.lrc_cache
+                .clone()
+                .unwrap_or_else(|| ExploreOptions::default_lrc_cache(args.seed)),
+        ),
+        timings: !args.no_timings,
+        resume: args.resume,
+        stage_two,
+        ..ExploreOptions::default()
+    })
 }

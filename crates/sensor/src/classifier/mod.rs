@@ -96,9 +96,11 @@ use geom::Real;
 use nalgebra::Matrix4;
 use serde::{Deserialize, Serialize};
 
+mod cache;
 mod features;
 mod training;
 
+pub use cache::{LRC_CACHE_FORMAT, LrcCacheOutcome};
 use features::coverage_terms;
 pub use features::{
     COVERAGE_TERMS, Features, Observation, ObservedReturn, PatchGeometry, extract_features,
@@ -261,6 +263,15 @@ pub enum LrcError {
         expected: &'static str,
         /// What was given.
         got: String,
+    },
+    /// The cache file of a trained model cannot be written
+    /// ([`Lrc::load_or_train`]).
+    #[error("LRC cache {path}: {message}")]
+    Cache {
+        /// The cache file.
+        path: std::path::PathBuf,
+        /// What went wrong.
+        message: String,
     },
     /// Training could not produce a model for a material.
     #[error("LRC training, material `{material}`: {message}")]
