@@ -9,12 +9,13 @@ use crate::{PlanConfig, PlanError};
 use geom::Real;
 use petgraph::algo::{astar, dijkstra};
 use petgraph::graph::{NodeIndex, UnGraph};
-use petgraph::visit::EdgeRef;
+use petgraph::visit::{EdgeFiltered, EdgeRef};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use robot::{JointKind, Robot};
 use serde::{Deserialize, Serialize};
+use std::cell::RefCell;
 use std::collections::HashMap;
 
 /// Decides whether configurations and straight joint-space motions are safe.
@@ -367,24 +368,38 @@ impl Roadmap {
                 _ => to,
             }
         };
-        let mut node_ok: HashMap<usize, bool> = HashMap::new();
-        let mut edge_ok: HashMap<usize, bool> = HashMap::new();
-        let mut cost = |e: petgraph::graph::EdgeReference<'_, Real>| -> Real {
-            let ok = *edge_ok.entry(e.id().index()).or_insert_with(|| {
-                let (u, v) = (e.source(), e.target());
-                [u, v].iter().all(|w| {
-                    *node_ok
-                        .entry(w.index())
-                        .or_insert_with(|| checker.pose_ok(config(*w)))
-                }) && checker.motion_ok(config(u), config(v))
-            });
-            if ok { *e.weight() } else { Real::INFINITY }
+        // An edge is usable when both its nodes and the motion along it are
+        // safe, checked when A* first meets it. A* sees only the usable
+        // edges: it expands the nodes a safe path reaches, in the order it
+        // would with every edge and the unusable ones at an infinite cost
+        // (those nodes come off its queue only after every finite one), so
+        // a path found is the same, and a search that finds none stops
+        // without checking the edges of nodes no safe path reaches.
+        let checks = RefCell::new((
+            HashMap::<usize, bool>::new(),
+            HashMap::<usize, bool>::new(),
+            checker,
+        ));
+        let usable = |e: petgraph::graph::EdgeReference<'_, Real>| -> bool {
+            let mut guard = checks.borrow_mut();
+            let (node_ok, edge_ok, checker) = &mut *guard;
+            if let Some(&ok) = edge_ok.get(&e.id().index()) {
+                return ok;
+            }
+            let (u, v) = (e.source(), e.target());
+            let ok = [u, v].iter().all(|w| {
+                *node_ok
+                    .entry(w.index())
+                    .or_insert_with(|| checker.pose_ok(config(*w)))
+            }) && checker.motion_ok(config(u), config(v));
+            edge_ok.insert(e.id().index(), ok);
+            ok
         };
         let (total, route) = astar(
-            &graph,
+            &EdgeFiltered::from_fn(&graph, usable),
             start,
             |v| v == goal,
-            &mut cost,
+            |e| *e.weight(),
             |v| self.distance(config(v), to),
         )?;
         if !total.is_finite() {
