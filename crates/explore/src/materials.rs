@@ -24,6 +24,9 @@ pub(crate) struct Materials {
     pub(crate) flat: Vec<bool>,
     pub(crate) patch_m: Real,
     reach_m: Real,
+    /// Per disc, its belief voxels (`MaterialBelief::disc_voxels`, in its
+    /// order): the discs do not change during a run.
+    voxels: Vec<Vec<map::VoxelKey>>,
     /// How the LRC was obtained: trained (and why the cache was not used)
     /// or loaded from its cache.
     pub(crate) obtained: String,
@@ -85,6 +88,13 @@ impl Materials {
         for disc in &d.discs {
             belief.insert_disc(disc);
         }
+        let voxels = {
+            use rayon::prelude::*;
+            d.discs
+                .par_iter()
+                .map(|disc| belief.disc_voxels(disc))
+                .collect()
+        };
         let patch_m = training.patch_radius_m;
         let flat = flat_patches(
             &d.discs,
@@ -98,6 +108,7 @@ impl Materials {
             flat,
             patch_m,
             reach_m: config.max_range_m + patch_m,
+            voxels,
             obtained,
         }))
     }
@@ -131,7 +142,7 @@ impl Materials {
             })
             .collect();
         for (i, posterior) in results {
-            for key in self.belief.disc_voxels(&d.discs[i]) {
+            for &key in &self.voxels[i] {
                 self.belief.update(key, &posterior)?;
             }
             d.observations[i] += 1;
@@ -141,8 +152,18 @@ impl Materials {
 
     /// The material information remaining on disc `i` (eq. 4.16 over its
     /// voxels).
-    pub(crate) fn h3(&self, d: &DiscMap, i: usize) -> Real {
-        self.belief.h3_disc(&d.discs[i])
+    pub(crate) fn h3(&self, i: usize) -> Real {
+        // `MaterialBelief::h3_disc` over the remembered voxels, summed in
+        // the same order.
+        self.voxels[i]
+            .iter()
+            .filter_map(|k| self.belief.h3_voxel(*k))
+            .sum()
+    }
+
+    /// The belief voxels of disc `i`.
+    pub(crate) fn disc_voxels(&self, i: usize) -> &[map::VoxelKey] {
+        &self.voxels[i]
     }
 
     /// `H3` over every disc voxel (eq. 4.17).

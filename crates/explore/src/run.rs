@@ -775,14 +775,19 @@ impl<'s> Aimer<'s> {
         let config = &s.config;
         let stage = &s.stage;
         let a2 = s.regions.a2;
-        let mut ranked: Vec<(usize, Real)> = (0..discs.discs.len())
-            .filter(|&i| !tried[i] && m.flat[i] && a2.contains(&discs.discs[i].centre))
-            .map(|i| (i, m.h3(discs, i)))
-            .filter(|(i, h)| {
-                let voxels = m.belief.disc_voxels(&discs.discs[*i]).len() as Real;
-                *h > config.significant_h3 * self.uniform * voxels
-            })
-            .collect();
+        let mut ranked: Vec<(usize, Real)> = {
+            use rayon::prelude::*;
+            let tried = &*tried;
+            (0..discs.discs.len())
+                .into_par_iter()
+                .filter(|&i| !tried[i] && m.flat[i] && a2.contains(&discs.discs[i].centre))
+                .map(|i| (i, m.h3(i)))
+                .filter(|(i, h)| {
+                    let voxels = m.disc_voxels(*i).len() as Real;
+                    *h > config.significant_h3 * self.uniform * voxels
+                })
+                .collect()
+        };
         ranked.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
         // One map for the whole decision: every motion checked while
         // trying one disc is known when trying the next.
