@@ -194,15 +194,21 @@ fn ellipsoid_dist(grid: &OccupancyGrid, e: &Ellipsoid, bound: Real, stop_at: Rea
     };
     let step_x = (inv * geom::Vector3::new(v, 0.0, 0.0)).component_mul(&scale);
     // Only the voxels that are not free count, found 64 at a time in a
-    // row's bits: a row holding none is skipped, and in the others `s` is
-    // still stepped voxel by voxel from the row's first, so every distance
-    // is the same number (to the bit) a scan of the whole box gives, and so
-    // is the first one at or below `stop_at` in scan order.
+    // row's bits; of those, only the ones whose distance can be below the
+    // best so far: along a row `|s|²` is the quadratic `c + 2bt + at²` of
+    // the voxel's step `t` from the row's first, so the steps where it is
+    // within `ROW_MARGIN` of the best (widened by one voxel each way) are
+    // found in closed form, and a row with none is skipped. In the rows
+    // looked at, `s` is still stepped voxel by voxel from the row's first,
+    // so every distance is the same number (to the bit) a scan of the whole
+    // box gives, and so is the first one at or below `stop_at` in scan
+    // order.
     let not_free = grid.not_free();
+    let a = step_x.norm_squared();
     let mut best = bound;
     for z in lo[2]..=hi[2] {
         for y in lo[1]..=hi[1] {
-            let mut row: Option<(geom::Vector3, i32)> = None;
+            let mut row: Option<(geom::Vector3, i32, i64, i64)> = None;
             let mut x0 = lo[0];
             while x0 <= hi[0] {
                 let n = hi[0] - x0 + 1;
@@ -210,12 +216,40 @@ fn ellipsoid_dist(grid: &OccupancyGrid, e: &Ellipsoid, bound: Real, stop_at: Rea
                 if n < 64 {
                     bits &= (1u64 << n) - 1;
                 }
+                if bits == 0 {
+                    x0 = x0.saturating_add(64);
+                    continue;
+                }
+                let (s, x, t_lo, t_hi) = row.get_or_insert_with(|| {
+                    let s0 = to_local(&VoxelKey::new(lo[0], y, z).center(v));
+                    let (b, c) = (s0.dot(&step_x), s0.norm_squared());
+                    let disc = b * b - a * (c - best - ROW_MARGIN);
+                    let (t_lo, t_hi) = if disc < 0.0 {
+                        (1, 0)
+                    } else {
+                        let r = disc.sqrt();
+                        (
+                            ((-b - r) / a).floor() as i64 - 1,
+                            ((-b + r) / a).ceil() as i64 + 1,
+                        )
+                    };
+                    (s0, lo[0], t_lo, t_hi)
+                });
+                // The steps `t` of this chunk's bits: `x0 − lo[0] + i`.
+                let t0 = i64::from(x0) - i64::from(lo[0]);
+                let keep_from = (*t_lo - t0).clamp(0, 64);
+                let keep_to = (*t_hi - t0 + 1).clamp(0, 64);
+                if keep_from >= keep_to {
+                    bits = 0;
+                } else {
+                    if keep_to < 64 {
+                        bits &= (1u64 << keep_to) - 1;
+                    }
+                    bits &= u64::MAX << keep_from;
+                }
                 while bits != 0 {
                     let at = x0 + bits.trailing_zeros() as i32;
                     bits &= bits - 1;
-                    let (s, x) = row.get_or_insert_with(|| {
-                        (to_local(&VoxelKey::new(lo[0], y, z).center(v)), lo[0])
-                    });
                     while *x < at {
                         *s += step_x;
                         *x += 1;
@@ -234,6 +268,12 @@ fn ellipsoid_dist(grid: &OccupancyGrid, e: &Ellipsoid, bound: Real, stop_at: Rea
     }
     best
 }
+
+/// How far above the best distance so far a row's closed-form minimum may
+/// be and the row still be scanned: far more than the rounding of `s`
+/// stepped along a row (a few ulps of `|s|` per step), so no voxel that the
+/// scan would take is skipped.
+const ROW_MARGIN: Real = 1e-9;
 
 /// [`Safety`] against one grid, as the roadmap's motion checker.
 #[derive(Debug)]
