@@ -13,6 +13,7 @@ use explore::{ExploreConfig, ExploreRun, Judge, SafetyTally, Setup, SetupInputs}
 use geom::{Isometry3, Point3, Real};
 use map::TsdfConfig;
 use plan::contact::{min_clearance, motion_contacts, robot_contacts, smallest_link_radius};
+use rayon::prelude::*;
 use record::Staging;
 use record::explore::{ExploreCoverage, ExploreSummary};
 use robot::Robot;
@@ -114,13 +115,17 @@ impl ExploreJudge {
                 &setup.start,
             )?;
             let r = &setup.regions;
-            for b in [r.a1, r.a2, r.a3] {
-                let mut m = *metrics;
-                m.sampling.region = Some(b.aabb());
-                let mut t = CoverageTracker::new(scene, &m)?;
-                t.set_observable_from(scene, &eyes, setup.reach_m, OBSERVABLE_CELL_M);
-                trackers.push(t);
-            }
+            // The three regions' trackers side by side (each is its own).
+            trackers = [r.a1, r.a2, r.a3]
+                .par_iter()
+                .map(|b| {
+                    let mut m = *metrics;
+                    m.sampling.region = Some(b.aabb());
+                    let mut t = CoverageTracker::new(scene, &m)?;
+                    t.set_observable_from(scene, &eyes, setup.reach_m, OBSERVABLE_CELL_M);
+                    Ok(t)
+                })
+                .collect::<Result<_, SimError>>()?;
         }
         Ok(Self {
             contact_step: smallest_link_radius(&robot).map_or(0.01, |r| 0.5 * r),

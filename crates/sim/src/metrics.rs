@@ -138,6 +138,9 @@ pub fn coverage_in_chunks(
 #[derive(Debug)]
 pub struct CoverageTracker {
     tree: Option<ImmutableKdTree<Real, 3>>,
+    /// The samples' bounding box grown by the threshold: a point outside it
+    /// is within the threshold of no sample.
+    reach: Option<Aabb>,
     points: Vec<[Real; 3]>,
     normals: Vec<[Real; 3]>,
     observable: Option<Vec<bool>>,
@@ -174,8 +177,24 @@ impl CoverageTracker {
             }
         }
         let covered = vec![false; points.len()];
+        // Grown a little more than the threshold: no rounding of the box can
+        // shut out a point the tree would find.
+        let r = cfg.covered_within_m + 1e-9;
+        let reach = points.first().map(|p| {
+            let (lo, hi) = points.iter().fold((*p, *p), |(lo, hi), q| {
+                (
+                    [0, 1, 2].map(|k| lo[k].min(q[k])),
+                    [0, 1, 2].map(|k| hi[k].max(q[k])),
+                )
+            });
+            Aabb::new(
+                Point3::from(lo.map(|v| v - r)),
+                Point3::from(hi.map(|v| v + r)),
+            )
+        });
         Ok(Self {
             tree: (!points.is_empty()).then(|| ImmutableKdTree::new_from_slice(&points)),
+            reach,
             points,
             normals,
             observable: None,
@@ -192,10 +211,13 @@ impl CoverageTracker {
 
     /// Mark the samples within the threshold of any of `points`.
     pub fn add_points(&mut self, points: &[Point3]) {
-        let Some(tree) = &self.tree else { return };
+        let (Some(tree), Some(reach)) = (&self.tree, &self.reach) else {
+            return;
+        };
         let r2 = self.r2;
         let hits: Vec<u64> = points
             .par_iter()
+            .filter(|p| reach.contains_point(p))
             .flat_map_iter(|p| {
                 tree.within_unsorted::<SquaredEuclidean>(&[p.x, p.y, p.z], r2)
                     .into_iter()
