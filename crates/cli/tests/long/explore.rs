@@ -101,61 +101,115 @@ fn small_run() -> &'static SmallRun {
     })
 }
 
-/// Run `surveyor explore <args> --no-timings --out DIR` killed with `kill -9`
-/// once `kill_when` holds of its checkpoint, then resumed: every output must
-/// equal the uninterrupted run's in `whole` (same arguments and `cache`).
+/// Spawn `surveyor explore <args>` (`args` of [`explore_args`]) and kill it
+/// with `kill -9` once `kill_when` holds of the checkpoint in `out`, or let
+/// it end. Returns the checkpoint's viewpoints at the kill, `None` when the
+/// run ended first.
 #[cfg(unix)]
-fn kill_9_then_resume(
-    args: &[&str],
-    cache: &Path,
-    whole: &Path,
+fn run_until(
+    args: &[String],
+    out: &Path,
     kill_when: impl Fn((usize, usize)) -> bool,
-) {
+) -> Option<(usize, usize)> {
     use std::process::{Command, Stdio};
-    let dir = tempfile::tempdir().unwrap();
-    let cut = dir.path().join("cut");
     let mut child = Command::new(env!("CARGO_BIN_EXE_surveyor"))
-        .args(explore_args(args, cache, &cut))
+        .args(args)
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
     // Up to 10 minutes (a slow or busy machine): the loop ends as soon as
     // the checkpoint shows the viewpoints to kill at, or the run has ended.
+    let mut ended = false;
     for _ in 0..24_000 {
-        if kill_when(checkpointed(&cut)) || child.try_wait().unwrap().is_some() {
+        if kill_when(checkpointed(out)) {
+            break;
+        }
+        if child.try_wait().unwrap().is_some() {
+            ended = true;
             break;
         }
         std::thread::sleep(std::time::Duration::from_millis(25));
     }
-    let killed_at = checkpointed(&cut);
+    let killed_at = checkpointed(out);
     // SIGKILL (kill -9) through the child handle: no signal to a process id
     // that may already have been reaped and reused.
     child.kill().unwrap();
-    let _ = child.wait();
-    assert!(kill_when(killed_at), "killed at {killed_at:?} viewpoints");
-    assert!(!cut.join("run.json").exists(), "the killed run finished");
+    let status = child.wait().unwrap();
+    (!ended && !status.success()).then_some(killed_at)
+}
 
+/// Run `surveyor explore <args> --no-timings --out DIR` killed with `kill -9`
+/// once `kill_when` holds of its checkpoint, then resumed (with `twice`, the
+/// resumed run is killed again once it has checkpointed a viewpoint more,
+/// and resumed once more): every file of the folder, the report and the
+/// checkpoint included, must equal the uninterrupted run's in `whole` (same
+/// arguments and `cache`), but for the folder's path in the report.
+#[cfg(unix)]
+fn kill_9_then_resume(
+    args: &[&str],
+    cache: &Path,
+    whole: &Path,
+    kill_when: impl Fn((usize, usize)) -> bool,
+    twice: bool,
+) {
+    let dir = tempfile::tempdir().unwrap();
+    let cut = dir.path().join("cut");
+    let killed_at = run_until(&explore_args(args, cache, &cut), &cut, &kill_when);
+    assert!(
+        killed_at.is_some_and(&kill_when),
+        "killed at {killed_at:?} viewpoints"
+    );
+    assert!(!cut.join("run.json").exists(), "the killed run finished");
+    let mut kills = vec![killed_at];
     let mut resume = explore_args(args, cache, &cut);
     resume.insert(1, "--resume".into());
-    ok_owned(&resume);
+    if twice {
+        // Killed again once past the first kill's viewpoints (or let end,
+        // when it gets through its last viewpoints between two looks).
+        let first = killed_at.unwrap();
+        let again = run_until(&resume, &cut, |(one, two)| one + two > first.0 + first.1);
+        if again.is_some() {
+            assert!(!cut.join("run.json").exists(), "the killed run finished");
+        }
+        kills.push(again);
+    }
+    if !cut.join("run.json").exists() {
+        ok_owned(&resume);
+    }
+    let names = |d: &Path| {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    let files = names(whole);
+    assert_eq!(names(&cut), files);
     for name in [
         "viewpoints.csv",
         "run.json",
-        "cloud.ply",
-        "mesh.ply",
-        "discs.csv",
-        "segments.json",
-        "blast_plan.json",
-        "blast_plan.csv",
+        "report.html",
+        "checkpoint.json",
     ] {
-        let (x, y) = (
+        assert!(files.iter().any(|f| f == name), "{files:?}");
+    }
+    // The report names the folder as given (`--out`): the one difference.
+    let (from, to) = (cut.to_str().unwrap(), whole.to_str().unwrap());
+    for name in &files {
+        let (x, mut y) = (
             std::fs::read(whole.join(name)).unwrap(),
             std::fs::read(cut.join(name)).unwrap(),
         );
+        if name == "report.html" {
+            let text = String::from_utf8(y).unwrap();
+            assert!(text.contains(from), "the report does not name its folder");
+            y = text.replace(from, to).into_bytes();
+        }
         assert!(
             x == y,
-            "{name} differs after resuming at {killed_at:?} viewpoints (stage one, stage two)"
+            "{name} differs after resuming at {kills:?} viewpoints (stage one, stage two)"
         );
     }
 }
@@ -168,20 +222,31 @@ fn kill_9_then_resume(
 fn kill_9_in_stage_one_then_resume_gives_the_uninterrupted_outputs() {
     let run = stage_two_run();
     let args: Vec<&str> = run.args.iter().map(String::as_str).collect();
-    kill_9_then_resume(&args, &run.cache, &run.whole, |(one, two)| {
-        (2..5).contains(&one) && two == 0
-    });
+    kill_9_then_resume(
+        &args,
+        &run.cache,
+        &run.whole,
+        |(one, two)| (2..5).contains(&one) && two == 0,
+        false,
+    );
 }
 
+/// Killed in Stage Two of the shared run (one or two of its three
+/// viewpoints recorded), resumed, killed again a viewpoint later (in Stage
+/// Two, or as it writes its folder), resumed to the end.
 #[cfg(unix)]
 #[test]
 #[ignore = "an exploration run (shared with the other kill -9 test): run by .ci/run"]
 fn kill_9_in_stage_two_then_resume_gives_the_uninterrupted_outputs() {
     let run = stage_two_run();
     let args: Vec<&str> = run.args.iter().map(String::as_str).collect();
-    kill_9_then_resume(&args, &run.cache, &run.whole, |(_, two)| {
-        (1..3).contains(&two)
-    });
+    kill_9_then_resume(
+        &args,
+        &run.cache,
+        &run.whole,
+        |(_, two)| (1..3).contains(&two),
+        true,
+    );
 }
 
 /// `--resume` refuses a checkpoint edited by hand (its records would be
