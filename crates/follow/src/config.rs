@@ -54,8 +54,9 @@ pub struct FollowConfig {
     /// see [`crate::actuator::actuator_change`]), metres.
     pub link_margin_m: Real,
     /// The safety guard (our addition, [`crate::guard`]): every step's
-    /// motion is checked against the model, the segments it deleted and
-    /// the raw readings of the last sets before it is taken.
+    /// motion is checked against the model (with strips past its unshared
+    /// edges), the segments it deleted and the raw readings of the last
+    /// sets before it is taken.
     pub guard: bool,
     /// The guard's margin: no link shape is brought closer than this to
     /// known surface, metres.
