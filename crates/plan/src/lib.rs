@@ -11,6 +11,7 @@
 //! | [`contact`] | robot shapes against a triangle scene: contacts, clearance |
 //! | (root) | [`CspaceModel`], [`PlanConfig`], [`PlanError`] |
 
+pub mod clearance;
 mod config;
 pub mod contact;
 mod error;
@@ -20,6 +21,7 @@ pub mod pose;
 pub mod roadmap;
 pub mod safety;
 
+pub use clearance::{ClearanceChecker, PointClearance};
 pub use config::{MAX_CHECK_STEP_M, MAX_N_Q, MAX_NEIGHBOURS, MIN_CHECK_STEP_M, PlanConfig};
 pub use error::PlanError;
 pub use interference::{Interference, interfering_voxels};

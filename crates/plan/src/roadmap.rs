@@ -18,6 +18,9 @@ use serde::{Deserialize, Serialize};
 use std::cell::RefCell;
 use std::collections::HashMap;
 
+/// Lazy searches of [`Roadmap::plan`] before it checks edges as A* meets them.
+const LAZY_ROUNDS: usize = 32;
+
 /// Decides whether configurations and straight joint-space motions are safe.
 /// [`crate::SafetyChecker`] implements it against an occupancy grid; tests use
 /// their own.
@@ -27,6 +30,12 @@ pub trait MotionChecker {
     /// `true` when every configuration of the straight joint-space motion from
     /// `a` to `b` (both ends included) is safe.
     fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool;
+    /// `false` only when [`MotionChecker::motion_ok`] would be: a cheaper
+    /// test, where the checker has one, that a search may run on many
+    /// motions and confirm with `motion_ok` on the few of the path found.
+    fn motion_may_be_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
+        self.motion_ok(a, b)
+    }
 }
 
 /// A [`MotionChecker`] that remembers every answer of the one it wraps, for
@@ -38,6 +47,7 @@ pub struct MemoChecker<C> {
     inner: C,
     poses: HashMap<Vec<u64>, bool>,
     motions: HashMap<(Vec<u64>, Vec<u64>), bool>,
+    may_be: HashMap<(Vec<u64>, Vec<u64>), bool>,
 }
 
 impl<C: MotionChecker> MemoChecker<C> {
@@ -47,6 +57,7 @@ impl<C: MotionChecker> MemoChecker<C> {
             inner,
             poses: HashMap::new(),
             motions: HashMap::new(),
+            may_be: HashMap::new(),
         }
     }
 
@@ -72,8 +83,7 @@ impl<C: MotionChecker> MotionChecker for MemoChecker<C> {
     }
 
     fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
-        let (ka, kb) = (bits(a), bits(b));
-        let key = if ka <= kb { (ka, kb) } else { (kb, ka) };
+        let key = motion_key(a, b);
         if let Some(&ok) = self.motions.get(&key) {
             return ok;
         }
@@ -81,6 +91,25 @@ impl<C: MotionChecker> MotionChecker for MemoChecker<C> {
         self.motions.insert(key, ok);
         ok
     }
+
+    fn motion_may_be_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
+        let key = motion_key(a, b);
+        if let Some(&ok) = self.motions.get(&key) {
+            return ok;
+        }
+        if let Some(&ok) = self.may_be.get(&key) {
+            return ok;
+        }
+        let ok = self.inner.motion_may_be_ok(a, b);
+        self.may_be.insert(key, ok);
+        ok
+    }
+}
+
+/// The key of the motion `a → b`, the same as `b → a`'s.
+fn motion_key(a: &[Real], b: &[Real]) -> (Vec<u64>, Vec<u64>) {
+    let (ka, kb) = (bits(a), bits(b));
+    if ka <= kb { (ka, kb) } else { (kb, ka) }
 }
 
 /// A roadmap node: its index in the roadmap's node order (stored as a bare
@@ -369,18 +398,25 @@ impl Roadmap {
             }
         };
         // An edge is usable when both its nodes and the motion along it are
-        // safe, checked when A* first meets it. A* sees only the usable
-        // edges: it expands the nodes a safe path reaches, in the order it
-        // would with every edge and the unusable ones at an infinite cost
-        // (those nodes come off its queue only after every finite one), so
-        // a path found is the same, and a search that finds none stops
-        // without checking the edges of nodes no safe path reaches.
+        // safe. The search is lazy first (Lazy PRM): A* over the edges
+        // between safe nodes whose motion is not yet found unsafe, then the
+        // path's motions checked from
+        // the start, and at the first unusable one the search is made again
+        // without it. A path whose every edge checks out is a shortest one
+        // among the usable edges, found checking only the edges of the
+        // paths tried. After `LAZY_ROUNDS` searches (a goal no safe path
+        // reaches keeps failing them) it turns eager: A* sees only the
+        // edges that may be usable, checked when A* first meets them, in
+        // the order it would expand with every edge and the unusable ones
+        // at an infinite cost, so a search that finds no path stops without
+        // checking the edges of nodes no safe path reaches. Every answer is
+        // kept for the next round.
         let checks = RefCell::new((
             HashMap::<usize, bool>::new(),
             HashMap::<usize, bool>::new(),
             checker,
         ));
-        let usable = |e: petgraph::graph::EdgeReference<'_, Real>| -> bool {
+        let check_edge = |e: petgraph::graph::EdgeReference<'_, Real>| -> bool {
             let mut guard = checks.borrow_mut();
             let (node_ok, edge_ok, checker) = &mut *guard;
             if let Some(&ok) = edge_ok.get(&e.id().index()) {
@@ -395,13 +431,75 @@ impl Roadmap {
             edge_ok.insert(e.id().index(), ok);
             ok
         };
-        let (total, route) = astar(
-            &EdgeFiltered::from_fn(&graph, usable),
-            start,
-            |v| v == goal,
-            |e| *e.weight(),
-            |v| self.distance(config(v), to),
-        )?;
+        // The lazy rounds check the nodes A* meets (one configuration each)
+        // and leave the motions (many) to the paths found.
+        let may_be_usable = |e: petgraph::graph::EdgeReference<'_, Real>| -> bool {
+            let mut guard = checks.borrow_mut();
+            let (node_ok, edge_ok, checker) = &mut *guard;
+            if let Some(&ok) = edge_ok.get(&e.id().index()) {
+                return ok;
+            }
+            let (u, v) = (e.source(), e.target());
+            [u, v].iter().all(|w| {
+                *node_ok
+                    .entry(w.index())
+                    .or_insert_with(|| checker.pose_ok(config(*w)))
+            }) && checker.motion_may_be_ok(config(u), config(v))
+        };
+        let not_known_bad = |e: petgraph::graph::EdgeReference<'_, Real>| -> bool {
+            let mut guard = checks.borrow_mut();
+            let (node_ok, edge_ok, checker) = &mut *guard;
+            edge_ok.get(&e.id().index()) != Some(&false)
+                && [e.source(), e.target()].iter().all(|w| {
+                    *node_ok
+                        .entry(w.index())
+                        .or_insert_with(|| checker.pose_ok(config(*w)))
+                })
+        };
+        let mut found = None;
+        for _ in 0..LAZY_ROUNDS {
+            let (total, route) = astar(
+                &EdgeFiltered::from_fn(&graph, not_known_bad),
+                start,
+                |v| v == goal,
+                |e| *e.weight(),
+                |v| self.distance(config(v), to),
+            )?;
+            let all_usable = route.windows(2).all(|w| {
+                graph
+                    .edges_connecting(w[0], w[1])
+                    .min_by(|a, b| a.weight().total_cmp(b.weight()))
+                    .is_some_and(check_edge)
+            });
+            if all_usable {
+                found = Some((total, route));
+                break;
+            }
+        }
+        let (total, route) = match found {
+            Some(f) => f,
+            // Eager: A* through the edges whose motion may be safe (the
+            // checker's cheaper test, checked as A* meets them), the path
+            // found confirmed edge by edge, and A* again without an edge
+            // that fails; every round knows one more unusable edge.
+            None => loop {
+                let (total, route) = astar(
+                    &EdgeFiltered::from_fn(&graph, may_be_usable),
+                    start,
+                    |v| v == goal,
+                    |e| *e.weight(),
+                    |v| self.distance(config(v), to),
+                )?;
+                if route.windows(2).all(|w| {
+                    graph
+                        .edges_connecting(w[0], w[1])
+                        .min_by(|a, b| a.weight().total_cmp(b.weight()))
+                        .is_some_and(check_edge)
+                }) {
+                    break (total, route);
+                }
+            },
+        };
         if !total.is_finite() {
             return None;
         }

@@ -1,0 +1,339 @@
+//! Clearance from measured points: the robot's collision capsules kept a
+//! distance from every point the scanner has measured, on top of `dist(Q)`
+//! (eq. 3.5). `dist(Q) > 1` is measured to the centres of the planning grid's
+//! voxels, so on its own it lets a link pass within millimetres of a surface
+//! the scanner has seen (a surface may lie anywhere in its voxel); the
+//! measured points say where the surface is.
+
+use crate::roadmap::MotionChecker;
+use crate::safety::Safety;
+use geom::{Isometry3, Point3, Real};
+use robot::{PosedShape, Robot};
+use std::collections::{HashMap, HashSet};
+
+/// Measured points are kept one per cube of this side, metres: a point
+/// stands for the others within `√3 · 0.01 / 2 ≈ 9 mm` of it (the range
+/// noise of the bridge scenes' scanner is 10 mm).
+pub const POINT_DEDUP_M: Real = 0.01;
+
+/// Side of the cells the kept points are looked up by, metres.
+const CELL_M: Real = 0.05;
+
+fn key(p: &Point3, side: Real) -> [i32; 3] {
+    [p.x, p.y, p.z].map(|v| (v / side).floor() as i32)
+}
+
+/// The measured points, indexed for clearance queries.
+#[derive(Clone, Debug, Default)]
+pub struct PointClearance {
+    kept: HashSet<[i32; 3]>,
+    cells: HashMap<[i32; 3], Vec<Point3>>,
+}
+
+impl PointClearance {
+    /// No points.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Add measured points (world frame); non-finite ones are ignored.
+    pub fn insert<'a>(&mut self, points: impl IntoIterator<Item = &'a Point3>) {
+        for p in points {
+            if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
+                continue;
+            }
+            if self.kept.insert(key(p, POINT_DEDUP_M)) {
+                self.cells.entry(key(p, CELL_M)).or_default().push(*p);
+            }
+        }
+    }
+
+    /// Points kept.
+    pub fn len(&self) -> usize {
+        self.kept.len()
+    }
+
+    /// No point kept.
+    pub fn is_empty(&self) -> bool {
+        self.kept.is_empty()
+    }
+
+    /// The smallest distance from the collision capsules of `robot`'s moving
+    /// links (posed by `base_from_link`, placed by `world_from_base`) to the
+    /// kept points, or `search_m` when none is closer (0 when a point is
+    /// inside a capsule). The links before the first actuated joint stand
+    /// on whatever carries the robot and are left out, as
+    /// [`crate::contact::min_clearance`] leaves them.
+    pub fn robot_clearance(
+        &self,
+        robot: &Robot,
+        base_from_link: &[Isometry3],
+        world_from_base: &Isometry3,
+        search_m: Real,
+    ) -> Real {
+        let mounted = robot.mounted_links();
+        let mut best = search_m;
+        for shape in robot.posed_collision_shapes(base_from_link) {
+            let PosedShape::Capsule { link, capsule } = shape else {
+                continue;
+            };
+            if link.index() < mounted {
+                continue;
+            }
+            let c = capsule.transformed(world_from_base);
+            let b = c.bounding_box().loosened(best);
+            let (lo, hi) = (key(&b.min, CELL_M), key(&b.max, CELL_M));
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        let Some(points) = self.cells.get(&[x, y, z]) else {
+                            continue;
+                        };
+                        for p in points {
+                            best = best.min(c.distance_to_point(p).max(0.0));
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+/// A [`MotionChecker`] that also keeps the robot's capsules `clearance_m`
+/// from the measured points at every configuration `safety` checks along a
+/// motion. The pose the arm stands at may already be closer (the scanner
+/// may have measured a surface beside it since it got there): it passes,
+/// and a motion from it passes when it never comes closer than the arm
+/// stands, so the arm can always back away.
+pub struct ClearanceChecker<'a, C> {
+    inner: C,
+    safety: &'a Safety,
+    points: &'a PointClearance,
+    clearance_m: Real,
+    /// The pose the arm stands at and its clearance (up to `clearance_m`).
+    here: (Vec<Real>, Real),
+}
+
+impl<'a, C: MotionChecker> ClearanceChecker<'a, C> {
+    /// `inner`'s checks and `clearance_m` from `points`, the arm standing
+    /// at `here`.
+    pub fn new(
+        inner: C,
+        safety: &'a Safety,
+        points: &'a PointClearance,
+        clearance_m: Real,
+        here: &[Real],
+    ) -> Self {
+        let mut checker = Self {
+            inner,
+            safety,
+            points,
+            clearance_m,
+            here: (here.to_vec(), clearance_m),
+        };
+        if clearance_m > 0.0 {
+            checker.here.1 = checker.clearance(here).min(clearance_m);
+        }
+        checker
+    }
+
+    /// The clearance of the configuration `q`, up to `clearance_m` (0 when
+    /// its kinematics fail).
+    pub fn clearance(&self, q: &[Real]) -> Real {
+        let robot = self.safety.robot();
+        robot.forward_kinematics(q).map_or(0.0, |frames| {
+            self.points.robot_clearance(
+                robot,
+                &frames,
+                self.safety.world_from_base(),
+                self.clearance_m,
+            )
+        })
+    }
+
+    /// The clearance a configuration needs: `clearance_m`, or where the arm
+    /// stands, no less than it has there.
+    fn needed(&self, from_here: bool) -> Real {
+        if from_here {
+            self.here.1
+        } else {
+            self.clearance_m
+        }
+    }
+}
+
+impl<C: MotionChecker> MotionChecker for ClearanceChecker<'_, C> {
+    fn pose_ok(&mut self, q: &[Real]) -> bool {
+        if self.clearance_m <= 0.0 {
+            return self.inner.pose_ok(q);
+        }
+        let here = q == self.here.0.as_slice();
+        self.inner.pose_ok(q) && (here || self.clearance(q) >= self.clearance_m)
+    }
+
+    fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
+        if !self.inner.motion_ok(a, b) {
+            return false;
+        }
+        if self.clearance_m <= 0.0 {
+            return true;
+        }
+        let from_here = a == self.here.0.as_slice() || b == self.here.0.as_slice();
+        let needed = self.needed(from_here);
+        self.safety
+            .interpolate(a, b)
+            .iter()
+            .all(|c| self.clearance(c) >= needed)
+    }
+
+    /// The wrapped checker's answer alone: the clearance is left to
+    /// `motion_ok` on the path a search finds.
+    fn motion_may_be_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
+        self.inner.motion_may_be_ok(a, b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use crate::{PlanConfig, Safety};
+    use geom::Vector3;
+
+    /// The clearance to points against the capsule distance by hand: for
+    /// each capsule of the VM-6083 at a pose, points placed at known
+    /// distances off the middle of its axis, perpendicular to it.
+    #[test]
+    fn robot_clearance_is_the_nearest_capsule_surface() {
+        let robot = robot::builtin("denso-vm6083").unwrap();
+        let q = [0.3, -0.5, 2.0, 0.2, -1.0, 0.4];
+        let frames = robot.forward_kinematics(&q).unwrap();
+        let world = Isometry3::translation(0.5, -0.2, 0.1);
+        let mounted = robot.mounted_links();
+        let capsules: Vec<geom::Capsule> = robot
+            .posed_collision_shapes(&frames)
+            .into_iter()
+            .filter_map(|s| match s {
+                PosedShape::Capsule { link, capsule } if link.index() >= mounted => {
+                    Some(capsule.transformed(&world))
+                }
+                _ => None,
+            })
+            .collect();
+        assert!(capsules.len() >= 4);
+        for (i, c) in capsules.iter().enumerate() {
+            let axis = c.segment.b - c.segment.a;
+            // A sphere (no axis) gets any direction.
+            let axis = if axis.norm() > 1e-9 {
+                axis
+            } else {
+                Vector3::new(1.0, 0.0, 0.0)
+            };
+            let side = axis.cross(&Vector3::new(0.3, 0.5, 0.8));
+            let side = side / side.norm();
+            let mid = c.segment.a + 0.5 * (c.segment.b - c.segment.a);
+            let p = mid + side * (c.radius + 0.04);
+            let mut points = PointClearance::new();
+            points.insert([p].iter());
+            let expected = capsules
+                .iter()
+                .map(|o| o.distance_to_point(&p).max(0.0))
+                .fold(0.5, Real::min);
+            let got = points.robot_clearance(&robot, &frames, &world, 0.5);
+            assert!(
+                (got - expected).abs() < 1e-12,
+                "capsule {i}: {got} vs {expected}"
+            );
+            assert!(got <= 0.04 + 1e-12);
+        }
+        // Nothing within the search radius: the radius.
+        let far = PointClearance::new();
+        assert_eq!(far.robot_clearance(&robot, &frames, &world, 0.3), 0.3);
+    }
+
+    /// Points closer than 1 cm to a kept one are not kept again; NaN is
+    /// ignored.
+    #[test]
+    fn points_are_kept_one_per_centimetre() {
+        let mut points = PointClearance::new();
+        let a = Point3::new(0.001, 0.001, 0.001);
+        let b = Point3::new(0.004, 0.002, 0.003);
+        let c = Point3::new(0.5, 0.0, 0.0);
+        points.insert([a, b, c, Point3::new(Real::NAN, 0.0, 0.0)].iter());
+        assert_eq!(points.len(), 2);
+    }
+
+    /// A checker that admits everything, under the clearance rule.
+    struct Free;
+    impl MotionChecker for Free {
+        fn pose_ok(&mut self, _: &[Real]) -> bool {
+            true
+        }
+        fn motion_ok(&mut self, _: &[Real], _: &[Real]) -> bool {
+            true
+        }
+    }
+
+    /// A motion that sweeps a link through a measured point is refused; the
+    /// pose the arm stands at passes even when closer than the clearance,
+    /// and a motion from it that backs away passes while one that comes
+    /// closer does not.
+    #[test]
+    fn motions_keep_the_clearance_and_may_back_away() {
+        let robot = robot::builtin("denso-vm6083").unwrap();
+        let safety = Safety::new(
+            robot.clone(),
+            Isometry3::identity(),
+            &PlanConfig::default(),
+            vec![1.0; 6],
+        )
+        .unwrap();
+        let here = [0.0, -0.5, 2.0, 0.0, -1.0, 0.0];
+        // A point 3 cm off the forearm's capsule, on the side the base
+        // turns it towards for positive q1 (+y at q1 = 0).
+        let frames = robot.forward_kinematics(&here).unwrap();
+        let capsules: Vec<geom::Capsule> = robot
+            .posed_collision_shapes(&frames)
+            .into_iter()
+            .filter_map(|s| match s {
+                PosedShape::Capsule { link, capsule } if link.index() >= robot.mounted_links() => {
+                    Some(capsule)
+                }
+                _ => None,
+            })
+            .collect();
+        let longest = capsules
+            .iter()
+            .max_by(|a, b| a.segment.length().total_cmp(&b.segment.length()))
+            .unwrap();
+        let mid = longest.segment.a + 0.5 * (longest.segment.b - longest.segment.a);
+        let p = mid + Vector3::new(0.0, longest.radius + 0.03, 0.0);
+        let mut points = PointClearance::new();
+        points.insert([p].iter());
+        let mut checker = ClearanceChecker::new(Free, &safety, &points, 0.05, &here);
+        let now = checker.clearance(&here);
+        assert!(now <= 0.03 + 1e-9, "{now}");
+        // Standing there is allowed.
+        assert!(checker.pose_ok(&here));
+        // A motion from here passes exactly when it never comes closer than
+        // the arm stands; turning the base towards the point is refused.
+        for q1 in [-0.3, 0.3] {
+            let to = [q1, -0.5, 2.0, 0.0, -1.0, 0.0];
+            let rule = safety
+                .interpolate(&here, &to)
+                .iter()
+                .all(|c| checker.clearance(c) >= now);
+            assert_eq!(checker.motion_ok(&here, &to), rule, "q1 = {q1}");
+            assert_eq!(checker.motion_ok(&to, &here), rule, "q1 = {q1}, back");
+        }
+        let toward = [0.3, -0.5, 2.0, 0.0, -1.0, 0.0];
+        assert!(checker.clearance(&toward) < now);
+        assert!(!checker.motion_ok(&here, &toward));
+        // Elsewhere the full clearance is needed.
+        assert!(!checker.pose_ok(&toward));
+        // Without a clearance, the inner checker's answer.
+        let mut off = ClearanceChecker::new(Free, &safety, &points, 0.0, &here);
+        assert!(off.motion_ok(&here, &toward) && off.pose_ok(&toward));
+    }
+}
