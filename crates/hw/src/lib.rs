@@ -17,5 +17,5 @@ mod sweep;
 mod traits;
 
 pub use error::HwError;
-pub use sweep::tilt_sweep;
+pub use sweep::{scan_motion, tilt_sweep};
 pub use traits::{Arm, LineScanner, RangeSensors, ScanReadings};
