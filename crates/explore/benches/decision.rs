@@ -59,7 +59,7 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("stage_one");
     group.sample_size(10);
     group.bench_function("decision_n1571_bridge1_first", |b| {
-        b.iter(|| stage.decide(black_box(&start)).unwrap());
+        b.iter(|| stage.decide(black_box(&start), None, &[]).unwrap());
     });
     group.finish();
 }

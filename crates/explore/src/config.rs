@@ -16,6 +16,12 @@ pub struct PredictionConfig {
     pub ray_step_deg: Real,
     /// Tilt between predicted scans, degrees (the sweep's own step is 0.4°).
     pub tilt_step_deg: Real,
+    /// Scanner poses predicted along the straight joint motion from the
+    /// current pose to a candidate, evenly spaced, when Stage One scans while
+    /// moving ([`ExploreConfig::motion_scan_step_deg`] > 0); 0 predicts the
+    /// sweep alone, as Paul did. The path the planner finds may bend
+    /// through roadmap nodes: the straight motion is the prediction.
+    pub motion_poses: usize,
 }
 
 impl Default for PredictionConfig {
@@ -23,8 +29,29 @@ impl Default for PredictionConfig {
         Self {
             ray_step_deg: 2.0,
             tilt_step_deg: 2.0,
+            motion_poses: 8,
         }
     }
+}
+
+/// Most scanner poses predicted along a motion.
+pub const MAX_MOTION_POSES: usize = 1000;
+
+/// How Stage One chooses among its safe candidates.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Selection {
+    /// The most information predicted: the largest `ΔH1/H1₀ + ΔH2/H2₀`
+    /// (geometric and C-space information revealed, each over its value
+    /// before the first sweep), ties to the lower index. Our choice: Paul's
+    /// rank sum favours the front's small moves (f3) and safest poses (f4),
+    /// and on the bridge scenes the arm then turned its wrist for ten
+    /// viewpoints before its shoulder moved (see the crate README).
+    #[default]
+    Information,
+    /// A§3.2.2, eq. 3.7–3.8: the Pareto front of (f1, f2, f3, f4), the
+    /// lowest rank sum, f1 breaking ties.
+    RankSum,
 }
 
 /// The map products made after Stage One (A§5.2–5.3, Table 6.1's
@@ -111,6 +138,22 @@ pub struct ExploreConfig {
     pub stage_two_clearance_m: Real,
     /// The discs and segments made of Stage One's map.
     pub mapping: MappingConfig,
+    /// Stage One scans while the arm moves to the next viewpoint, a scan
+    /// each time the joints have moved this far (the largest joint change,
+    /// degrees), as well as at the viewpoint; 0 scans only at viewpoints,
+    /// as Paul did (A§3.2). Our addition: a line scanner keeps scanning
+    /// while the arm moves (the Hokuyo of A§5.1 gives a scan every 100 ms:
+    /// the default 1° is the arm at 10°/s).
+    pub motion_scan_step_deg: Real,
+    /// How the next viewpoint is chosen among the safe candidates.
+    pub selection: Selection,
+    /// Stage One keeps the robot's collision capsules at least this far
+    /// from every point the scanner has measured, along the path to a
+    /// viewpoint and through its sweep, metres (0: `dist(Q) > 1` alone, as
+    /// Paul). `dist(Q)` is measured to the planning grid's voxel centres: on
+    /// its own it let links pass within 13 mm of the true beams once the
+    /// arm reached into the channel.
+    pub stage_one_clearance_m: Real,
 }
 
 impl Default for ExploreConfig {
@@ -123,8 +166,8 @@ impl Default for ExploreConfig {
             prediction: PredictionConfig::default(),
             stop_fraction: 0.01,
             max_viewpoints: 20,
-            local_candidates: 200,
-            local_reach_m: 0.3,
+            local_candidates: 600,
+            local_reach_m: 0.6,
             link_k: 10,
             max_plan_attempts: 100,
             pose: plan::PoseConfig::default(),
@@ -133,7 +176,26 @@ impl Default for ExploreConfig {
             stage_two_target_attempts: 60,
             stage_two_clearance_m: 0.05,
             mapping: MappingConfig::default(),
+            motion_scan_step_deg: 1.0,
+            selection: Selection::Information,
+            stage_one_clearance_m: 0.05,
         }
+    }
+}
+
+impl ExploreConfig {
+    /// Paul's Stage One (A§3.2): the rank sum on the Pareto front, scans
+    /// only at viewpoints, the sweep alone predicted, `dist(Q) > 1` the only
+    /// safety rule, and 200 local candidates within 0.3 m (what this
+    /// configuration had before ours); every other parameter as `self`'s.
+    pub fn thesis_stage_one(mut self) -> Self {
+        self.selection = Selection::RankSum;
+        self.motion_scan_step_deg = 0.0;
+        self.prediction.motion_poses = 0;
+        self.stage_one_clearance_m = 0.0;
+        self.local_candidates = 200;
+        self.local_reach_m = 0.3;
+        self
     }
 }
 
@@ -183,6 +245,21 @@ impl ExploreConfig {
             if !(v.is_finite() && (0.1..=90.0).contains(&v)) {
                 return Err(bad(field, "an angle from 0.1 to 90 degrees", v.to_string()));
             }
+        }
+        let m = self.motion_scan_step_deg;
+        if !(m.is_finite() && (m == 0.0 || (0.1..=90.0).contains(&m))) {
+            return Err(bad(
+                "explore.motion_scan_step_deg",
+                "0 (no scans while moving) or an angle from 0.1 to 90 degrees",
+                m.to_string(),
+            ));
+        }
+        if self.prediction.motion_poses > MAX_MOTION_POSES {
+            return Err(bad(
+                "explore.prediction.motion_poses",
+                "at most 1000 poses",
+                self.prediction.motion_poses.to_string(),
+            ));
         }
         if !(self.stop_fraction.is_finite() && (0.0..1.0).contains(&self.stop_fraction)) {
             return Err(bad(
@@ -243,14 +320,13 @@ impl ExploreConfig {
                 self.link_k.to_string(),
             ));
         }
-        if !(self.stage_two_clearance_m.is_finite()
-            && (0.0..=1.0).contains(&self.stage_two_clearance_m))
-        {
-            return Err(bad(
-                "explore.stage_two_clearance_m",
-                "a length from 0 to 1 metre",
-                self.stage_two_clearance_m.to_string(),
-            ));
+        for (field, v) in [
+            ("explore.stage_one_clearance_m", self.stage_one_clearance_m),
+            ("explore.stage_two_clearance_m", self.stage_two_clearance_m),
+        ] {
+            if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
+                return Err(bad(field, "a length from 0 to 1 metre", v.to_string()));
+            }
         }
         if self.max_viewpoints == 0 {
             return Err(bad("explore.max_viewpoints", "at least 1", "0".into()));

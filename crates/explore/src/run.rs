@@ -24,11 +24,12 @@ use crate::judge::{Judge, SafetyTally};
 use crate::materials::{Materials, sweep_patch};
 use crate::probe::MapProbe;
 use crate::setup::Setup;
+use crate::stage_one::path_via_visited;
 use crate::{Choice, ExploreConfig, ExploreError, StageOne, Termination};
 use geom::{Isometry3, Real, TriMesh};
 use hw::{Arm, LineScanner, tilt_sweep};
 use map::{IntegrationStats, TsdfConfig, TsdfMap};
-use plan::{PlanConfig, Safety};
+use plan::{PlanConfig, PointClearance, Safety};
 use record::checkpoint::{CHECKPOINT_FORMAT, Checkpoint};
 use record::{ScoredCandidate, UnsafeConfiguration, ViewpointRecord};
 use robot::Robot;
@@ -130,9 +131,8 @@ fn viewpoint_seed(seed: u64, k: usize) -> u64 {
     seed ^ 0xa076_1d64_78bd_642f_u64.wrapping_mul(k as u64 + 1)
 }
 
-/// Poses the arm has stood at that are tried as the last waypoint before a
-/// goal the roadmap cannot reach.
-const VISITED_BRIDGES: usize = 5;
+/// Salt of the noise seed of the scans taken on the way to a viewpoint.
+const MOTION_NOISE_SALT: u64 = 0x5bd1_e995_0000_0001;
 
 /// Run AXBAM from `setup` on `hw`: Stage One, then Stage Two when
 /// `options.stage_two` (and the setup has materials), then the map
@@ -287,6 +287,8 @@ struct Episode<'a, H: ?Sized> {
     unsafe_configurations: Vec<UnsafeConfiguration>,
     /// Where the arm is.
     q: Vec<Real>,
+    /// Every point measured, for Stage One's clearance.
+    points: PointClearance,
 }
 
 impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
@@ -321,6 +323,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             sweeps: Vec::new(),
             unsafe_configurations: Vec::new(),
             q,
+            points: PointClearance::new(),
         })
     }
 
@@ -455,6 +458,68 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         Ok(())
     }
 
+    /// Move along `waypoints` to Stage One's viewpoint `k` scanning as the
+    /// arm moves (`motion_scan_step_deg`; without it, as
+    /// [`Episode::move_along`]), each motion audited first unless
+    /// `replayed`; what the scanner saw goes into the maps and the cloud as
+    /// viewpoint `k`'s.
+    fn move_scanning(
+        &mut self,
+        k: usize,
+        waypoints: &[Vec<Real>],
+        replayed: bool,
+    ) -> Result<(), ExploreError> {
+        let step = self.config().motion_scan_step_deg.to_radians();
+        if step <= 0.0 {
+            // A replayed viewpoint's arm is put where it stood.
+            return if replayed {
+                Ok(())
+            } else {
+                self.move_along(k, waypoints)
+            };
+        }
+        self.hw
+            .seed_noise(viewpoint_seed(self.options.seed, k) ^ MOTION_NOISE_SALT);
+        let mut builder = sensor::SweepBuilder::new(self.hw.bearings_rad())?;
+        if let Some(first) = waypoints.first()
+            && replayed
+        {
+            self.hw.move_to(first)?;
+        }
+        for w in waypoints.windows(2) {
+            if !replayed {
+                self.audit(k, &w[0], &w[1])?;
+            }
+            let s = &self.setup;
+            hw::scan_motion(
+                &mut *self.hw,
+                &s.robot,
+                &s.world_from_base,
+                &w[1],
+                step,
+                &mut builder,
+            )?;
+        }
+        self.q = self.hw.joints();
+        if builder.scan_count() == 0 {
+            return Ok(());
+        }
+        let sweep = builder.finish()?;
+        self.setup.stage.integrate_motion(&sweep);
+        self.tsdf.integrate_sweep(&sweep);
+        self.add_points(k, &sweep);
+        Ok(())
+    }
+
+    /// Keep the points `sweep` measured for viewpoint `k` (the cloud, the
+    /// clearance index) and show them to the judge.
+    fn add_points(&mut self, k: usize, sweep: &Sweep) {
+        self.cloud.extend_from_slice(sweep.points());
+        self.cloud_viewpoint.resize(self.cloud.len(), k);
+        self.points.insert(sweep.points().iter().map(|p| &p.point));
+        self.judge.sweep(sweep);
+    }
+
     /// Take viewpoint `k`'s sweep where the arm stands and integrate it;
     /// with `classify`, the sweep also updates the material beliefs. A
     /// replayed viewpoint's sweep motion was audited before the
@@ -490,9 +555,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             m.observe(discs, &sweep)?;
         }
         let integrate_ms = self.timed(t);
-        self.cloud.extend_from_slice(sweep.points());
-        self.cloud_viewpoint.resize(self.cloud.len(), k);
-        self.judge.sweep(&sweep);
+        self.add_points(k, &sweep);
         Ok((
             sweep,
             Taken {
@@ -583,6 +646,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             // audit come from the checkpoint.
             let replayed = replay.pop_front();
             if let Some(r) = &replayed {
+                self.move_scanning(k, &r.path, true)?;
                 self.stand_at(r)?;
             }
             let (sweep, taken) = self.take_viewpoint(k, replayed.is_some(), None)?;
@@ -607,7 +671,12 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                 return Ok(t);
             }
             let t = Instant::now();
-            let decision = self.stage().decide(&self.q)?;
+            let visited: Vec<&[Real]> = self
+                .viewpoints
+                .iter()
+                .map(|v| v.joints.as_slice())
+                .collect();
+            let decision = self.stage().decide(&self.q, Some(&self.points), &visited)?;
             let decision_ms = self.timed(t);
             let plan_ms = if self.options.timings {
                 decision.plan_ms
@@ -617,8 +686,9 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             let Some(choice) = decision.choice else {
                 return Ok(Termination::NoSafeCandidate);
             };
-            // Move along the path, auditing each motion against the map as it is.
-            self.move_along(k + 1, &choice.path.waypoints)?;
+            // Move along the path, auditing each motion against the map as
+            // it is, and scanning as the arm moves.
+            self.move_scanning(k + 1, &choice.path.waypoints, false)?;
             let scored = decision
                 .candidates
                 .iter()
@@ -878,41 +948,4 @@ fn clear_of_map(
         }
     }
     Ok(true)
-}
-
-/// A safe path from `from` to `goal`: the roadmap's (a direct motion, or A*
-/// through the roadmap), or else through one of the poses the arm has
-/// already stood at (`visited`; the [`VISITED_BRIDGES`] nearest to the goal,
-/// nearest first) from which a straight motion reaches the goal. A Stage Two
-/// pose is chosen by LM anywhere in free space, often beside a viewpoint
-/// the arm took but far from every roadmap node whose surroundings are known
-/// free.
-fn path_via_visited(
-    roadmap: &plan::Roadmap,
-    visited: &[&[Real]],
-    from: &[Real],
-    goal: &[Real],
-    link_k: usize,
-    checker: &mut dyn plan::MotionChecker,
-) -> Option<plan::Path> {
-    if let Some(path) = roadmap.plan(from, goal, link_k, checker) {
-        return Some(path);
-    }
-    let mut near: Vec<(Real, &[Real])> = visited
-        .iter()
-        .map(|v| (roadmap.distance(v, goal), *v))
-        .collect();
-    near.sort_by(|a, b| a.0.total_cmp(&b.0));
-    near.dedup_by(|a, b| a.1 == b.1);
-    for (d, v) in near.into_iter().take(VISITED_BRIDGES) {
-        if v == from || !checker.motion_ok(v, goal) {
-            continue;
-        }
-        if let Some(mut path) = roadmap.plan(from, v, link_k, checker) {
-            path.waypoints.push(goal.to_vec());
-            path.cost += d;
-            return Some(path);
-        }
-    }
-    None
 }

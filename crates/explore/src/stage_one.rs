@@ -11,10 +11,13 @@
 //! path there, else the next choice is tried.
 
 use crate::pareto::{self, Sense};
-use crate::{ExploreConfig, ExploreError};
+use crate::{ExploreConfig, ExploreError, Selection};
 use geom::{Isometry3, Point3, Real, UnitVector3};
 use map::{IntegrationStats, OccupancyConfig, OccupancyGrid, VoxelKey};
-use plan::{CspaceModel, NodeId, Path, Safety, interfering_voxels};
+use plan::{
+    ClearanceChecker, CspaceModel, MotionChecker, NodeId, Path, PointClearance, Safety,
+    interfering_voxels,
+};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -237,6 +240,14 @@ impl StageOne {
         stats
     }
 
+    /// Integrate what the scanner measured while the arm moved to the next
+    /// viewpoint (`motion_scan_step_deg`): the grid changes, the history of
+    /// information does not until that viewpoint's sweep is integrated, so
+    /// A§3.2.4's changes are per viewpoint, motion and sweep together.
+    pub fn integrate_motion(&mut self, sweep: &Sweep) -> IntegrationStats {
+        self.grid.integrate_sweep(sweep)
+    }
+
     /// Why Stage One should stop now, if it should: A§3.2.4 after at least
     /// two sweeps, or the budget.
     pub fn termination(&self) -> Option<Termination> {
@@ -324,6 +335,7 @@ impl StageOne {
     fn predict(
         &self,
         q: &[Real],
+        from: Option<&[Real]>,
         stamp: &mut [u32],
         mark: u32,
     ) -> Result<(Real, Real, usize), ExploreError> {
@@ -336,6 +348,7 @@ impl StageOne {
         let world_from_base = *self.safety().world_from_base();
         let geometry = self.grid.geometry();
         let (mut g1, mut g2, mut n) = (0.0, 0.0, 0usize);
+        let mut configs: Vec<Vec<Real>> = Vec::new();
         let mut c = lo.clone();
         for s in 0..=steps {
             c[j] = if steps == 0 {
@@ -343,7 +356,19 @@ impl StageOne {
             } else {
                 lo[j] + span * s as Real / steps as Real
             };
-            let Some(pose) = self.robot().scanner_pose(&c)? else {
+            configs.push(c.clone());
+        }
+        // The straight motion from where the arm stands, when the arm scans
+        // as it moves.
+        let poses = self.config.prediction.motion_poses;
+        if let (Some(from), true) = (from, self.config.motion_scan_step_deg > 0.0) {
+            for s in 1..=poses {
+                let t = s as Real / (poses + 1) as Real;
+                configs.push(from.iter().zip(q).map(|(a, b)| a + (b - a) * t).collect());
+            }
+        }
+        for c in &configs {
+            let Some(pose) = self.robot().scanner_pose(c)? else {
                 continue;
             };
             let pose: Isometry3 = world_from_base * pose;
@@ -424,7 +449,7 @@ impl StageOne {
                     let Some(f4) = self.sweep_dist(&c)? else {
                         return Ok(None);
                     };
-                    let (g1, g2, revealed) = self.predict(&c, stamp, i as u32 + 1)?;
+                    let (g1, g2, revealed) = self.predict(&c, Some(q), stamp, i as u32 + 1)?;
                     Ok(Some(Candidate {
                         node,
                         q: c,
@@ -440,19 +465,56 @@ impl StageOne {
     /// One Stage One decision from the current pose `q` (A§3.2): score, choose
     /// on the Pareto front, plan a safe path; a choice without a safe path is
     /// dropped and the choice made again, up to `max_plan_attempts`.
-    pub fn decide(&self, q: &[Real]) -> Result<Decision, ExploreError> {
+    ///
+    /// A candidate the roadmap cannot reach may be reached by a straight
+    /// motion from a pose in `visited` (the viewpoints so far) that the
+    /// roadmap reaches. With `points` (what the scanner measured), the path and the chosen
+    /// candidate's sweep must also keep `stage_one_clearance_m` from them
+    /// ([`plan::ClearanceChecker`]); a chosen candidate whose sweep does not
+    /// is dropped like one without a path.
+    pub fn decide(
+        &self,
+        q: &[Real],
+        points: Option<&PointClearance>,
+        visited: &[&[Real]],
+    ) -> Result<Decision, ExploreError> {
         let t0 = Instant::now();
         let candidates = self.score(q)?;
         let score_ms = t0.elapsed().as_secs_f64() * 1e3;
         let t1 = Instant::now();
-        let mut pool: Vec<usize> = (0..candidates.len()).collect();
+        // Candidates standing closer to a measured point than the clearance
+        // are not contenders (their paths would fail at the end).
+        let clearance_m = self.config.stage_one_clearance_m;
+        let robot = self.robot();
+        let world_from_base = self.safety().world_from_base();
+        let clear: Vec<bool> = candidates
+            .par_iter()
+            .map(|c| match points {
+                Some(p) if clearance_m > 0.0 => robot.forward_kinematics(&c.q).is_ok_and(|f| {
+                    p.robot_clearance(robot, &f, world_from_base, clearance_m) >= clearance_m
+                }),
+                _ => true,
+            })
+            .collect();
+        let mut pool: Vec<usize> = (0..candidates.len()).filter(|&i| clear[i]).collect();
         let mut front_size = 0;
         let mut on_front = vec![false; candidates.len()];
         let mut unreachable = 0;
         let mut choice = None;
         // The map does not change during a decision: each attempt reuses
         // the motion checks of the ones before.
-        let mut checker = plan::MemoChecker::new(self.safety().checker(&self.grid));
+        let empty = PointClearance::new();
+        let mut checker = plan::MemoChecker::new(ClearanceChecker::new(
+            self.safety().checker(&self.grid),
+            self.safety(),
+            points.unwrap_or(&empty),
+            if points.is_some() {
+                self.config.stage_one_clearance_m
+            } else {
+                0.0
+            },
+            q,
+        ));
         for attempt in 0..self.config.max_plan_attempts {
             let f: Vec<Vec<Real>> = pool.iter().map(|&i| candidates[i].f.to_vec()).collect();
             if attempt == 0 {
@@ -462,15 +524,27 @@ impl StageOne {
                     on_front[i] = true;
                 }
             }
-            let Some((k, rank_sum)) = pareto::choose(&f, &SENSES) else {
+            let picked = match self.config.selection {
+                Selection::RankSum => pareto::choose(&f, &SENSES),
+                Selection::Information => {
+                    most_information(&f, self.information(), self.initial_information())
+                }
+            };
+            let Some((k, rank_sum)) = picked else {
                 break;
             };
             let c = &candidates[pool[k]];
-            if let Some(path) = self
-                .model
-                .roadmap()
-                .plan(q, &c.q, self.config.link_k, &mut checker)
-            {
+            let (lo, hi) = self.sweep_range(&c.q);
+            let path = path_via_visited(
+                self.model.roadmap(),
+                visited,
+                q,
+                &c.q,
+                self.config.link_k,
+                &mut checker,
+            )
+            .filter(|_| checker.motion_ok(&c.q, &lo) && checker.motion_ok(&lo, &hi));
+            if let Some(path) = path {
                 choice = Some(Choice {
                     candidate: c.clone(),
                     rank_sum,
@@ -491,6 +565,63 @@ impl StageOne {
             plan_ms: t1.elapsed().as_secs_f64() * 1e3,
         })
     }
+}
+
+/// Poses the arm has stood at that are tried as the last waypoint before a
+/// goal the roadmap cannot reach.
+const VISITED_BRIDGES: usize = 5;
+
+/// A safe path from `from` to `goal`: the roadmap's (a direct motion, or A*
+/// through the roadmap), or else through one of the poses the arm has
+/// already stood at (`visited`; the [`VISITED_BRIDGES`] nearest to the goal,
+/// nearest first) from which a straight motion reaches the goal. A Stage Two
+/// pose is chosen by LM anywhere in free space, often beside a viewpoint
+/// the arm took but far from every roadmap node whose surroundings are known
+/// free.
+pub(crate) fn path_via_visited(
+    roadmap: &plan::Roadmap,
+    visited: &[&[Real]],
+    from: &[Real],
+    goal: &[Real],
+    link_k: usize,
+    checker: &mut dyn plan::MotionChecker,
+) -> Option<plan::Path> {
+    if let Some(path) = roadmap.plan(from, goal, link_k, checker) {
+        return Some(path);
+    }
+    let mut near: Vec<(Real, &[Real])> = visited
+        .iter()
+        .map(|v| (roadmap.distance(v, goal), *v))
+        .collect();
+    near.sort_by(|a, b| a.0.total_cmp(&b.0));
+    near.dedup_by(|a, b| a.1 == b.1);
+    for (d, v) in near.into_iter().take(VISITED_BRIDGES) {
+        if v == from || !checker.motion_ok(v, goal) {
+            continue;
+        }
+        if let Some(mut path) = roadmap.plan(from, v, link_k, checker) {
+            path.waypoints.push(goal.to_vec());
+            path.cost += d;
+            return Some(path);
+        }
+    }
+    None
+}
+
+/// The candidate (index into `f`, rank sum 0) predicted to reveal the most
+/// information, `ΔH1/H1₀ + ΔH2/H2₀` with `ΔH = H now − f` (f1 and f2 are
+/// what would remain); ties to the lower index. `None` when `f` is empty.
+fn most_information(
+    f: &[Vec<Real>],
+    (h1, h2): (Real, Real),
+    (h10, h20): (Real, Real),
+) -> Option<(usize, usize)> {
+    let share = |gain: Real, of: Real| if of > 0.0 { gain / of } else { 0.0 };
+    f.iter()
+        .enumerate()
+        .map(|(i, v)| (i, share(h1 - v[0], h10) + share(h2 - v[1], h20)))
+        .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
+        .map(|(i, _)| (i, 0))
 }
 
 /// Bearings every `step` radians (the first, then each at least `step` past
@@ -524,7 +655,29 @@ fn first_link_moved_by(robot: &Robot, a: usize) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use super::subsample;
+    use super::{most_information, subsample};
+
+    /// By hand: H now (100, 10), H₀ (200, 20). Candidate 0 reveals 20 of H1
+    /// (0.1) and 1 of H2 (0.05): 0.15; candidate 1 reveals 0 and 4 (0.2);
+    /// candidate 2 the same as 1 (a tie: the lower index).
+    #[test]
+    fn the_most_information_by_hand() {
+        let f = vec![
+            vec![80.0, 9.0, 0.5, 2.0],
+            vec![100.0, 6.0, 3.0, 1.5],
+            vec![100.0, 6.0, 0.1, 9.0],
+        ];
+        assert_eq!(
+            most_information(&f, (100.0, 10.0), (200.0, 20.0)),
+            Some((1, 0))
+        );
+        assert_eq!(most_information(&[], (100.0, 10.0), (200.0, 20.0)), None);
+        // With H₀ = 0 a share counts for nothing.
+        assert_eq!(
+            most_information(&f, (100.0, 10.0), (0.0, 20.0)),
+            Some((1, 0))
+        );
+    }
 
     #[test]
     fn subsample_keeps_ends_and_spacing() {

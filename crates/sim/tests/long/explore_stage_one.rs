@@ -95,7 +95,7 @@ fn predicted_gain_ranks_candidates_like_the_gain_their_sweeps_bring() {
         let sweep = tilt_sweep(&mut rig, &robot, &wfb, &config.sweep, &mut |_, _| {}).unwrap();
         stage.integrate(&sweep);
         let q = rig.joints();
-        let d = stage.decide(&q).unwrap();
+        let d = stage.decide(&q, None, &[]).unwrap();
         let (h1, _) = stage.information();
         let stride = (d.candidates.len() / 40).max(1);
         let (mut predicted, mut obtained) = (Vec::new(), Vec::new());
