@@ -92,6 +92,10 @@ pub struct PhaseTimings {
     /// The scenario's world, the C-space model (built or loaded), the
     /// planning grid, the judge.
     pub setup_s: Real,
+    /// The coverage oracle, computed or read from its cache (0 without
+    /// one).
+    #[serde(default)]
+    pub oracle_s: Real,
     /// Stage One: decisions, motions, sweeps, integration (a resumed run's
     /// replayed viewpoints included).
     pub stage_one_s: Real,
@@ -117,9 +121,10 @@ pub struct PhaseTimings {
 impl PhaseTimings {
     /// The phases in the order they run, with their names, seconds (the
     /// total not among them).
-    pub fn phases(&self) -> [(&'static str, Real); 9] {
+    pub fn phases(&self) -> [(&'static str, Real); 10] {
         [
             ("setup", self.setup_s),
+            ("oracle", self.oracle_s),
             ("stage one", self.stage_one_s),
             ("mesh and discs", self.discs_s),
             ("LRC", self.lrc_s),
@@ -217,6 +222,97 @@ pub struct ExploreCoverage {
     pub a1_per_material: BTreeMap<String, Real>,
     /// The full reports of A1, A2, A3.
     pub reports: Vec<CoverageReport>,
+    /// What the coverage oracle reaches, and this run beside it (absent
+    /// without a true scene, or with `--no-oracle`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub oracle: Option<OracleComparison>,
+}
+
+/// The coverage oracle (`sim::oracle`): tilt sweeps chosen greedily
+/// *knowing the true scene*, each the one whose simulated points cover the
+/// most A1 samples not yet covered, from the start pose and the roadmap's
+/// nodes that the run's safety rule admits against the true scene; the
+/// same scanner, noise and samples as the run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoverageOracle {
+    /// The safety rule the oracle's poses obey.
+    pub rule: String,
+    /// Poses in its pool (the start and the roadmap's nodes).
+    pub poses: usize,
+    /// Of them, those clear under the rule with their whole sweep.
+    pub clear_poses: usize,
+    /// Share of A1 covered after 1, 2, … sweeps (the start's first), until
+    /// no sweep adds a sample or the oracle's limit of sweeps.
+    #[serde(rename = "A1_after_sweeps")]
+    pub a1_after_sweeps: Vec<Real>,
+    /// Share of A1 all the clear poses' sweeps and the start's cover
+    /// together.
+    #[serde(rename = "A1_all_poses")]
+    pub a1_all_poses: Real,
+}
+
+impl CoverageOracle {
+    /// The share of A1 covered after `n` sweeps (the last one when the
+    /// greedy stopped earlier; 0 for none).
+    pub fn after(&self, n: usize) -> Real {
+        match n {
+            0 => 0.0,
+            n => self
+                .a1_after_sweeps
+                .get(n - 1)
+                .or(self.a1_after_sweeps.last())
+                .copied()
+                .unwrap_or(0.0),
+        }
+    }
+}
+
+/// The oracle's coverage beside the run's.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OracleComparison {
+    /// Viewpoints of Stage One (the start's included).
+    pub stage_one_viewpoints: usize,
+    /// The oracle's A1 coverage after as many sweeps.
+    #[serde(rename = "A1_after_stage_one_viewpoints")]
+    pub a1_after_stage_one_viewpoints: Real,
+    /// The oracle's A1 coverage after 12 sweeps.
+    #[serde(rename = "A1_after_12")]
+    pub a1_after_12: Real,
+    /// The run's A1 coverage after 12 Stage One viewpoints (at the end of
+    /// Stage One when it took fewer) over the oracle's after 12.
+    pub ratio_after_12: Real,
+    /// The run's A1 coverage at the end of Stage One over the oracle's
+    /// after 12.
+    pub ratio_at_stage_one_end: Real,
+    /// The oracle.
+    pub oracle: CoverageOracle,
+}
+
+impl OracleComparison {
+    /// The comparison of a run whose Stage One covered `stage_one_a1[k]`
+    /// of A1 after viewpoint `k`.
+    pub fn new(oracle: CoverageOracle, stage_one_a1: &[Real]) -> Self {
+        let n = stage_one_a1.len();
+        let twelve = oracle.after(12);
+        let ratio = |x: Real| if twelve > 0.0 { x / twelve } else { 0.0 };
+        let at = |k: usize| {
+            stage_one_a1
+                .get(k)
+                .or(stage_one_a1.last())
+                .copied()
+                .unwrap_or(0.0)
+        };
+        Self {
+            stage_one_viewpoints: n,
+            a1_after_stage_one_viewpoints: oracle.after(n),
+            a1_after_12: twelve,
+            ratio_after_12: ratio(at(11)),
+            ratio_at_stage_one_end: ratio(at(n.saturating_sub(1))),
+            oracle,
+        }
+    }
 }
 
 /// Covered share of the observable samples per region, and the observable
@@ -265,6 +361,7 @@ impl ExploreCoverage {
                     .first()
                     .map(|(n, _)| *n as Real / a1.samples.max(1) as Real),
             },
+            oracle: None,
             a1_per_material: a1
                 .per_material
                 .iter()
@@ -631,6 +728,7 @@ mod tests {
         assert!(!s.to_json().unwrap().contains("timings"));
         let t = PhaseTimings {
             setup_s: 1.0,
+            oracle_s: 0.0,
             stage_one_s: 2.0,
             discs_s: 0.25,
             lrc_s: 0.5,
@@ -649,7 +747,7 @@ mod tests {
         let back: ExploreSummary = serde_json::from_str(&text).unwrap();
         assert_eq!(back.timings, Some(t));
         let table = t.table();
-        assert_eq!(table.lines().count(), 11, "{table}");
+        assert_eq!(table.lines().count(), 12, "{table}");
         assert!(
             table.contains("blast planning     4.00 s  32.0 %"),
             "{table}"

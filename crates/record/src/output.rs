@@ -153,3 +153,27 @@ impl Drop for Staged {
         }
     }
 }
+
+/// Write `bytes` to `path` through a temporary name of this process and call
+/// in the same folder, renamed into place (an interruption leaves the file
+/// as it was; two processes writing one path never share a temporary file).
+/// The folder is created when missing.
+pub fn replace_file(path: &Path, bytes: &[u8]) -> Result<()> {
+    static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| RecordError::file(dir, format!("cannot create the folder: {e}")))?;
+    }
+    let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = path.with_extension(format!("tmp.{}.{n}", std::process::id()));
+    let written = std::fs::write(&tmp, bytes)
+        .map_err(|e| RecordError::file(path, format!("cannot write: {e}")))
+        .and_then(|()| {
+            std::fs::rename(&tmp, path)
+                .map_err(|e| RecordError::file(path, format!("cannot rename into place: {e}")))
+        });
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written
+}

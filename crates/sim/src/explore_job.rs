@@ -15,7 +15,7 @@ use map::TsdfConfig;
 use plan::contact::{min_clearance, motion_contacts, robot_contacts, smallest_link_radius};
 use rayon::prelude::*;
 use record::Staging;
-use record::explore::{ExploreCoverage, ExploreSummary};
+use record::explore::{CoverageOracle, ExploreCoverage, ExploreSummary, OracleComparison};
 use robot::Robot;
 use scenario::LoadedScenario;
 use scene::{Scene, World};
@@ -49,6 +49,19 @@ pub struct ExploreOptions {
     pub resume: bool,
     /// Run Stage Two after Stage One.
     pub stage_two: bool,
+    /// Whether the outcome holds the coverage oracle
+    /// ([`crate::oracle::run_oracle`]; mesh worlds only), and its cache.
+    pub oracle: OracleOption,
+}
+
+/// Whether a run computes the coverage oracle.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum OracleOption {
+    /// No oracle.
+    #[default]
+    Off,
+    /// The oracle, cached in the file when one is given (else computed).
+    On(Option<PathBuf>),
 }
 
 impl ExploreOptions {
@@ -58,6 +71,19 @@ impl ExploreOptions {
     pub fn default_cspace_cache(loaded: &LoadedScenario) -> Result<PathBuf, SimError> {
         let name = loaded.robot_choice()?.short_name();
         Ok(std::env::temp_dir().join(format!("surveyor-cspace-{name}.json")))
+    }
+
+    /// The default oracle cache of a scenario: one file per scenario name
+    /// (a file's by its name) in the system's temporary folder; a file made
+    /// for other inputs is made again.
+    pub fn default_oracle_cache(loaded: &LoadedScenario) -> PathBuf {
+        let stem: String = loaded
+            .scenario
+            .name
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+            .collect();
+        std::env::temp_dir().join(format!("surveyor-oracle-{stem}.json"))
     }
 
     /// The default LRC cache of a run seed (the training's seed): one file
@@ -328,6 +354,8 @@ pub struct SimExplore {
     pub judge: ExploreJudge,
     /// How the loop runs.
     pub run_options: explore::RunOptions,
+    /// Whether the coverage oracle is computed, and its cache.
+    pub oracle: OracleOption,
 }
 
 impl SimExplore {
@@ -369,6 +397,7 @@ impl SimExplore {
             rig,
             judge,
             run_options,
+            oracle: options.oracle.clone(),
         })
     }
 
@@ -380,15 +409,28 @@ impl SimExplore {
         let Self {
             loaded,
             setup,
+            world,
             mut rig,
             mut judge,
             run_options,
-            ..
+            oracle,
         } = self;
-        let run = explore::run(setup, &mut rig, &mut judge, &run_options, progress)?;
+        let t = Instant::now();
+        let oracle = match oracle {
+            OracleOption::On(cache) if world.as_scene().is_some() => {
+                Some(crate::oracle::run_oracle(&loaded, &setup, &world, cache.as_deref())?.0)
+            }
+            _ => None,
+        };
+        let oracle_s = t.elapsed().as_secs_f64();
+        let mut run = explore::run(setup, &mut rig, &mut judge, &run_options, progress)?;
+        if let Some(t) = &mut run.timings {
+            t.oracle_s = oracle_s;
+        }
         Ok(ExploreOutcome {
             coverage: judge.coverage(),
             observable: judge.observable(),
+            oracle,
             run,
             loaded,
         })
@@ -406,14 +448,27 @@ pub struct ExploreOutcome {
     pub coverage: Option<[CoverageReport; 3]>,
     /// Per region: observable samples and the covered ones among them.
     pub observable: Vec<(usize, usize)>,
+    /// The coverage oracle (when asked for, mesh worlds).
+    pub oracle: Option<CoverageOracle>,
 }
 
 impl ExploreOutcome {
     /// The coverage as `run.json` holds it.
     pub fn coverage_summary(&self) -> Option<ExploreCoverage> {
-        self.coverage
-            .as_ref()
-            .map(|c| ExploreCoverage::new(c, &self.observable))
+        self.coverage.as_ref().map(|c| {
+            let mut summary = ExploreCoverage::new(c, &self.observable);
+            summary.oracle = self.oracle.clone().map(|o| {
+                let stage_one: Vec<Real> = self
+                    .run
+                    .viewpoints
+                    .iter()
+                    .filter(|v| v.stage == 1)
+                    .map(|v| v.coverage_a1.unwrap_or(0.0))
+                    .collect();
+                OracleComparison::new(o, &stage_one)
+            });
+            summary
+        })
     }
 
     /// `run.json`.

@@ -17,6 +17,7 @@ pub mod explore_job;
 pub mod follow_job;
 pub mod follow_reach;
 pub mod metrics;
+pub mod oracle;
 pub mod rig;
 pub mod scan_check;
 pub mod scan_job;

@@ -4,7 +4,7 @@
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use scenario::{RobotChoice, Scenario};
-use sim::explore_job::ExploreOptions;
+use sim::explore_job::{ExploreOptions, OracleOption};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -70,6 +70,23 @@ pub struct ExploreArgs {
     /// seed) differ.
     #[arg(long)]
     lrc_cache: Option<PathBuf>,
+    /// How Stage One chooses its viewpoints: `information` (the most
+    /// information predicted, scanning while the arm moves, links kept
+    /// [explore] stage_one_clearance_m from measured points) or `thesis`
+    /// (Paul's rank sum on the Pareto front, scans at viewpoints only,
+    /// dist(Q) > 1 alone).
+    #[arg(long, default_value = "information")]
+    stage_one: String,
+    /// Skip the coverage oracle (run.json's coverage.oracle: what greedy
+    /// sweeps chosen knowing the true scene cover, computed once per scene,
+    /// robot and scanner and cached).
+    #[arg(long)]
+    no_oracle: bool,
+    /// Where to cache the coverage oracle [default: a file in the system's
+    /// temporary folder named after the scenario]; it is computed again when
+    /// its inputs differ.
+    #[arg(long)]
+    oracle_cache: Option<PathBuf>,
     /// Write zeros in the time columns so outputs are byte-identical run to run.
     #[arg(long)]
     no_timings: bool,
@@ -191,21 +208,7 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
                 .map_or("none".into(), |a| format!("{:.1} %", 100.0 * a))
         )?;
     }
-    if let Some(c) = &outcome.coverage {
-        say!(
-            "coverage of the true surfaces: A1 {:.1} %, A2 {:.1} %, A3 {:.1} %",
-            100.0 * c[0].fraction(),
-            100.0 * c[1].fraction(),
-            100.0 * c[2].fraction()
-        )?;
-        if let Some((n, covered)) = outcome.observable.first() {
-            say!(
-                "A1 surfaces observable from some collision-free roadmap pose: {:.1} % of them; {:.1} % of those covered",
-                100.0 * *n as f64 / c[0].samples.max(1) as f64,
-                100.0 * *covered as f64 / (*n).max(1) as f64
-            )?;
-        }
-    }
+    say_coverage(&outcome)?;
     if let Some(plan) = &blast {
         say!("{}", plan.summary())?;
     }
@@ -229,6 +232,37 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     Ok(())
 }
 
+/// The coverage of the true surfaces, the observable share and the oracle,
+/// when the world has true surfaces.
+fn say_coverage(outcome: &sim::explore_job::ExploreOutcome) -> Result<()> {
+    if let Some(c) = &outcome.coverage {
+        say!(
+            "coverage of the true surfaces: A1 {:.1} %, A2 {:.1} %, A3 {:.1} %",
+            100.0 * c[0].fraction(),
+            100.0 * c[1].fraction(),
+            100.0 * c[2].fraction()
+        )?;
+        if let Some((n, covered)) = outcome.observable.first() {
+            say!(
+                "A1 surfaces observable from some collision-free roadmap pose: {:.1} % of them; {:.1} % of those covered",
+                100.0 * *n as f64 / c[0].samples.max(1) as f64,
+                100.0 * *covered as f64 / (*n).max(1) as f64
+            )?;
+        }
+    }
+    if let Some(o) = outcome.coverage_summary().and_then(|c| c.oracle) {
+        say!(
+            "coverage oracle (greedy sweeps knowing the true scene): A1 {:.1} % after 12 sweeps, {:.1} % after {}; Stage One {:.0} % of its 12-sweep coverage after 12 viewpoints, {:.0} % at its end",
+            100.0 * o.a1_after_12,
+            100.0 * o.a1_after_stage_one_viewpoints,
+            o.stage_one_viewpoints,
+            100.0 * o.ratio_after_12,
+            100.0 * o.ratio_at_stage_one_end
+        )?;
+    }
+    Ok(())
+}
+
 /// How to run: the caches (given, or the defaults), seed, budget, stages.
 fn run_options(
     args: &ExploreArgs,
@@ -239,9 +273,31 @@ fn run_options(
         Some(path) => path.clone(),
         None => ExploreOptions::default_cspace_cache(loaded)?,
     };
+    let config = match args.stage_one.as_str() {
+        "information" => None,
+        "thesis" => Some(
+            loaded
+                .scenario
+                .explore
+                .clone()
+                .unwrap_or_default()
+                .thesis_stage_one(),
+        ),
+        other => bail!("--stage-one {other}: expected `information` or `thesis`"),
+    };
     Ok(ExploreOptions {
         seed: args.seed,
         max_viewpoints: args.max_viewpoints,
+        config,
+        oracle: if args.no_oracle {
+            OracleOption::Off
+        } else {
+            OracleOption::On(Some(
+                args.oracle_cache
+                    .clone()
+                    .unwrap_or_else(|| ExploreOptions::default_oracle_cache(loaded)),
+            ))
+        },
         cspace_cache: Some(cspace_cache),
         lrc_cache: Some(
             args.lrc_cache

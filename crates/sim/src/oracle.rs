@@ -1,0 +1,385 @@
+//! The coverage oracle: what Stage One's viewpoint choice could cover if it
+//! knew the true scene. From the start pose and the C-space model's roadmap
+//! nodes (the pool Stage One chooses from, less its local candidates), each
+//! next tilt sweep is the one whose simulated points cover the most A1
+//! samples not yet covered (SPEC §6's samples and 10 mm rule, the scanner's
+//! noise, seeded by the pose's index as a run's is by the viewpoint).
+//!
+//! A pose is in the pool when it and every configuration of its sweep obey
+//! a safety rule against the true scene:
+//! - [`OracleRule::Run`], the run's: `dist(Q) > 1` (eq. 3.5) against the
+//!   planning voxels a true surface passes through, every other voxel free
+//!   (the planner with a perfect map), and the links' capsules at least
+//!   Stage One's clearance (`stage_one_clearance_m`) from the true surface;
+//! - [`OracleRule::Contact`]: the links' collision shapes touch no true
+//!   surface.
+//!
+//! [`run_oracle`] is what `surveyor explore` puts in `run.json`
+//! (`coverage.oracle`), cached in a file like the C-space model;
+//! `cargo run --release -p sim --example coverage_oracle` prints both rules
+//! and how much a denser pool adds.
+
+use crate::SimError;
+use crate::metrics::CoverageTracker;
+use explore::Setup;
+use geom::{Isometry3, Real};
+use map::VoxelKey;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use record::explore::CoverageOracle;
+use robot::Robot;
+use scenario::{LoadedScenario, MetricsConfig};
+use scene::World;
+use serde::{Deserialize, Serialize};
+use std::collections::HashSet;
+use std::path::Path;
+use std::sync::Arc;
+
+/// Tilt step at which a sweep's configurations are checked, degrees.
+const CHECK_TILT_DEG: Real = 2.0;
+
+/// Density of the true-surface points that mark planning voxels occupied.
+const VOXEL_MARK_PER_M2: Real = 10_000.0;
+
+/// Most sweeps the oracle's greedy choice takes (it stops sooner when no
+/// sweep adds a sample).
+pub const ORACLE_MAX_SWEEPS: usize = 40;
+
+/// Format of the cache file; a file of another format is made again.
+const CACHE_FORMAT: u32 = 1;
+
+/// The safety rule a pose of the pool obeys.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OracleRule {
+    /// The run's: `dist(Q) > 1` with a perfect map and Stage One's
+    /// clearance from the true surface.
+    Run,
+    /// No contact of the links with the true surface.
+    Contact,
+}
+
+impl OracleRule {
+    /// Its name in `run.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Run => "dist(Q) > 1 on the true scene's voxels and Stage One's clearance",
+            Self::Contact => "no contact",
+        }
+    }
+}
+
+/// Every pose of the pool with what its sweep covers.
+#[derive(Debug)]
+pub struct OraclePool {
+    samples: usize,
+    poses: usize,
+    /// Per pose: clear by the run's rule, by the contact rule, and the bits
+    /// of the A1 samples its sweep covers.
+    per_pose: Vec<(bool, bool, Vec<u64>)>,
+}
+
+impl OraclePool {
+    /// The pool of `setup` in `world` (a scene: the oracle needs true
+    /// surfaces) with the scanner `scanner` and the metric `metrics`:
+    /// the start, the roadmap's nodes and `extra` poses drawn uniformly
+    /// within the joint limits (seeded).
+    pub fn new(
+        setup: &Setup,
+        world: &Arc<World>,
+        scanner: &sensor::ScannerConfig,
+        metrics: &MetricsConfig,
+        extra: usize,
+    ) -> Result<Self, SimError> {
+        let scene = world.as_scene().ok_or_else(|| SimError::InvalidArgument {
+            what: "coverage oracle".into(),
+            message: "needs a scene with true surfaces, not a point cloud".into(),
+        })?;
+        let mut a1 = *metrics;
+        a1.sampling.region = Some(setup.regions.a1.aabb());
+        let tracker = CoverageTracker::new(scene, &a1)?;
+
+        // The planning voxels a true surface passes through (in A3).
+        let voxel = setup.config.planning_voxel_m;
+        let mut marks = metrics.sampling;
+        marks.region = Some(setup.regions.a3.aabb());
+        marks.samples_per_m2 = VOXEL_MARK_PER_M2;
+        marks.exposed_only = false;
+        let occupied: HashSet<VoxelKey> = scene::SurfaceSampler::new(scene, &marks)?
+            .flatten()
+            .filter_map(|s| VoxelKey::of_point(&s.point, voxel))
+            .collect();
+
+        let robot = &setup.robot;
+        let world_from_base = setup.world_from_base;
+        let safety = setup.stage.model().safety();
+        let clearance_m = setup.config.stage_one_clearance_m;
+        let mut poses: Vec<Vec<Real>> = vec![setup.start.clone()];
+        poses.extend(setup.stage.model().roadmap().nodes().map(<[Real]>::to_vec));
+        let mut rng = ChaCha8Rng::seed_from_u64(0);
+        for _ in 0..extra {
+            poses.push(
+                robot
+                    .limits()
+                    .iter()
+                    .map(|l| l.map_or(0.0, |l| rng.random_range(l.min..=l.max)))
+                    .collect(),
+            );
+        }
+        let per_pose = poses
+            .par_iter()
+            .enumerate()
+            .map(|(i, q)| -> Result<_, SimError> {
+                let mut contact = true;
+                let mut run = true;
+                for c in &sweep_configurations(setup, q) {
+                    let frames = robot.forward_kinematics(c)?;
+                    contact &=
+                        plan::contact::robot_contacts(robot, &frames, &world_from_base, scene)
+                            .is_empty();
+                    if run {
+                        run = plan::interfering_voxels(safety, c, voxel)
+                            .map_err(|e| SimError::Plan(Box::new(e)))?
+                            .iter()
+                            .all(|k| !occupied.contains(k))
+                            && (clearance_m <= 0.0
+                                || plan::contact::min_clearance(
+                                    robot,
+                                    &frames,
+                                    &world_from_base,
+                                    scene,
+                                    clearance_m,
+                                ) >= clearance_m);
+                    }
+                }
+                // The start's sweep is taken whatever the rules say (a run
+                // takes it).
+                let bits = if i == 0 || contact || run {
+                    let points =
+                        simulated_sweep(setup, world, robot, &world_from_base, scanner, q, i)?;
+                    tracker.bits_of(&points)
+                } else {
+                    Vec::new()
+                };
+                Ok((run, contact, bits))
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Self {
+            samples: tracker.len(),
+            poses: poses.len(),
+            per_pose,
+        })
+    }
+
+    /// A1 samples.
+    pub fn samples(&self) -> usize {
+        self.samples
+    }
+
+    /// Poses in the pool.
+    pub fn poses(&self) -> usize {
+        self.poses
+    }
+
+    /// The poses clear under `rule` (the start counted when it is).
+    pub fn clear(&self, rule: OracleRule) -> Vec<usize> {
+        (0..self.per_pose.len())
+            .filter(|&i| match rule {
+                OracleRule::Run => self.per_pose[i].0,
+                OracleRule::Contact => self.per_pose[i].1,
+            })
+            .collect()
+    }
+
+    fn share(&self, bits: &[u64]) -> Real {
+        count(bits) as Real / self.samples.max(1) as Real
+    }
+
+    /// The share of A1 covered by the start's sweep and every clear pose's.
+    pub fn all(&self, rule: OracleRule) -> Real {
+        let mut all = self.per_pose[0].2.clone();
+        for i in self.clear(rule) {
+            or_into(&mut all, &self.per_pose[i].2);
+        }
+        self.share(&all)
+    }
+
+    /// The greedy choice: the start's sweep, then up to `sweeps - 1` more,
+    /// each the clear pose that adds the most samples (ties to the lower
+    /// index), stopping when none adds one. Returns the share covered after
+    /// each sweep and the samples covered at the end.
+    pub fn greedy(&self, rule: OracleRule, sweeps: usize) -> (Vec<Real>, Vec<u64>) {
+        let clear = self.clear(rule);
+        let mut have = self.per_pose[0].2.clone();
+        let mut curve = vec![self.share(&have)];
+        for _ in 1..sweeps {
+            let Some((best, g)) = clear
+                .par_iter()
+                .map(|&i| (i, gain(&self.per_pose[i].2, &have)))
+                .max_by_key(|&(i, g)| (g, std::cmp::Reverse(i)))
+            else {
+                break;
+            };
+            if g == 0 {
+                break;
+            }
+            or_into(&mut have, &self.per_pose[best].2);
+            curve.push(self.share(&have));
+        }
+        (curve, have)
+    }
+
+    /// No start sweep and `sweeps - 1` poses cover more than this share:
+    /// the greedy set's samples plus the `sweeps - 1` largest gains over it
+    /// (coverage is submodular), and no more than all the poses together.
+    pub fn bound(&self, rule: OracleRule, sweeps: usize, greedy: &[u64]) -> Real {
+        let mut gains: Vec<usize> = self
+            .clear(rule)
+            .iter()
+            .map(|&i| gain(&self.per_pose[i].2, greedy))
+            .collect();
+        gains.sort_unstable_by(|a, b| b.cmp(a));
+        let extra: usize = gains.iter().take(sweeps.saturating_sub(1)).sum();
+        ((count(greedy) + extra) as Real / self.samples.max(1) as Real).min(self.all(rule))
+    }
+
+    /// The oracle under `rule` as `run.json` gives it.
+    pub fn oracle(&self, rule: OracleRule) -> CoverageOracle {
+        CoverageOracle {
+            rule: rule.name().to_owned(),
+            poses: self.poses,
+            clear_poses: self.clear(rule).len(),
+            a1_after_sweeps: self.greedy(rule, ORACLE_MAX_SWEEPS).0,
+            a1_all_poses: self.all(rule),
+        }
+    }
+}
+
+/// The cache file: the inputs the oracle was made for, and the oracle.
+#[derive(Serialize, Deserialize)]
+struct CacheFile {
+    format: u32,
+    inputs: String,
+    oracle: CoverageOracle,
+}
+
+/// What the oracle depends on, as text: the scenario with what does not
+/// matter to it left out (names, the `[explore]` table), and the
+/// parameters of the run it does depend on (the roadmap's, the planning
+/// voxel, Stage One's clearance, the sweep). A scene's mesh file
+/// enters by its path, not its content.
+fn oracle_inputs(loaded: &LoadedScenario, setup: &Setup) -> Result<String, SimError> {
+    let mut s = loaded.standalone();
+    s.name.clear();
+    s.description.clear();
+    s.initial_segments.clear();
+    s.explore = None;
+    let c = &setup.config;
+    Ok(format!(
+        "plan = {:?}\nplanning_voxel_m = {:?}\nstage_one_clearance_m = {:?}\nsweep = {:?}\n{}",
+        c.plan,
+        c.planning_voxel_m,
+        c.stage_one_clearance_m,
+        c.sweep,
+        s.to_toml()?
+    ))
+}
+
+/// The run's oracle ([`OracleRule::Run`]) of the scenario `loaded` set up
+/// as `setup` in `world`: read from `cache` when that file was made for the
+/// same inputs, else computed (and written there). The second value says
+/// whether it was loaded.
+pub fn run_oracle(
+    loaded: &LoadedScenario,
+    setup: &Setup,
+    world: &Arc<World>,
+    cache: Option<&Path>,
+) -> Result<(CoverageOracle, bool), SimError> {
+    let inputs = oracle_inputs(loaded, setup)?;
+    if let Some(path) = cache
+        && let Ok(text) = std::fs::read(path)
+        && let Ok(file) = serde_json::from_slice::<CacheFile>(&text)
+        && file.format == CACHE_FORMAT
+        && file.inputs == inputs
+    {
+        return Ok((file.oracle, true));
+    }
+    let scanner = loaded.scenario.scanner.clone().unwrap_or_default().config;
+    let pool = OraclePool::new(setup, world, &scanner, &loaded.scenario.metrics, 0)?;
+    let oracle = pool.oracle(OracleRule::Run);
+    if let Some(path) = cache {
+        let file = CacheFile {
+            format: CACHE_FORMAT,
+            inputs,
+            oracle: oracle.clone(),
+        };
+        let text = serde_json::to_vec(&file).map_err(|e| SimError::InvalidArgument {
+            what: path.display().to_string(),
+            message: format!("cannot encode the oracle: {e}"),
+        })?;
+        record::output::replace_file(path, &text)?;
+    }
+    Ok((oracle, false))
+}
+
+/// The configurations of the tilt sweep from `q`: every `CHECK_TILT_DEG` of
+/// the sweep joint's range, ends included, and `q` itself.
+fn sweep_configurations(setup: &Setup, q: &[Real]) -> Vec<Vec<Real>> {
+    let (lo, hi) = setup.stage.sweep_range(q);
+    let j = setup.config.sweep.joint - 1;
+    let steps = ((hi[j] - lo[j]) / CHECK_TILT_DEG.to_radians())
+        .ceil()
+        .max(1.0) as usize;
+    let mut out = vec![q.to_vec()];
+    for s in 0..=steps {
+        let mut c = lo.clone();
+        c[j] = lo[j] + (hi[j] - lo[j]) * s as Real / steps as Real;
+        out.push(c);
+    }
+    out
+}
+
+/// The points of the sweep from `q`, simulated with noise seeded by `seed`.
+fn simulated_sweep(
+    setup: &Setup,
+    world: &Arc<World>,
+    robot: &Robot,
+    world_from_base: &Isometry3,
+    scanner: &sensor::ScannerConfig,
+    q: &[Real],
+    seed: usize,
+) -> Result<Vec<geom::Point3>, SimError> {
+    let mut rig = crate::SimRig::new(
+        robot.clone(),
+        Arc::clone(world),
+        *world_from_base,
+        q,
+        Some(sensor::Scanner::new(*scanner)?),
+        seed as u64,
+    )?;
+    let sweep = hw::tilt_sweep(
+        &mut rig,
+        robot,
+        world_from_base,
+        &setup.config.sweep,
+        &mut |_, _| {},
+    )?;
+    Ok(sweep.positions())
+}
+
+fn count(bits: &[u64]) -> usize {
+    bits.iter().map(|w| w.count_ones() as usize).sum()
+}
+
+fn gain(bits: &[u64], have: &[u64]) -> usize {
+    bits.iter()
+        .zip(have)
+        .map(|(a, b)| (a & !b).count_ones() as usize)
+        .sum()
+}
+
+fn or_into(into: &mut [u64], bits: &[u64]) {
+    for (a, b) in into.iter_mut().zip(bits) {
+        *a |= b;
+    }
+}
