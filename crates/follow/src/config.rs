@@ -16,6 +16,33 @@ pub enum Objective {
     ProximitySwitches,
 }
 
+/// How current edge following (P§3.4.3) cuts the unexposed surface near the
+/// current edge into slices.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SliceRule {
+    /// Pudney's rule: slices λ/2 wide, whatever the sensors cover.
+    #[default]
+    Thesis,
+    /// Our addition: the slice width is taken from where the control
+    /// point's range finders land on the current segment's plane (its
+    /// lattice), the widest for which the strips of passes one slice apart
+    /// interleave no more than λ/2 apart, as one sensor's strips do with
+    /// the thesis' slices (`follower/edge_following.rs`,
+    /// `lattice_slice_width`).
+    Lattice,
+}
+
+impl SliceRule {
+    /// Name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Thesis => "thesis",
+            Self::Lattice => "lattice",
+        }
+    }
+}
+
 /// Surface-following parameters (SPEC §3.5; values of P§4.3).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -67,6 +94,9 @@ pub struct FollowConfig {
     /// the polygon, in its plane, metres (0: the polygons as they are);
     /// default λ/2 for Pudney's λ = 0.05 (see [`crate::guard`]).
     pub guard_edge_extension_m: Real,
+    /// How current edge following cuts slices (P§3.4.3): `thesis` (λ/2
+    /// wide) or `lattice` (width from the control point's sensor lattice).
+    pub slices: SliceRule,
 }
 
 impl Default for FollowConfig {
@@ -89,6 +119,7 @@ impl Default for FollowConfig {
             guard_margin_m: 0.02,
             guard_recent_sets: 10,
             guard_edge_extension_m: 0.025,
+            slices: SliceRule::Thesis,
         }
     }
 }

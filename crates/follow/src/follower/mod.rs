@@ -121,11 +121,14 @@ pub struct Step {
 }
 
 /// Slices of current edge following (P§3.4.3, Fig. 31): slabs of width λ/2
-/// perpendicular to the slice line, numbered along it.
+/// (or as [`crate::config::SliceRule`] says) perpendicular to the slice
+/// line, numbered along it.
 #[derive(Clone, Debug, PartialEq)]
 struct SliceLine {
     point: Point3,
     dir: UnitVector3,
+    /// The slices' width, fixed with the line.
+    width: Real,
     used: BTreeSet<i64>,
 }
 
@@ -808,7 +811,7 @@ mod tests {
     }
 
     /// point3 over the floor z = 0 after a few steps: a model with a polygon.
-    fn floor_follower() -> (Follower, SegmentId) {
+    pub(super) fn floor_follower() -> (Follower, SegmentId) {
         let robot = robot::builtin("point3").unwrap();
         let model = SurfaceModel::new(surface::SurfaceConfig::default()).unwrap();
         let mut f =
