@@ -4,7 +4,7 @@
 use super::output::{config_toml, load_config};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use follow::RunEnd;
+use follow::{RunEnd, SliceRule};
 use geom::Real;
 use indicatif::{ProgressBar, ProgressStyle};
 use scenario::{RobotChoice, Scenario};
@@ -92,6 +92,12 @@ pub struct FollowArgs {
     /// max_step_m, ...) and a [surface] table (SurfaceConfig: lambda, mu_deg, ...).
     #[arg(long)]
     config: Option<PathBuf>,
+    /// How current edge following cuts slices (P§3.4.3): `thesis`, Pudney's
+    /// slices λ/2 wide, or `lattice`, as wide as the control point's sensor
+    /// lattice on the current face allows (our addition). Overrides the
+    /// `[follow] slices` of --config [default: thesis].
+    #[arg(long, value_parser = ["thesis", "lattice"])]
+    slices: Option<String>,
     /// Print the configuration in effect as TOML and exit.
     #[arg(long)]
     print_config: bool,
@@ -176,7 +182,13 @@ fn options(a: &FollowArgs, config: FollowRunConfig) -> Result<FollowRunOptions> 
 }
 
 pub fn follow(a: &FollowArgs) -> Result<()> {
-    let config: FollowRunConfig = load_config(a.config.as_deref())?;
+    let mut config: FollowRunConfig = load_config(a.config.as_deref())?;
+    match a.slices.as_deref() {
+        None => {}
+        Some("thesis") => config.follow.slices = SliceRule::Thesis,
+        Some("lattice") => config.follow.slices = SliceRule::Lattice,
+        Some(other) => bail!("--slices {other}: expected thesis or lattice"),
+    }
     if a.print_config {
         put!("{}", config_toml(&config)?)?;
         return Ok(());
