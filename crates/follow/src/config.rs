@@ -43,6 +43,37 @@ impl SliceRule {
     }
 }
 
+/// When current edge following keeps its slice line, its used slices and
+/// its current slice after the current edge changes (P§3.4.3, P§3.4.6).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SliceLineRule {
+    /// Pudney's rule (P§3.4.3, Fig. 33): the line and its used slices are
+    /// kept for a new current edge on the same segment whose vertices lie
+    /// within λ of the line, at less than 45° to it, with a used slice
+    /// through it; the current slice is chosen anew.
+    #[default]
+    Thesis,
+    /// Our addition: the line and its used slices are also kept when the
+    /// new current edge lies on the same segment, at less than 45° to the
+    /// line, and neither vertex lies more than λ inside the line (the edge
+    /// only moved outward: the model grew), used slice or not; the current
+    /// slice is kept too when it passes through the new edge and is not
+    /// used, so a slice is followed across the unexposed surface in one
+    /// pass (`follower/edge_following.rs`, `outward_retained`).
+    Outward,
+}
+
+impl SliceLineRule {
+    /// Name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Thesis => "thesis",
+            Self::Outward => "outward",
+        }
+    }
+}
+
 /// Surface-following parameters (SPEC §3.5; values of P§4.3).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -97,6 +128,10 @@ pub struct FollowConfig {
     /// How current edge following cuts slices (P§3.4.3): `thesis` (λ/2
     /// wide) or `lattice` (width from the control point's sensor lattice).
     pub slices: SliceRule,
+    /// When a changed current edge keeps the slice line (P§3.4.3,
+    /// P§3.4.6): `thesis` or `outward` (also while the edge only moves
+    /// outward).
+    pub slice_line: SliceLineRule,
 }
 
 impl Default for FollowConfig {
@@ -120,6 +155,7 @@ impl Default for FollowConfig {
             guard_recent_sets: 10,
             guard_edge_extension_m: 0.025,
             slices: SliceRule::Thesis,
+            slice_line: SliceLineRule::Thesis,
         }
     }
 }

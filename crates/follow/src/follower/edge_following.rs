@@ -3,7 +3,7 @@
 //! little-unexposed-surface test.
 
 use super::{Directive, Flow, Follower, Mode, SliceLine};
-use crate::config::SliceRule;
+use crate::config::{SliceLineRule, SliceRule};
 use crate::query::{EdgeRef, Feature, ModelPoint, closest_on_segment, edge_by_key};
 use geom::{Point3, Real, Segment3, Vector3, unit};
 use std::collections::BTreeSet;
@@ -15,6 +15,28 @@ fn slice_range(line: &SliceLine, e: &EdgeRef) -> (i64, i64) {
     let lo = (ta.min(tb) / width).floor() as i64;
     let hi = ((ta.max(tb) / width).ceil() as i64 - 1).max(lo);
     (lo, hi)
+}
+
+/// Whether `e` runs at less than 45° to the slice line, anticlockwise
+/// (P§3.4.3, Fig. 33(b)).
+fn aligned(line: &SliceLine, e: &EdgeRef) -> bool {
+    unit(e.b - e.a).is_some_and(|d| d.dot(&line.dir) > std::f64::consts::FRAC_PI_4.cos())
+}
+
+/// The retention test of [`SliceLineRule::Outward`] (our addition to
+/// P§3.4.3), for a new current edge `e` on the segment whose slice line
+/// `line` is and whose outward normal is `normal`: `e` runs at less than
+/// 45° to the line and neither vertex lies more than λ inside it, where
+/// "outside" is `line.dir × normal`, the side P§3.4.3's outside-edge test
+/// (Fig. 32) calls away from the edge. The thesis' test also asks the
+/// vertices to lie within λ of the line on either side and a used slice to
+/// pass through `e`; this one keeps the line however far the edge moved
+/// outward, used slice or not, since a model that grew past the line has
+/// left the used slices used and the rest still to cover.
+fn outward_retained(line: &SliceLine, e: &EdgeRef, normal: &Vector3, lambda: Real) -> bool {
+    let out = line.dir.cross(normal);
+    let outside = |p: &Point3| (p - line.point).dot(&out) > -lambda;
+    aligned(line, e) && outside(&e.a) && outside(&e.b)
 }
 
 /// Widest slice considered by [`lattice_slice_width`], in quarters of λ.
@@ -56,18 +78,34 @@ impl Follower {
     /// kept (P§3.4.3, Fig. 33).
     pub(super) fn set_current_edge(&mut self, e: &EdgeRef) {
         let lambda = self.model.config().lambda;
+        let same_segment = self.state.edge_segment == Some(e.segment);
         let retained = self.state.slices.as_ref().is_some_and(|line| {
-            let same_segment = self.state.edge_segment == Some(e.segment);
             let near =
                 (e.a - line.foot(&e.a)).norm() < lambda && (e.b - line.foot(&e.b)).norm() < lambda;
-            let dir = e.b - e.a;
-            let aligned =
-                unit(dir).is_some_and(|d| d.dot(&line.dir) > std::f64::consts::FRAC_PI_4.cos());
+            let aligned = aligned(line, e);
             let (ka, kb) = slice_range(line, e);
             let any_used = (ka..=kb).any(|k| line.used.contains(&k));
             same_segment && near && aligned && any_used
         });
-        if !retained {
+        // Our addition (`slice_line = "outward"`): the edge only moved
+        // outward, so the line, its used slices and the current slice stay.
+        let outward = !retained
+            && same_segment
+            && self.config.slice_line == SliceLineRule::Outward
+            && self.state.slices.as_ref().is_some_and(|line| {
+                self.model
+                    .polygon(e.segment)
+                    .is_some_and(|p| outward_retained(line, e, &p.normal().into_inner(), lambda))
+            });
+        let keep_slice = self.config.slice_line == SliceLineRule::Outward
+            && (retained || outward)
+            && self.state.slices.as_ref().is_some_and(|line| {
+                let (ka, kb) = slice_range(line, e);
+                self.state
+                    .slice
+                    .is_some_and(|k| (ka..=kb).contains(&k) && !line.used.contains(&k))
+            });
+        if !retained && !outward {
             let dir = unit(e.b - e.a).unwrap_or_else(Vector3::x_axis);
             let width = match self.config.slices {
                 SliceRule::Thesis => 0.5 * lambda,
@@ -85,7 +123,9 @@ impl Follower {
         }
         self.state.edge = Some(e.key);
         self.state.edge_segment = Some(e.segment);
-        self.state.slice = None;
+        if !keep_slice {
+            self.state.slice = None;
+        }
     }
 
     /// Where the control point's range finders, at their present
@@ -368,5 +408,91 @@ mod tests {
         }
         let w = lattice_slice_width(&offsets, LAMBDA);
         assert!((w - 0.075).abs() < 1e-12, "{w}");
+    }
+
+    fn edge_at(a: Point3, b: Point3) -> EdgeRef {
+        EdgeRef {
+            key: EdgeKey(9),
+            segment: surface::SegmentId(3),
+            index: 0,
+            a,
+            b,
+            shared_with: None,
+        }
+    }
+
+    /// The outward test by hand: a slice line along +x through the origin
+    /// on a face with normal +z, so outside is x × z = −y. An edge 4λ
+    /// outside (y = −0.2) keeps the line, which the thesis' "within λ"
+    /// would not; one 0.04 inside (less than λ) keeps it; one 0.06 inside
+    /// (more than λ) does not, nor one at 60° to the line, nor the same
+    /// edge run clockwise (180°).
+    #[test]
+    fn the_outward_rule_keeps_the_line_for_an_edge_that_moved_outward() {
+        let line = SliceLine {
+            point: Point3::origin(),
+            dir: Vector3::x_axis(),
+            width: 0.5 * LAMBDA,
+            used: BTreeSet::from([0, 1]),
+        };
+        let n = Vector3::z();
+        let keeps = |a: [Real; 2], b: [Real; 2]| {
+            let e = edge_at(Point3::new(a[0], a[1], 0.0), Point3::new(b[0], b[1], 0.0));
+            outward_retained(&line, &e, &n, LAMBDA)
+        };
+        assert!(keeps([0.0, -0.2], [1.0, -0.2]));
+        assert!(keeps([0.0, 0.04], [1.0, 0.04]));
+        assert!(!keeps([0.0, 0.06], [1.0, 0.06]));
+        assert!(!keeps([0.0, -0.2], [0.5, -0.2 + 0.5 * 3.0_f64.sqrt()]));
+        assert!(!keeps([1.0, -0.2], [0.0, -0.2]));
+        // The same edge 4λ out fails the thesis' nearness (P§3.4.3, Fig. 33(a)).
+        let e = edge_at(Point3::new(0.0, -0.2, 0.0), Point3::new(1.0, -0.2, 0.0));
+        assert!((e.a - line.foot(&e.a)).norm() > LAMBDA);
+    }
+
+    /// The follower over the floor: a slice line with slices 0 and 1 used
+    /// and slice 2 current, and a new current edge on the same polygon
+    /// parallel to the line 4λ outside it. The thesis rule defines a new
+    /// line (no used slices, no current slice); the outward rule keeps the
+    /// line, its used slices and slice 2, which the new edge passes through
+    /// (0 ≤ x ≤ 1 spans slices 0 to 39).
+    #[test]
+    fn a_changed_edge_keeps_the_slices_only_under_the_outward_rule() {
+        for rule in [SliceLineRule::Thesis, SliceLineRule::Outward] {
+            let (mut f, poly) = super::super::tests::floor_follower();
+            f.config.slice_line = rule;
+            let n = f.model.polygon(poly).expect("a polygon").normal();
+            // Anticlockwise about the normal: +x with n = +z, −x with −z.
+            let dir = unit(Vector3::x() * n.z.signum()).expect("a direction");
+            let out = dir.cross(&n);
+            let line = SliceLine {
+                point: Point3::origin(),
+                dir,
+                width: 0.5 * LAMBDA,
+                used: BTreeSet::from([0, 1]),
+            };
+            f.state.slices = Some(line.clone());
+            f.state.edge_segment = Some(poly);
+            f.state.slice = Some(2);
+            let a = Point3::origin() + out * (4.0 * LAMBDA);
+            let e = EdgeRef {
+                segment: poly,
+                ..edge_at(a, a + dir.into_inner())
+            };
+            f.set_current_edge(&e);
+            let kept = f.state.slices.clone().expect("a slice line");
+            match rule {
+                SliceLineRule::Thesis => {
+                    assert!(kept.used.is_empty(), "{kept:?}");
+                    assert!((kept.point - e.a).norm() < 1e-12);
+                    assert_eq!(f.state.slice, None);
+                }
+                SliceLineRule::Outward => {
+                    assert_eq!(kept, line);
+                    assert_eq!(f.state.slice, Some(2));
+                }
+            }
+            assert_eq!(f.state.edge, Some(e.key));
+        }
     }
 }
