@@ -74,6 +74,31 @@ impl SliceLineRule {
     }
 }
 
+/// Which gap-following target points (P§3.4.5) count as detected.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GapTargetRule {
+    /// Pudney's rule: a target is detected by a sensor point within λ/2 of
+    /// it in a set taken while gap following aims at it.
+    #[default]
+    Thesis,
+    /// Our addition: a target within λ/2 of a point any earlier set sensed
+    /// (since the run began) counts as detected at once, so gap following
+    /// does not send the sensors over surface they already measured
+    /// (`follower/gap_following.rs`, `SensedPoints`).
+    Sensed,
+}
+
+impl GapTargetRule {
+    /// Name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Thesis => "thesis",
+            Self::Sensed => "sensed",
+        }
+    }
+}
+
 /// Surface-following parameters (SPEC §3.5; values of P§4.3).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -132,6 +157,9 @@ pub struct FollowConfig {
     /// P§3.4.6): `thesis` or `outward` (also while the edge only moves
     /// outward).
     pub slice_line: SliceLineRule,
+    /// Which gap-following targets count as detected (P§3.4.5): `thesis`
+    /// or `sensed` (also those an earlier set already sensed).
+    pub gap_targets: GapTargetRule,
 }
 
 impl Default for FollowConfig {
@@ -156,6 +184,7 @@ impl Default for FollowConfig {
             guard_edge_extension_m: 0.025,
             slices: SliceRule::Thesis,
             slice_line: SliceLineRule::Thesis,
+            gap_targets: GapTargetRule::Thesis,
         }
     }
 }
