@@ -16,6 +16,89 @@ pub enum Objective {
     ProximitySwitches,
 }
 
+/// How current edge following (P§3.4.3) cuts the unexposed surface near the
+/// current edge into slices.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SliceRule {
+    /// Pudney's rule: slices λ/2 wide, whatever the sensors cover.
+    #[default]
+    Thesis,
+    /// Our addition: the slice width is taken from where the control
+    /// point's range finders land on the current segment's plane (its
+    /// lattice), the widest for which the strips of passes one slice apart
+    /// interleave no more than λ/2 apart, as one sensor's strips do with
+    /// the thesis' slices (`follower/edge_following.rs`,
+    /// `lattice_slice_width`).
+    Lattice,
+}
+
+impl SliceRule {
+    /// Name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Thesis => "thesis",
+            Self::Lattice => "lattice",
+        }
+    }
+}
+
+/// When current edge following keeps its slice line, its used slices and
+/// its current slice after the current edge changes (P§3.4.3, P§3.4.6).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SliceLineRule {
+    /// Pudney's rule (P§3.4.3, Fig. 33): the line and its used slices are
+    /// kept for a new current edge on the same segment whose vertices lie
+    /// within λ of the line, at less than 45° to it, with a used slice
+    /// through it; the current slice is chosen anew.
+    #[default]
+    Thesis,
+    /// Our addition: the line and its used slices are also kept when the
+    /// new current edge lies on the same segment, at less than 45° to the
+    /// line, and neither vertex lies more than λ inside the line (the edge
+    /// only moved outward: the model grew), used slice or not; the current
+    /// slice is kept too when it passes through the new edge and is not
+    /// used, so a slice is followed across the unexposed surface in one
+    /// pass (`follower/edge_following.rs`, `outward_retained`).
+    Outward,
+}
+
+impl SliceLineRule {
+    /// Name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Thesis => "thesis",
+            Self::Outward => "outward",
+        }
+    }
+}
+
+/// Which gap-following target points (P§3.4.5) count as detected.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GapTargetRule {
+    /// Pudney's rule: a target is detected by a sensor point within λ/2 of
+    /// it in a set taken while gap following aims at it.
+    #[default]
+    Thesis,
+    /// Our addition: a target within λ/2 of a point any earlier set sensed
+    /// (since the run began) counts as detected at once, so gap following
+    /// does not send the sensors over surface they already measured
+    /// (`follower/gap_following.rs`, `SensedPoints`).
+    Sensed,
+}
+
+impl GapTargetRule {
+    /// Name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Thesis => "thesis",
+            Self::Sensed => "sensed",
+        }
+    }
+}
+
 /// Surface-following parameters (SPEC §3.5; values of P§4.3).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -67,6 +150,16 @@ pub struct FollowConfig {
     /// the polygon, in its plane, metres (0: the polygons as they are);
     /// default λ/2 for Pudney's λ = 0.05 (see [`crate::guard`]).
     pub guard_edge_extension_m: Real,
+    /// How current edge following cuts slices (P§3.4.3): `thesis` (λ/2
+    /// wide) or `lattice` (width from the control point's sensor lattice).
+    pub slices: SliceRule,
+    /// When a changed current edge keeps the slice line (P§3.4.3,
+    /// P§3.4.6): `thesis` or `outward` (also while the edge only moves
+    /// outward).
+    pub slice_line: SliceLineRule,
+    /// Which gap-following targets count as detected (P§3.4.5): `thesis`
+    /// or `sensed` (also those an earlier set already sensed).
+    pub gap_targets: GapTargetRule,
 }
 
 impl Default for FollowConfig {
@@ -89,6 +182,9 @@ impl Default for FollowConfig {
             guard_margin_m: 0.02,
             guard_recent_sets: 10,
             guard_edge_extension_m: 0.025,
+            slices: SliceRule::Thesis,
+            slice_line: SliceLineRule::Thesis,
+            gap_targets: GapTargetRule::Thesis,
         }
     }
 }

@@ -4,7 +4,7 @@
 use super::output::{config_toml, load_config};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use follow::RunEnd;
+use follow::{GapTargetRule, RunEnd, SliceLineRule, SliceRule};
 use geom::Real;
 use indicatif::{ProgressBar, ProgressStyle};
 use scenario::{RobotChoice, Scenario};
@@ -92,6 +92,25 @@ pub struct FollowArgs {
     /// max_step_m, ...) and a [surface] table (SurfaceConfig: lambda, mu_deg, ...).
     #[arg(long)]
     config: Option<PathBuf>,
+    /// How current edge following cuts slices (P§3.4.3): `thesis`, Pudney's
+    /// slices λ/2 wide, or `lattice`, as wide as the control point's sensor
+    /// lattice on the current face allows (our addition). Overrides the
+    /// `[follow] slices` of --config [default: thesis].
+    #[arg(long, value_parser = ["thesis", "lattice"])]
+    slices: Option<String>,
+    /// When a changed current edge keeps its slice line (P§3.4.3,
+    /// P§3.4.6): `thesis`, within λ of the line with a used slice through
+    /// it, or `outward`, also while the edge only moves outward, the
+    /// current slice kept (our addition). Overrides `[follow] slice_line`
+    /// [default: thesis].
+    #[arg(long, value_parser = ["thesis", "outward"])]
+    slice_line: Option<String>,
+    /// Which gap-following targets count as detected (P§3.4.5): `thesis`,
+    /// a point sensed near it while aimed at, or `sensed`, also a point any
+    /// earlier set sensed within λ/2 (our addition). Overrides `[follow]
+    /// gap_targets` [default: thesis].
+    #[arg(long, value_parser = ["thesis", "sensed"])]
+    gap_targets: Option<String>,
     /// Print the configuration in effect as TOML and exit.
     #[arg(long)]
     print_config: bool,
@@ -176,7 +195,25 @@ fn options(a: &FollowArgs, config: FollowRunConfig) -> Result<FollowRunOptions> 
 }
 
 pub fn follow(a: &FollowArgs) -> Result<()> {
-    let config: FollowRunConfig = load_config(a.config.as_deref())?;
+    let mut config: FollowRunConfig = load_config(a.config.as_deref())?;
+    match a.slices.as_deref() {
+        None => {}
+        Some("thesis") => config.follow.slices = SliceRule::Thesis,
+        Some("lattice") => config.follow.slices = SliceRule::Lattice,
+        Some(other) => bail!("--slices {other}: expected thesis or lattice"),
+    }
+    match a.slice_line.as_deref() {
+        None => {}
+        Some("thesis") => config.follow.slice_line = SliceLineRule::Thesis,
+        Some("outward") => config.follow.slice_line = SliceLineRule::Outward,
+        Some(other) => bail!("--slice-line {other}: expected thesis or outward"),
+    }
+    match a.gap_targets.as_deref() {
+        None => {}
+        Some("thesis") => config.follow.gap_targets = GapTargetRule::Thesis,
+        Some("sensed") => config.follow.gap_targets = GapTargetRule::Sensed,
+        Some(other) => bail!("--gap-targets {other}: expected thesis or sensed"),
+    }
     if a.print_config {
         put!("{}", config_toml(&config)?)?;
         return Ok(());

@@ -2,8 +2,62 @@
 //! λ/2 and the controlled sensor.
 
 use super::{Directive, Flow, Follower, Gap, Mode};
+use crate::config::GapTargetRule;
 use crate::query::ModelPoint;
 use geom::{Point3, Real, Segment3, polygon2};
+use std::collections::HashMap;
+
+/// A cube of [`SensedPoints`]' grid, by its integer coordinates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct Cell([i64; 3]);
+
+/// Every sensor point the run has sensed, in a grid of cubes `radius`
+/// wide, for [`GapTargetRule::Sensed`] (our addition to P§3.4.5): whether a
+/// gap-following target lies within `radius` (λ/2) of a point an earlier set
+/// sensed. Lookups only, so hash order never shows.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct SensedPoints {
+    radius: Real,
+    cells: HashMap<Cell, Vec<Point3>>,
+}
+
+impl SensedPoints {
+    pub(super) fn new(radius: Real) -> Self {
+        Self {
+            radius,
+            cells: HashMap::new(),
+        }
+    }
+
+    fn cell(&self, p: &Point3) -> Cell {
+        let k = |v: Real| (v / self.radius).floor() as i64;
+        Cell([k(p.x), k(p.y), k(p.z)])
+    }
+
+    pub(super) fn insert(&mut self, points: &[Point3]) {
+        for p in points
+            .iter()
+            .filter(|p| p.coords.iter().all(|v| v.is_finite()))
+        {
+            let c = self.cell(p);
+            self.cells.entry(c).or_default().push(*p);
+        }
+    }
+
+    /// Whether some point lies closer than the radius to `target`.
+    pub(super) fn any_near(&self, target: &Point3) -> bool {
+        let Cell([x, y, z]) = self.cell(target);
+        (-1..=1).any(|dx| {
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dz| {
+                    self.cells
+                        .get(&Cell([x + dx, y + dy, z + dz]))
+                        .is_some_and(|ps| ps.iter().any(|p| (p - target).norm() < self.radius))
+                })
+            })
+        })
+    }
+}
 
 /// Gap following deems the controlled sensor aimed at its target when its
 /// sensing axis passes within this fraction of λ of it (λ/20 = 2.5 mm at
@@ -142,6 +196,15 @@ impl Follower {
                     .last_points
                     .iter()
                     .any(|p| (p - target).norm() < 0.5 * lambda);
+            // Our addition (`gap_targets = "sensed"`): a target the sensors
+            // already landed near, in this set or an earlier one, is not
+            // visited again. Only for gaps of current edge following: point
+            // following's targets run to the point segment, sensed already,
+            // and it waits for that segment to become a polygon.
+            let detected = detected
+                || (gap.from == Mode::Edge
+                    && self.config.gap_targets == GapTargetRule::Sensed
+                    && self.sensed.as_ref().is_some_and(|s| s.any_near(&target)));
             let patience = self.config.target_patience_steps;
             if detected || (patience > 0 && gap.steps_on_target >= patience) {
                 gap.next += 1;
@@ -204,5 +267,29 @@ impl Follower {
         let o = frame * m.origin;
         let a = frame.rotation * m.axis;
         Some(Segment3::new(o, o + a.into_inner() * m.max_range_m).closest_point(target))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// By hand, radius λ/2 = 0.025 (cells 0.025 wide): points at the origin
+    /// and at (0.1, 0, 0). (0.02, 0.01, 0) is √0.0005 ≈ 0.0224 from the
+    /// origin; (0.076, 0, 0) is 0.024 from (0.1, 0, 0), in the cell before
+    /// its own along x; (−0.001, 0, 0) is 0.001 from the origin across the
+    /// cell border at 0. (0.05, 0, 0) is 0.05 from both and (0.0, 0.0,
+    /// 0.026) 0.026 from the origin: not near.
+    #[test]
+    fn sensed_points_are_found_across_cell_borders() {
+        let mut s = SensedPoints::new(0.025);
+        assert!(!s.any_near(&Point3::origin()));
+        s.insert(&[Point3::origin(), Point3::new(0.1, 0.0, 0.0)]);
+        for near in [[0.02, 0.01, 0.0], [0.076, 0.0, 0.0], [-0.001, 0.0, 0.0]] {
+            assert!(s.any_near(&Point3::from(near)), "{near:?}");
+        }
+        for far in [[0.05, 0.0, 0.0], [0.0, 0.0, 0.026]] {
+            assert!(!s.any_near(&Point3::from(far)), "{far:?}");
+        }
     }
 }

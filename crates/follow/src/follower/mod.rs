@@ -10,7 +10,7 @@ use crate::actuator::{
     LinkBody, LinkProximity, SwitchContact, actuator_change, link_bodies, link_proximities,
     reconfiguration,
 };
-use crate::config::{FollowConfig, Objective};
+use crate::config::{FollowConfig, GapTargetRule, Objective};
 use crate::guard::{Guard, GuardAction, GuardCounts};
 use crate::motion::control_point_motion;
 use crate::path::{EdgePath, surface_edges};
@@ -121,11 +121,14 @@ pub struct Step {
 }
 
 /// Slices of current edge following (P§3.4.3, Fig. 31): slabs of width λ/2
-/// perpendicular to the slice line, numbered along it.
+/// (or as [`crate::config::SliceRule`] says) perpendicular to the slice
+/// line, numbered along it.
 #[derive(Clone, Debug, PartialEq)]
 struct SliceLine {
     point: Point3,
     dir: UnitVector3,
+    /// The slices' width, fixed with the line.
+    width: Real,
     used: BTreeSet<i64>,
 }
 
@@ -268,6 +271,8 @@ pub struct Follower {
     marks: Marks,
     progress: Progress,
     last_points: Vec<Point3>,
+    /// Every point sensed so far, kept for `gap_targets = "sensed"` only.
+    sensed: Option<gap_following::SensedPoints>,
     steps: u64,
     finished: Option<Termination>,
     frames: Vec<Isometry3>,
@@ -310,6 +315,8 @@ impl Follower {
             .fold(0.0, Real::max);
         let bodies = link_bodies(&robot);
         let dof = robot.dof();
+        let sensed = (config.gap_targets == GapTargetRule::Sensed)
+            .then(|| gap_following::SensedPoints::new(0.5 * model.config().lambda));
         Ok(Self {
             robot,
             world_from_base,
@@ -328,6 +335,7 @@ impl Follower {
                 watched: Vec::new(),
             },
             last_points: Vec::new(),
+            sensed,
             steps: 0,
             finished: None,
             frames: Vec::new(),
@@ -465,6 +473,9 @@ impl Follower {
             self.model.update(&set)?
         };
         self.guard.remember(&self.model, &points);
+        if let Some(sensed) = self.sensed.as_mut() {
+            sensed.insert(&points);
+        }
         self.last_points = points;
         let t1 = Instant::now();
         let mut termination = self.finished;
@@ -776,6 +787,63 @@ mod tests {
         assert!(d.step_limit.is_none_or(|l| l > 1e-3));
     }
 
+    /// `gap_targets = "sensed"`: point3 at (0, 0, 0.1) following a gap of
+    /// edge following whose first target, (0.3, 0, 0), lies 0.02 from a
+    /// point an earlier set sensed, (0.3, 0.02, 0) (less than λ/2 =
+    /// 0.025): that target counts as detected before any step is spent on
+    /// it, and the step aims at the second, (0.4, 0, 0), 0.1 from every
+    /// sensed point. The thesis rule, and a gap of point following under
+    /// the new rule, aim at the first target.
+    #[test]
+    fn a_target_an_earlier_set_sensed_is_detected_at_once() {
+        let robot = robot::builtin("point3").expect("point3");
+        let first = Point3::new(0.3, 0.0, 0.0);
+        let second = Point3::new(0.4, 0.0, 0.0);
+        let cases = [
+            (GapTargetRule::Sensed, Mode::Edge, 1),
+            (GapTargetRule::Thesis, Mode::Edge, 0),
+            (GapTargetRule::Sensed, Mode::Point, 0),
+        ];
+        for (rule, from, next) in cases {
+            let model = SurfaceModel::new(surface::SurfaceConfig::default()).expect("model");
+            let config = FollowConfig {
+                gap_targets: rule,
+                ..FollowConfig::default()
+            };
+            let mut f =
+                Follower::new(robot.clone(), Isometry3::identity(), model, config).expect("f");
+            let q = [0.0, 0.0, 0.1];
+            f.frames = f.robot.forward_kinematics(&q).expect("fk");
+            let cp = f.control_point(&q).expect("cp");
+            if let Some(s) = f.sensed.as_mut() {
+                s.insert(&[Point3::new(0.3, 0.02, 0.0), Point3::new(0.5, 0.0, 0.0)]);
+            }
+            f.last_points = vec![Point3::new(0.0, 0.0, 0.0)];
+            f.state.edge = Some(EdgeKey(7));
+            // Point following's gaps need a point segment as the current one.
+            if from == Mode::Point {
+                let set =
+                    SensorSet::new(vec![Point3::new(0.0, 0.0, 0.0)], vec![-Vector3::z_axis()])
+                        .expect("set");
+                f.model.update(&set).expect("update");
+                f.state.segment = f.model.segments().next().map(surface::Segment::id);
+            }
+            f.state.mode = Mode::Gap;
+            f.state.gap = Some(Gap {
+                from,
+                targets: vec![first, second],
+                next: 0,
+                sensor: None,
+                steps_on_target: 0,
+            });
+            let Flow::Go(_) = f.gap_following(&cp) else {
+                panic!("{rule:?} {from:?}: gap following should direct the control point");
+            };
+            let gap = f.state.gap.clone().expect("still gap following");
+            assert_eq!(gap.next, next, "{rule:?} from {from:?}");
+        }
+    }
+
     /// The O(1) route length equals walking the perimeter both ways.
     #[test]
     fn perimeter_distance_equals_walking() {
@@ -808,7 +876,7 @@ mod tests {
     }
 
     /// point3 over the floor z = 0 after a few steps: a model with a polygon.
-    fn floor_follower() -> (Follower, SegmentId) {
+    pub(super) fn floor_follower() -> (Follower, SegmentId) {
         let robot = robot::builtin("point3").unwrap();
         let model = SurfaceModel::new(surface::SurfaceConfig::default()).unwrap();
         let mut f =

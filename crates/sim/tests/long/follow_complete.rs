@@ -112,6 +112,33 @@ fn point3_completes_block1() {
     assert_complete(&run_to_the_end("block1", "point3"), 910);
 }
 
+/// Issue 24's efficiency with the lattice slice rule (`slices = "lattice"`,
+/// `--slices lattice`): point3 completes the cube and block1 by
+/// acceptance 1's criteria, in fewer sets per square metre than with the
+/// thesis' slices (1017 and 1001 on 2026-11-26; the lattice rule then took
+/// 843 and 956). Issue 24 asks for ≤ 450, not reached yet; the bound here
+/// keeps what was gained.
+#[test]
+#[ignore = "whole runs: release profile, run by .ci/run"]
+fn point3_completes_the_cube_and_block1_with_lattice_slices() {
+    for (scene, pudney, ceiling) in [("cube", 693, 900.0), ("block1", 910, 990.0)] {
+        let mut options = FollowRunOptions {
+            robot: Some("point3".to_owned()),
+            ..FollowRunOptions::default()
+        };
+        options.config.follow.slices = follow::SliceRule::Lattice;
+        let run = run_with(scene, options);
+        assert_complete(&run, pudney);
+        let score = run.score.as_ref().expect("a built-in scene is scored");
+        let per_m2 = run.episode.rows.len() as f64 / score.modelled_m2;
+        println!("{scene} / point3, lattice slices: {per_m2:.0} sets/m²");
+        assert!(
+            per_m2 <= ceiling,
+            "{scene}: {per_m2:.0} sets/m² (at most {ceiling})"
+        );
+    }
+}
+
 /// Acceptance 3 for point3: with range noise σ = λ/5 the cube and block1
 /// complete under acceptance 1's criteria with corners at ≥ 60 % of the
 /// corners, and no stray polygon (on no true face) holds more than 0.5 % of the
