@@ -585,8 +585,16 @@ fn a_full_disk_while_explore_writes_leaves_no_partial_output() {
 fn no_local_candidates_is_explained() {
     let dir = tempfile::tempdir().unwrap();
     let scenario = dir.path().join("b.toml");
-    let text = ok(&["scenario", "show", "bridge1"])
-        .replace("local_candidates = 200", "local_candidates = 0");
+    let text: String = ok(&["scenario", "show", "bridge1"])
+        .lines()
+        .map(|l| {
+            if l.starts_with("local_candidates = ") {
+                "local_candidates = 0\n".to_owned()
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
     assert!(text.contains("local_candidates = 0"));
     std::fs::write(&scenario, text).unwrap();
     let out = dir.path().join("run");
