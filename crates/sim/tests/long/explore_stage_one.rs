@@ -68,9 +68,10 @@ fn spearman_by_hand() {
 #[test]
 #[ignore = "seconds in release; run by .ci/run"]
 fn predicted_gain_ranks_candidates_like_the_gain_their_sweeps_bring() {
-    // Three decisions along a run. At each, every candidate's sweep is
-    // simulated in the true scene and integrated into a copy of the map:
-    // the weighted H1 it really removes is the second method.
+    // Three decisions along a run. At each, every candidate's motion (with
+    // its scans) and sweep are simulated in the true scene and integrated
+    // into a copy of the map: the weighted H1 they really remove is the
+    // second method.
     let loaded = Scenario::load("bridge1").unwrap();
     let (setup, world) = sim::explore_job::explore_setup(&loaded, &cached()).unwrap();
     let explore::Setup {
@@ -101,15 +102,25 @@ fn predicted_gain_ranks_candidates_like_the_gain_their_sweeps_bring() {
         let (mut predicted, mut obtained) = (Vec::new(), Vec::new());
         for c in d.candidates.iter().step_by(stride) {
             let mut trial = stage.clone();
+            // The arm moves there in a straight joint motion, scanning as
+            // it goes (what the prediction predicts), then sweeps.
             let mut other = SimRig::new(
                 robot.clone(),
                 Arc::clone(&world),
                 wfb,
-                &c.q,
+                &q,
                 Some(scanner.clone()),
                 1,
             )
             .unwrap();
+            let step = config.motion_scan_step_deg.to_radians();
+            if step > 0.0 {
+                let mut on_the_way = sensor::SweepBuilder::new(scanner.bearings_rad()).unwrap();
+                hw::scan_motion(&mut other, &robot, &wfb, &c.q, step, &mut on_the_way).unwrap();
+                trial.integrate_motion(&on_the_way.finish().unwrap());
+            } else {
+                other.move_to(&c.q).unwrap();
+            }
             let sw = tilt_sweep(&mut other, &robot, &wfb, &config.sweep, &mut |_, _| {}).unwrap();
             trial.integrate(&sw);
             predicted.push(h1 - c.f[0]);
