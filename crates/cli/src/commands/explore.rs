@@ -72,7 +72,7 @@ pub struct ExploreArgs {
     lrc_cache: Option<PathBuf>,
     /// How Stage One chooses its viewpoints: `information` (the most
     /// information predicted, scanning while the arm moves, links kept
-    /// [explore] stage_one_clearance_m from measured points) or `thesis`
+    /// `[explore] stage_one_clearance_m` from measured points) or `thesis`
     /// (Paul's rank sum on the Pareto front, scans at viewpoints only,
     /// dist(Q) > 1 alone).
     #[arg(long, default_value = "information")]

@@ -78,9 +78,15 @@ fn predicted_gain_ranks_candidates_like_the_gain_their_sweeps_bring() {
     // straight motion, and against the motion's real 1° scans it ranked the
     // candidates of the second decision at Spearman 0.77 (2026-11-26): not
     // yet bounded here.
-    let mut config = explore::ExploreConfig::default();
-    config.motion_scan_step_deg = 0.0;
-    config.prediction.motion_poses = 0;
+    let defaults = explore::ExploreConfig::default();
+    let config = explore::ExploreConfig {
+        motion_scan_step_deg: 0.0,
+        prediction: explore::PredictionConfig {
+            motion_poses: 0,
+            ..defaults.prediction
+        },
+        ..defaults
+    };
     let options = ExploreOptions {
         config: Some(config),
         ..cached()
