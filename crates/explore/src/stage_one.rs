@@ -466,12 +466,14 @@ impl StageOne {
     /// on the Pareto front, plan a safe path; a choice without a safe path is
     /// dropped and the choice made again, up to `max_plan_attempts`.
     ///
-    /// A candidate the roadmap cannot reach may be reached by a straight
-    /// motion from a pose in `visited` (the viewpoints so far) that the
-    /// roadmap reaches. With `points` (what the scanner measured), the path and the chosen
-    /// candidate's sweep must also keep `stage_one_clearance_m` from them
-    /// ([`plan::ClearanceChecker`]); a chosen candidate whose sweep does not
-    /// is dropped like one without a path.
+    /// The choice is `selection`'s: Paul's rank sum on the Pareto front, or
+    /// the most information. A candidate the roadmap cannot reach may be
+    /// reached by a straight motion from a pose in `visited` (the viewpoints
+    /// so far) that the roadmap reaches. With `points` (what the scanner
+    /// measured), candidates must stand, and their path and sweep keep,
+    /// `stage_one_clearance_m` from them ([`plan::ClearanceChecker`]); a
+    /// chosen candidate whose sweep does not is dropped like one without a
+    /// path.
     pub fn decide(
         &self,
         q: &[Real],
@@ -520,8 +522,9 @@ impl StageOne {
             if attempt == 0 {
                 let front = pareto::pareto_front(&f, &SENSES);
                 front_size = front.len();
+                // `front` indexes the pool (the clear candidates).
                 for &i in &front {
-                    on_front[i] = true;
+                    on_front[pool[i]] = true;
                 }
             }
             let picked = match self.config.selection {

@@ -64,6 +64,8 @@ impl PointClearance {
     /// inside a capsule). The links before the first actuated joint stand
     /// on whatever carries the robot and are left out, as
     /// [`crate::contact::min_clearance`] leaves them.
+    /// The cells looked in grow as the cube of `search_m` past each
+    /// capsule: callers search as far as the clearance they need.
     pub fn robot_clearance(
         &self,
         robot: &Robot,

@@ -400,8 +400,8 @@ impl Roadmap {
         // An edge is usable when both its nodes and the motion along it are
         // safe. The search is lazy first (Lazy PRM): A* over the edges
         // between safe nodes whose motion is not yet found unsafe, then the
-        // path's motions checked from
-        // the start, and at the first unusable one the search is made again
+        // path's motions checked from the start, and at the first unusable
+        // one the search is made again
         // without it. A path whose every edge checks out is a shortest one
         // among the usable edges, found checking only the edges of the
         // paths tried. After `LAZY_ROUNDS` searches (a goal no safe path
@@ -431,8 +431,6 @@ impl Roadmap {
             edge_ok.insert(e.id().index(), ok);
             ok
         };
-        // The lazy rounds check the nodes A* meets (one configuration each)
-        // and leave the motions (many) to the paths found.
         let may_be_usable = |e: petgraph::graph::EdgeReference<'_, Real>| -> bool {
             let mut guard = checks.borrow_mut();
             let (node_ok, edge_ok, checker) = &mut *guard;
@@ -446,6 +444,8 @@ impl Roadmap {
                     .or_insert_with(|| checker.pose_ok(config(*w)))
             }) && checker.motion_may_be_ok(config(u), config(v))
         };
+        // The lazy rounds check the nodes A* meets (one configuration each)
+        // and leave the motions (many) to the paths found.
         let not_known_bad = |e: petgraph::graph::EdgeReference<'_, Real>| -> bool {
             let mut guard = checks.borrow_mut();
             let (node_ok, edge_ok, checker) = &mut *guard;
@@ -466,10 +466,9 @@ impl Roadmap {
                 |v| self.distance(config(v), to),
             )?;
             let all_usable = route.windows(2).all(|w| {
-                graph
-                    .edges_connecting(w[0], w[1])
-                    .min_by(|a, b| a.weight().total_cmp(b.weight()))
-                    .is_some_and(check_edge)
+                // Every edge between the two nodes is checked until one is
+                // usable, so the edge A* took is known after a failure.
+                graph.edges_connecting(w[0], w[1]).any(check_edge)
             });
             if all_usable {
                 found = Some((total, route));
@@ -491,10 +490,9 @@ impl Roadmap {
                     |v| self.distance(config(v), to),
                 )?;
                 if route.windows(2).all(|w| {
-                    graph
-                        .edges_connecting(w[0], w[1])
-                        .min_by(|a, b| a.weight().total_cmp(b.weight()))
-                        .is_some_and(check_edge)
+                    // Every edge between the two nodes is checked until one is
+                    // usable, so the edge A* took is known after a failure.
+                    graph.edges_connecting(w[0], w[1]).any(check_edge)
                 }) {
                     break (total, route);
                 }
