@@ -17,5 +17,7 @@ mod sweep;
 mod traits;
 
 pub use error::HwError;
-pub use sweep::{scan_motion, tilt_sweep};
+pub use sweep::{
+    ScannedMotion, StepGuard, scan_motion, tilt_joint, tilt_sweep, tilt_sweep_through,
+};
 pub use traits::{Arm, LineScanner, RangeSensors, ScanReadings};

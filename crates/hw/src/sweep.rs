@@ -21,13 +21,7 @@ pub fn tilt_sweep<R: Arm + LineScanner + ?Sized>(
 ) -> Result<Sweep, HwError> {
     cfg.validate()?;
     let q0 = rig.joints();
-    let j = cfg.joint - 1;
-    if j >= q0.len() {
-        return Err(HwError::TiltJoint {
-            joint: cfg.joint,
-            dof: q0.len(),
-        });
-    }
+    let j = tilt_joint(cfg, q0.len())?;
     let limits = robot
         .limits()
         .get(j)
@@ -35,34 +29,95 @@ pub fn tilt_sweep<R: Arm + LineScanner + ?Sized>(
         .flatten()
         .map(|l| (l.min, l.max));
     let tilts = cfg.tilt_values(q0[j], limits);
+    tilt_sweep_through(rig, robot, world_from_base, j, &tilts, progress)
+}
+
+/// The 0-based index of `cfg`'s tilt joint on an arm of `dof` joints.
+pub fn tilt_joint(cfg: &SweepConfig, dof: usize) -> Result<usize, HwError> {
+    let j = cfg.joint.wrapping_sub(1);
+    if j >= dof {
+        return Err(HwError::TiltJoint {
+            joint: cfg.joint,
+            dof,
+        });
+    }
+    Ok(j)
+}
+
+/// Sweep the scanner through the given values of joint `j` (0-based),
+/// scanning at each, and return the arm to where it started; each scan is
+/// placed as in [`tilt_sweep`]. `tilts` is not empty.
+pub fn tilt_sweep_through<R: Arm + LineScanner + ?Sized>(
+    rig: &mut R,
+    robot: &Robot,
+    world_from_base: &Isometry3,
+    j: usize,
+    tilts: &[geom::Real],
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Sweep, HwError> {
+    let q0 = rig.joints();
+    if j >= q0.len() {
+        return Err(HwError::TiltJoint {
+            joint: j + 1,
+            dof: q0.len(),
+        });
+    }
     let mut builder = SweepBuilder::new(rig.bearings_rad())?;
     let mut q = q0.clone();
     for (k, &t) in tilts.iter().enumerate() {
         q[j] = t;
         rig.move_to(&q)?;
-        let readings = rig.scan()?;
-        let reached = rig.joints();
-        let pose = robot
-            .scanner_pose(&reached)?
-            .map(|p| world_from_base * p)
-            .ok_or(HwError::NoScanner)?;
-        builder.push_scan(
-            &pose,
-            &readings.ranges_m,
-            &readings.intensities,
-            readings.truth_materials.as_deref(),
-        )?;
+        scan_into(rig, robot, world_from_base, &mut builder)?;
         progress(k + 1, tilts.len());
     }
     rig.move_to(&q0)?;
     Ok(builder.finish()?)
 }
 
+/// Scan where the arm stands and add the scan to `builder` at the scanner
+/// pose of the joints the arm reports.
+fn scan_into<R: Arm + LineScanner + ?Sized>(
+    rig: &mut R,
+    robot: &Robot,
+    world_from_base: &Isometry3,
+    builder: &mut SweepBuilder,
+) -> Result<(), HwError> {
+    let readings = rig.scan()?;
+    let reached = rig.joints();
+    let pose = robot
+        .scanner_pose(&reached)?
+        .map(|p| world_from_base * p)
+        .ok_or(HwError::NoScanner)?;
+    builder.push_scan(
+        &pose,
+        &readings.ranges_m,
+        &readings.intensities,
+        readings.truth_materials.as_deref(),
+    )?;
+    Ok(())
+}
+
+/// How a [`scan_motion`] went.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ScannedMotion {
+    /// Steps taken (a scan after each).
+    pub steps: usize,
+    /// The arm reached the goal (the guard never stopped it).
+    pub completed: bool,
+}
+
+/// What [`scan_motion`] asks before each step: `(at, next, scanned)`, where
+/// the arm is, where the step would take it, and what was scanned so far;
+/// `false` keeps the arm where it is.
+pub type StepGuard<'a> = dyn FnMut(&[geom::Real], &[geom::Real], &SweepBuilder) -> bool + 'a;
+
 /// Scan while moving: take the arm from where it stands to `to` in equal
 /// steps of at most `step_rad` on every joint, scanning after each step (a
 /// line scanner keeps scanning while the arm moves; the Hokuyo of A§5.1
 /// delivers a scan every 100 ms), each scan added to `builder` at the
-/// scanner pose of the joints the arm reports. Returns the number of scans.
+/// scanner pose of the joints the arm reports. Before each step,
+/// `guard(at, next, builder)` sees where the arm is, where the step would
+/// take it, and what was scanned so far; when it says no, the arm stays.
 pub fn scan_motion<R: Arm + LineScanner + ?Sized>(
     rig: &mut R,
     robot: &Robot,
@@ -70,7 +125,8 @@ pub fn scan_motion<R: Arm + LineScanner + ?Sized>(
     to: &[geom::Real],
     step_rad: geom::Real,
     builder: &mut SweepBuilder,
-) -> Result<usize, HwError> {
+    guard: &mut StepGuard<'_>,
+) -> Result<ScannedMotion, HwError> {
     let from = rig.joints();
     let span = from
         .iter()
@@ -89,21 +145,19 @@ pub fn scan_motion<R: Arm + LineScanner + ?Sized>(
         } else {
             from.iter().zip(to).map(|(a, b)| a + (b - a) * t).collect()
         };
+        if !guard(&rig.joints(), &q, builder) {
+            return Ok(ScannedMotion {
+                steps: s - 1,
+                completed: false,
+            });
+        }
         rig.move_to(&q)?;
-        let readings = rig.scan()?;
-        let reached = rig.joints();
-        let pose = robot
-            .scanner_pose(&reached)?
-            .map(|p| world_from_base * p)
-            .ok_or(HwError::NoScanner)?;
-        builder.push_scan(
-            &pose,
-            &readings.ranges_m,
-            &readings.intensities,
-            readings.truth_materials.as_deref(),
-        )?;
+        scan_into(rig, robot, world_from_base, builder)?;
     }
-    Ok(steps)
+    Ok(ScannedMotion {
+        steps,
+        completed: true,
+    })
 }
 
 #[cfg(test)]
@@ -160,8 +214,31 @@ mod tests {
         };
         let world = Isometry3::translation(0.0, 0.0, 0.2);
         let mut builder = SweepBuilder::new(&rig.bearings).unwrap();
-        let n = scan_motion(&mut rig, &robot, &world, &to, 0.1, &mut builder).unwrap();
-        assert_eq!(n, 5);
+        let mut seen = Vec::new();
+        let n = scan_motion(
+            &mut rig,
+            &robot,
+            &world,
+            &to,
+            0.1,
+            &mut builder,
+            &mut |at, _, b| {
+                seen.push((at.to_vec(), b.scan_count()));
+                true
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            n,
+            ScannedMotion {
+                steps: 5,
+                completed: true
+            }
+        );
+        // The guard saw each step's start and the scans before it.
+        assert_eq!(seen.len(), 5);
+        assert_eq!(seen[0], (from.clone(), 0));
+        assert_eq!(seen[3], (rig.moves[2].clone(), 3));
         assert_eq!(rig.q, to);
         assert_eq!(rig.moves.len(), 5);
         for (k, q) in rig.moves.iter().enumerate() {
@@ -183,8 +260,46 @@ mod tests {
         // Standing still: one scan where the arm stands.
         let mut builder = SweepBuilder::new(&rig.bearings).unwrap();
         assert_eq!(
-            scan_motion(&mut rig, &robot, &world, &to, 0.1, &mut builder).unwrap(),
+            scan_motion(
+                &mut rig,
+                &robot,
+                &world,
+                &to,
+                0.1,
+                &mut builder,
+                &mut |_, _, _| true
+            )
+            .unwrap()
+            .steps,
             1
         );
+        // A guard that refuses the third step: two steps, two scans, the
+        // arm where the second left it.
+        let mut rig = Rig {
+            q: from.clone(),
+            bearings: vec![0.0],
+            moves: Vec::new(),
+        };
+        let mut builder = SweepBuilder::new(&rig.bearings).unwrap();
+        let done = scan_motion(
+            &mut rig,
+            &robot,
+            &world,
+            &to,
+            0.1,
+            &mut builder,
+            &mut |_, _, b| b.scan_count() < 2,
+        )
+        .unwrap();
+        assert_eq!(
+            done,
+            ScannedMotion {
+                steps: 2,
+                completed: false
+            }
+        );
+        assert_eq!(builder.scan_count(), 2);
+        assert_eq!(rig.moves.len(), 2);
+        assert_eq!(rig.q, rig.moves[1]);
     }
 }

@@ -471,6 +471,11 @@ impl SweepBuilder {
         self.poses.len()
     }
 
+    /// The points of the scans added so far, in the order they came.
+    pub fn points(&self) -> &[SweepPoint] {
+        &self.points
+    }
+
     /// The sweep (empty when no ray returned).
     pub fn finish(self) -> Result<Sweep, SensorError> {
         let mut sweep = Sweep::from_points(self.points)?;
