@@ -117,7 +117,7 @@ pub struct ClearanceChecker<'a, C> {
     here: (Vec<Real>, Real),
 }
 
-impl<'a, C: MotionChecker> ClearanceChecker<'a, C> {
+impl<'a, C> ClearanceChecker<'a, C> {
     /// `inner`'s checks and `clearance_m` from `points`, the arm standing
     /// at `here`.
     pub fn new(
@@ -163,6 +163,26 @@ impl<'a, C: MotionChecker> ClearanceChecker<'a, C> {
             self.clearance_m
         }
     }
+
+    /// Whether the motion `a` → `b` keeps the clearance it needs at every
+    /// configuration `safety` checks along it (the wrapped checker is not
+    /// asked).
+    pub fn motion_clears(&self, a: &[Real], b: &[Real]) -> bool {
+        if self.clearance_m <= 0.0 {
+            return true;
+        }
+        let from_here = a == self.here.0.as_slice() || b == self.here.0.as_slice();
+        self.safety
+            .interpolate(a, b)
+            .iter()
+            .all(|c| self.clears(c, from_here))
+    }
+
+    /// Whether configuration `c` has the clearance it needs on a motion
+    /// that starts or ends where the arm stands (`from_here`) or not.
+    pub fn clears(&self, c: &[Real], from_here: bool) -> bool {
+        self.clearance_m <= 0.0 || self.clearance(c) >= self.needed(from_here)
+    }
 }
 
 impl<C: MotionChecker> MotionChecker for ClearanceChecker<'_, C> {
@@ -175,18 +195,7 @@ impl<C: MotionChecker> MotionChecker for ClearanceChecker<'_, C> {
     }
 
     fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
-        if !self.inner.motion_ok(a, b) {
-            return false;
-        }
-        if self.clearance_m <= 0.0 {
-            return true;
-        }
-        let from_here = a == self.here.0.as_slice() || b == self.here.0.as_slice();
-        let needed = self.needed(from_here);
-        self.safety
-            .interpolate(a, b)
-            .iter()
-            .all(|c| self.clearance(c) >= needed)
+        self.inner.motion_ok(a, b) && self.motion_clears(a, b)
     }
 
     /// The wrapped checker's answer alone: the clearance is left to
