@@ -169,7 +169,7 @@ impl Default for ExploreConfig {
             local_candidates: 600,
             local_reach_m: 0.6,
             link_k: 10,
-            max_plan_attempts: 100,
+            max_plan_attempts: 400,
             pose: plan::PoseConfig::default(),
             stage_two_max_viewpoints: 20,
             significant_h3: 0.5,

@@ -249,10 +249,11 @@ impl StageOne {
     }
 
     /// Why Stage One should stop now, if it should: A§3.2.4 after at least
-    /// two sweeps, or the budget.
-    pub fn termination(&self) -> Option<Termination> {
+    /// two sweeps when the arm `arrived` at the viewpoint it chose (a motion
+    /// stopped short of it does not judge the choice), or the budget.
+    pub fn termination(&self, arrived: bool) -> Option<Termination> {
         let n = self.history.len();
-        if n >= 3 {
+        if n >= 3 && arrived {
             let (h10, h20) = self.history[0];
             let (a1, a2) = self.history[n - 2];
             let (b1, b2) = self.history[n - 1];
@@ -269,13 +270,24 @@ impl StageOne {
     /// joints held).
     pub fn sweep_range(&self, q: &[Real]) -> (Vec<Real>, Vec<Real>) {
         let j = self.tilt_joint;
-        let limits = self.robot().limits()[j].map(|l| (l.min, l.max));
-        let tilts = self.config.sweep.tilt_values(q[j], limits);
+        let tilts = self.sweep_tilts(q);
         let mut lo = q.to_vec();
         let mut hi = q.to_vec();
         lo[j] = tilts.first().copied().unwrap_or(q[j]);
         hi[j] = tilts.last().copied().unwrap_or(q[j]);
         (lo, hi)
+    }
+
+    /// The tilt joint's values a sweep at `q` scans at, in order.
+    pub fn sweep_tilts(&self, q: &[Real]) -> Vec<Real> {
+        let j = self.tilt_joint;
+        let limits = self.robot().limits()[j].map(|l| (l.min, l.max));
+        self.config.sweep.tilt_values(q[j], limits)
+    }
+
+    /// The index of the joint that tilts the scanner.
+    pub fn tilt_joint(&self) -> usize {
+        self.tilt_joint
     }
 
     fn robot(&self) -> &Robot {
@@ -580,8 +592,50 @@ const VISITED_BRIDGES: usize = 5;
 /// nearest first) from which a straight motion reaches the goal. A Stage Two
 /// pose is chosen by LM anywhere in free space, often beside a viewpoint
 /// the arm took but far from every roadmap node whose surroundings are known
-/// free.
+/// free. When neither reaches the goal (the arm may stand where such a
+/// bridge took it, beside a part of the roadmap cut off from the rest, and
+/// the way it came is the way out), the path leaves by a straight motion to
+/// the nearest visited pose one reaches and goes on from there as above.
 pub(crate) fn path_via_visited(
+    roadmap: &plan::Roadmap,
+    visited: &[&[Real]],
+    from: &[Real],
+    goal: &[Real],
+    link_k: usize,
+    checker: &mut dyn plan::MotionChecker,
+) -> Option<plan::Path> {
+    if let Some(path) = path_into(roadmap, visited, from, goal, link_k, checker) {
+        return Some(path);
+    }
+    // The way out: the nearest visited pose a straight motion reaches.
+    let (d, v) = nearest_visited(roadmap, visited, from)
+        .into_iter()
+        .find(|&(_, v)| v != from && v != goal && checker.motion_ok(from, v))?;
+    let mut path = path_into(roadmap, visited, v, goal, link_k, checker)?;
+    path.waypoints.insert(0, from.to_vec());
+    path.cost += d;
+    Some(path)
+}
+
+/// The [`VISITED_BRIDGES`] poses of `visited` nearest `to`, nearest first,
+/// with their distance.
+fn nearest_visited<'v>(
+    roadmap: &plan::Roadmap,
+    visited: &[&'v [Real]],
+    to: &[Real],
+) -> Vec<(Real, &'v [Real])> {
+    let mut near: Vec<(Real, &[Real])> = visited
+        .iter()
+        .map(|v| (roadmap.distance(v, to), *v))
+        .collect();
+    near.sort_by(|a, b| a.0.total_cmp(&b.0));
+    near.dedup_by(|a, b| a.1 == b.1);
+    near.truncate(VISITED_BRIDGES);
+    near
+}
+
+/// [`path_via_visited`] without leaving `from` by a visited pose.
+fn path_into(
     roadmap: &plan::Roadmap,
     visited: &[&[Real]],
     from: &[Real],
@@ -592,13 +646,7 @@ pub(crate) fn path_via_visited(
     if let Some(path) = roadmap.plan(from, goal, link_k, checker) {
         return Some(path);
     }
-    let mut near: Vec<(Real, &[Real])> = visited
-        .iter()
-        .map(|v| (roadmap.distance(v, goal), *v))
-        .collect();
-    near.sort_by(|a, b| a.0.total_cmp(&b.0));
-    near.dedup_by(|a, b| a.1 == b.1);
-    for (d, v) in near.into_iter().take(VISITED_BRIDGES) {
+    for (d, v) in nearest_visited(roadmap, visited, goal) {
         if v == from || !checker.motion_ok(v, goal) {
             continue;
         }
@@ -658,7 +706,78 @@ fn first_link_moved_by(robot: &Robot, a: usize) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use super::{most_information, subsample};
+    #![allow(clippy::unwrap_used)]
+    use super::{most_information, path_via_visited, subsample};
+    use geom::Real;
+    use plan::{Edge, MotionChecker, NodeId, Roadmap, RoadmapParts};
+
+    /// A 2-D joint space with forbidden boxes, motions checked every 0.01.
+    struct Boxes(Vec<([Real; 2], [Real; 2])>);
+
+    impl Boxes {
+        fn inside(&self, q: &[Real]) -> bool {
+            self.0
+                .iter()
+                .any(|(lo, hi)| (0..2).all(|i| q[i] > lo[i] && q[i] < hi[i]))
+        }
+    }
+
+    impl MotionChecker for Boxes {
+        fn pose_ok(&mut self, q: &[Real]) -> bool {
+            !self.inside(q)
+        }
+        fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
+            let len = (a[0] - b[0]).hypot(a[1] - b[1]);
+            let steps = (len / 0.01).ceil().max(1.0) as usize;
+            (0..=steps).all(|s| {
+                let t = s as Real / steps as Real;
+                !self.inside(&[a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])])
+            })
+        }
+    }
+
+    /// The arm stands at (7.5, 8.5), beside two roadmap nodes joined only to
+    /// each other; the rest of the roadmap is a chain along y = 0 to the
+    /// goal (2, 0.5). A box blocks the straight way to the goal, another the
+    /// straight way from the one viewpoint visited, (0.5, 5), to the goal.
+    /// Neither the roadmap nor a last straight motion from the viewpoint
+    /// reaches the goal: the path leaves by the straight motion to the
+    /// viewpoint and goes on through the chain.
+    #[test]
+    fn a_path_leaves_by_a_visited_pose_when_the_roadmap_is_cut_off() {
+        let edge = |a: u32, b: u32, cost: Real| Edge {
+            a: NodeId(a),
+            b: NodeId(b),
+            cost,
+        };
+        let roadmap = Roadmap::from_parts(RoadmapParts {
+            dof: 2,
+            nodes: vec![
+                vec![0.0, 0.0],
+                vec![1.0, 0.0],
+                vec![2.0, 0.0],
+                vec![8.0, 8.0],
+                vec![8.0, 9.0],
+            ],
+            weights: vec![1.0, 1.0],
+            edges: vec![edge(0, 1, 1.0), edge(1, 2, 1.0), edge(3, 4, 1.0)],
+        })
+        .unwrap();
+        let mut checker = Boxes(vec![([2.5, 0.0], [4.5, 4.0]), ([1.0, 2.0], [1.6, 3.5])]);
+        let (from, goal, visited) = ([7.5, 8.5], [2.0, 0.5], [0.5, 5.0]);
+        assert!(!checker.motion_ok(&from, &goal));
+        assert!(!checker.motion_ok(&visited, &goal));
+        assert!(roadmap.plan(&from, &goal, 2, &mut checker).is_none());
+        let path = path_via_visited(&roadmap, &[&visited], &from, &goal, 2, &mut checker).unwrap();
+        assert_eq!(path.waypoints[0], from.to_vec());
+        assert_eq!(path.waypoints[1], visited.to_vec());
+        assert_eq!(path.waypoints.last().unwrap(), &goal.to_vec());
+        for w in path.waypoints.windows(2) {
+            assert!(checker.motion_ok(&w[0], &w[1]), "{w:?}");
+        }
+        // Without the visited pose there is no way.
+        assert!(path_via_visited(&roadmap, &[], &from, &goal, 2, &mut checker).is_none());
+    }
 
     /// By hand: H now (100, 10), H₀ (200, 20). Candidate 0 reveals 20 of H1
     /// (0.1) and 1 of H2 (0.05): 0.15; candidate 1 reveals 0 and 4 (0.2);
