@@ -4,7 +4,7 @@
 
 use crate::judge::Judge;
 use crate::{ExploreError, MappingConfig};
-use geom::{Real, TriMesh};
+use geom::{Real, TriMesh, Vector3};
 use record::ViewpointRecord;
 use sensor::SweepPoint;
 
@@ -18,6 +18,9 @@ pub struct DiscMap {
     pub discs: Vec<map::Disc>,
     /// Per disc: the viewpoint (index into `viewpoints`) that saw it.
     pub viewpoint: Vec<usize>,
+    /// Per disc: its unit normal turned toward the scanner of its nearest
+    /// measured point (the side of the surface that was seen).
+    pub facing: Vec<Vector3>,
     /// Per disc: its segment (into `segments`).
     pub segment: Vec<map::SegmentId>,
     /// The segments: disc indices, ascending.
@@ -131,15 +134,17 @@ pub(crate) fn disc_map(
         .map(|p| [p.point.x, p.point.y, p.point.z])
         .collect();
     let tree: ImmutableKdTree<Real, 3> = ImmutableKdTree::new_from_slice(&pts);
-    let viewpoint: Vec<usize> = sld
+    // Per disc, its nearest measured point: its viewpoint, and the side
+    // its scanner saw the disc from.
+    let nearest: Vec<usize> = sld
         .discs
         .iter()
         .map(|d| {
-            let n =
-                tree.approx_nearest_one::<SquaredEuclidean>(&[d.centre.x, d.centre.y, d.centre.z]);
-            cloud_viewpoint[n.item as usize]
+            tree.approx_nearest_one::<SquaredEuclidean>(&[d.centre.x, d.centre.y, d.centre.z])
+                .item as usize
         })
         .collect();
+    let viewpoint: Vec<usize> = nearest.iter().map(|&n| cloud_viewpoint[n]).collect();
     let poses: Vec<map::segment::JointPose> = viewpoint
         .iter()
         .map(|&k| {
@@ -162,10 +167,24 @@ pub(crate) fn disc_map(
             segment[d.0] = map::SegmentId(s);
         }
     }
+    let facing: Vec<Vector3> = sld
+        .discs
+        .iter()
+        .zip(&nearest)
+        .map(|(d, &n)| {
+            let normal = d.normal.into_inner();
+            if normal.dot(&(cloud[n].origin - d.centre)) < 0.0 {
+                -normal
+            } else {
+                normal
+            }
+        })
+        .collect();
     let true_material = sld
         .discs
         .iter()
-        .map(|d| judge.true_material(&d.centre))
+        .zip(&facing)
+        .map(|(d, f)| judge.true_material(&d.centre, f))
         .collect();
     let material_names = materials.iter().map(|m| m.name.clone()).collect();
     Ok(DiscMap {
@@ -174,6 +193,7 @@ pub(crate) fn disc_map(
         segment,
         segments,
         true_material,
+        facing,
         material_names,
         ..DiscMap::default()
     })
@@ -213,6 +233,7 @@ mod tests {
             h3: vec![0.69, 0.33],
             observations: vec![0, 2],
             h3_total: Some(1.02),
+            ..DiscMap::default()
         };
         let run = d.table().to_csv().unwrap();
         let mut contract = Vec::new();

@@ -4,7 +4,7 @@
 //! truth and runs with [`NoJudge`].
 
 use crate::ExploreError;
-use geom::{Point3, Real};
+use geom::{Point3, Real, Vector3};
 use sensor::Sweep;
 
 /// The safety a judge has tallied so far (kept in the checkpoint, so a
@@ -34,8 +34,9 @@ pub trait Judge {
     /// The share of A1's true surfaces covered so far.
     fn coverage_a1(&self) -> Option<Real>;
     /// The material (index into the run's material table) of the true
-    /// surface nearest `centre`.
-    fn true_material(&self, centre: &Point3) -> Option<usize>;
+    /// surface a disc at `centre` stands for; `facing` is the disc's normal
+    /// turned toward the scanner that saw it.
+    fn true_material(&self, centre: &Point3, facing: &Vector3) -> Option<usize>;
     /// The tally so far.
     fn tally(&self) -> SafetyTally;
     /// Go on from a checkpoint's tally.
@@ -63,7 +64,7 @@ impl Judge for NoJudge {
         None
     }
 
-    fn true_material(&self, _: &Point3) -> Option<usize> {
+    fn true_material(&self, _: &Point3, _: &Vector3) -> Option<usize> {
         None
     }
 

@@ -131,13 +131,23 @@ impl Materials {
         let tree: kiddo::ImmutableKdTree<Real, 3> = kiddo::ImmutableKdTree::new_from_slice(&coords);
         let origin = pts[pts.len() / 2].origin;
         let (lrc, patch, reach) = (&self.lrc, self.patch_m, self.reach_m);
+        let facing = &d.facing;
         let results: Vec<(usize, Vec<Real>)> = d
             .discs
             .par_iter()
             .enumerate()
             .filter(|(_, disc)| (disc.centre - origin).norm() <= reach)
             .filter_map(|(i, disc)| {
-                let obs = patch_observation(pts, &tree, &disc.centre, patch);
+                let mut obs = patch_observation(pts, &tree, &disc.centre, patch);
+                // Only returns from the seen side of the disc's surface: a
+                // patch around a disc on one face of a thin wall (the right
+                // web seen from under the beam) also holds the returns of
+                // the other face (its containment sheet seen from the
+                // channel), a few millimetres away.
+                if let Some(f) = facing.get(i) {
+                    obs.returns
+                        .retain(|r| (r.origin - disc.centre).dot(f) > 0.0);
+                }
                 lrc.classify(&obs).ok().map(|r| (i, r.posterior))
             })
             .collect();

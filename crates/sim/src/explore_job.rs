@@ -10,7 +10,7 @@ use crate::metrics::{CoverageReport, CoverageTracker};
 use crate::{SimError, SimRig};
 use blast::{BlastConfig, BlastInputs, BlastPlan};
 use explore::{ExploreConfig, ExploreRun, Judge, SafetyTally, Setup, SetupInputs};
-use geom::{Isometry3, Point3, Real};
+use geom::{Isometry3, Point3, Real, Vector3};
 use map::TsdfConfig;
 use plan::contact::{min_clearance, motion_contacts, robot_contacts, smallest_link_radius};
 use rayon::prelude::*;
@@ -100,8 +100,9 @@ const CLEARANCE_SEARCH_M: Real = 0.5;
 /// Cell size of the observability test, metres.
 const OBSERVABLE_CELL_M: Real = 0.05;
 
-/// Within this distance of a disc's centre, the nearest true surface gives
-/// the disc its true material, metres.
+/// A disc's true material is that of the true surface a ray from this far
+/// out on its seen side meets within twice this distance, or else of the
+/// nearest true surface within this distance of its centre, metres.
 const TRUE_MATERIAL_SEARCH_M: Real = 0.05;
 
 /// The ground truth's judgement of an exploration: contacts of the robot's
@@ -229,11 +230,24 @@ impl Judge for ExploreJudge {
         self.trackers.first().map(CoverageTracker::fraction)
     }
 
-    fn true_material(&self, centre: &Point3) -> Option<usize> {
+    fn true_material(&self, centre: &Point3, facing: &Vector3) -> Option<usize> {
+        use scene::RayCast;
         let scene = self.world.as_scene()?;
-        scene
-            .closest_point(centre, TRUE_MATERIAL_SEARCH_M)
-            .map(|(_, face, _)| usize::from(scene.triangle_material(face).0))
+        // The surface the scanner saw: a ray from the seen side of the disc
+        // back through its centre. The nearest triangle alone mislabels a
+        // disc on a thin surface over another (the 4 mm containment sheet
+        // on bridge1's web: the disc's centre, within the map's error of
+        // the sheet, is as near the web behind it).
+        let seen = geom::UnitVector3::try_new(*facing, 1e-9).and_then(|n| {
+            let ray = geom::Ray::new(centre + n.into_inner() * TRUE_MATERIAL_SEARCH_M, -n);
+            scene.cast_ray(&ray, 2.0 * TRUE_MATERIAL_SEARCH_M)
+        });
+        match seen {
+            Some(hit) => hit.material.map(|m| usize::from(m.0)),
+            None => scene
+                .closest_point(centre, TRUE_MATERIAL_SEARCH_M)
+                .map(|(_, face, _)| usize::from(scene.triangle_material(face).0)),
+        }
     }
 
     fn tally(&self) -> SafetyTally {
