@@ -134,7 +134,16 @@ fn predicted_gain_ranks_candidates_like_the_gain_their_sweeps_bring() {
             let step = config.motion_scan_step_deg.to_radians();
             if step > 0.0 {
                 let mut on_the_way = sensor::SweepBuilder::new(scanner.bearings_rad()).unwrap();
-                hw::scan_motion(&mut other, &robot, &wfb, &c.q, step, &mut on_the_way).unwrap();
+                hw::scan_motion(
+                    &mut other,
+                    &robot,
+                    &wfb,
+                    &c.q,
+                    step,
+                    &mut on_the_way,
+                    &mut |_, _, _| true,
+                )
+                .unwrap();
                 trial.integrate_motion(&on_the_way.finish().unwrap());
             } else {
                 other.move_to(&c.q).unwrap();
