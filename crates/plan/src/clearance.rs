@@ -9,7 +9,7 @@ use crate::roadmap::MotionChecker;
 use crate::safety::Safety;
 use geom::{Isometry3, Point3, Real};
 use robot::{PosedShape, Robot};
-use std::collections::{HashMap, HashSet};
+use rustc_hash::{FxHashMap, FxHashSet};
 
 /// Measured points are kept one per cube of this side, metres: a point
 /// stands for the others within `√3 · 0.01 / 2 ≈ 9 mm` of it (the range
@@ -26,8 +26,8 @@ fn key(p: &Point3, side: Real) -> [i32; 3] {
 /// The measured points, indexed for clearance queries.
 #[derive(Clone, Debug, Default)]
 pub struct PointClearance {
-    kept: HashSet<[i32; 3]>,
-    cells: HashMap<[i32; 3], Vec<Point3>>,
+    kept: FxHashSet<[i32; 3]>,
+    cells: FxHashMap<[i32; 3], Vec<Point3>>,
 }
 
 impl PointClearance {
