@@ -321,7 +321,9 @@ type Found = (Vec<Real>, BlastMeasure);
 /// A valid, re-measured pose for each disc of `scope` (indices into
 /// `inputs`' discs) against `grid`, or `None`.
 ///
-/// First every disc's LM starts from its own start joints (the viewpoint
+/// Discs that [`BlastPoses::may_reach`] proves out of the nozzle's reach
+/// get `None` without a run. Then every other disc's LM starts from its own
+/// start joints (the viewpoint
 /// that saw it; App. A.1 leaves the start open). Then, in up to
 /// [`NEIGHBOUR_ROUNDS`] rounds, each disc still without a pose is tried
 /// again from the poses of the [`NEIGHBOUR_STARTS`] nearest discs (by
@@ -341,9 +343,24 @@ fn select_poses(
     scope: &[usize],
 ) -> Result<Vec<Option<Found>>, BlastError> {
     use rayon::prelude::*;
+    // Discs out of the nozzle's reach have no pose on any map: they take no
+    // LM runs (on bridge1's run, half the discs without a pose, which took
+    // most of the planning time in up to twenty runs each).
+    let open: Vec<bool> = scope
+        .par_iter()
+        .map(|&i| {
+            let target = Target::from_disc(&inputs.discs[i]);
+            target.check()?;
+            Ok(poses.may_reach(&target))
+        })
+        .collect::<Result<_, BlastError>>()?;
     let mut found: Vec<Option<Found>> = scope
         .par_iter()
-        .map(|&i| disc_pose(poses, grid, inputs, i, &inputs.start_joints[i]))
+        .zip(&open)
+        .map(|(&i, &open)| match open {
+            true => disc_pose(poses, grid, inputs, i, &inputs.start_joints[i]),
+            false => Ok(None),
+        })
         .collect::<Result<_, _>>()?;
     let retry = poses.with_starts(1)?;
     // The neighbours each disc has been tried from: LM is deterministic, so a
@@ -356,7 +373,9 @@ fn select_poses(
             .zip(&found)
             .filter_map(|(&i, f)| f.as_ref().map(|(q, _)| (i, q.as_slice())))
             .collect();
-        let failed: Vec<usize> = (0..scope.len()).filter(|&k| found[k].is_none()).collect();
+        let failed: Vec<usize> = (0..scope.len())
+            .filter(|&k| open[k] && found[k].is_none())
+            .collect();
         if solved.is_empty() || failed.is_empty() {
             break;
         }

@@ -21,7 +21,7 @@
 use geom::{Isometry3, Real};
 use map::OccupancyGrid;
 use plan::{PlanConfig, PlanError, PoseConfig, PoseSelector, PoseSolution, Safety, Target};
-use robot::{Robot, ScannerMount};
+use robot::{ReachBound, Robot, ScannerMount};
 use serde::{Deserialize, Serialize};
 
 /// A grit-blasting nozzle on the robot's tool link (its flange) and the
@@ -179,6 +179,34 @@ impl BlastTool {
     }
 }
 
+/// The distance from the point at `v` (relative to a disc centre with unit
+/// normal `n`) to the tip positions from which a stream through the centre
+/// meets the disc at an angle below `phi_max` (radians) after a length in
+/// `[d_min, d_max]`: the solid sector `{u d : ∠(u, n) ≤ φ_max, d ∈ [d_min,
+/// d_max]}`. Within the cone the distance is radial; outside it, it is the
+/// distance to the cone's boundary segment in the plane of `v` and `n` (the
+/// sector's arcs end on that segment, so they are never nearer).
+fn tip_gap(v: geom::Vector3, n: geom::Vector3, phi_max: Real, d_min: Real, d_max: Real) -> Real {
+    let len = v.norm();
+    let along = v.dot(&n);
+    if along >= len * phi_max.cos() {
+        return (d_min - len).max(len - d_max).max(0.0);
+    }
+    let side = v - n * along;
+    let side_len = side.norm();
+    let w = if side_len > 0.0 {
+        side / side_len
+    } else {
+        // `v` straight behind the disc: every boundary ray is as near.
+        n.cross(&geom::Vector3::x())
+            .try_normalize(1e-9)
+            .unwrap_or_else(|| n.cross(&geom::Vector3::y()).normalize())
+    };
+    let u = n * phi_max.cos() + w * phi_max.sin();
+    let t = v.dot(&u).clamp(d_min, d_max);
+    (v - u * t).norm()
+}
+
 /// A blast pose re-measured from the nozzle's forward kinematics.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BlastMeasure {
@@ -201,7 +229,13 @@ pub struct BlastPoses {
     safety: Safety,
     config: PoseConfig,
     tool: BlastTool,
+    /// Where the nozzle tip can be at all, world frame (`None`: unbounded).
+    reach: Option<ReachBound>,
 }
+
+/// First-joint samples of the nozzle's reach bound: 1° steps over a
+/// 360° joint (the VM-6083's 340° range: chords of 3 mm at its shoulder).
+const REACH_SAMPLES: usize = 360;
 
 impl BlastPoses {
     /// The nozzle `tool` on `robot` ([`BlastTool::robot_with_nozzle`]: its
@@ -220,10 +254,18 @@ impl BlastPoses {
         let robot = tool.robot_with_nozzle(robot)?;
         let config = tool.pose_config(pose);
         config.validate()?;
+        let mount = tool.mount(&robot);
+        let reach = robot
+            .reach_bound(mount.link, &mount.link_from_scanner, REACH_SAMPLES)
+            .map(|b| ReachBound {
+                centres: b.centres.iter().map(|c| world_from_base * c).collect(),
+                radius: b.radius,
+            });
         Ok(Self {
             safety: Safety::new(robot, world_from_base, plan, weights)?,
             config,
             tool,
+            reach,
         })
     }
 
@@ -239,12 +281,37 @@ impl BlastPoses {
             safety: self.safety.clone(),
             config,
             tool: self.tool,
+            reach: self.reach.clone(),
         })
     }
 
     /// The robot with the nozzle as its "scanner".
     pub fn robot(&self) -> &Robot {
         self.safety.robot()
+    }
+
+    /// `false` when no configuration within the joint limits puts the
+    /// nozzle tip where its stream could meet `target` within the tool's
+    /// angle, stream length and aim limits (the arm's reach bound,
+    /// [`robot::ReachBound`], against the tip positions of [`tip_gap`]):
+    /// such a target has no pose, whatever the map. `true` says only that
+    /// it may have one.
+    pub fn may_reach(&self, target: &Target) -> bool {
+        let Some(reach) = &self.reach else {
+            return true;
+        };
+        let t = &self.tool;
+        // The tip stands within ρ_min of a point of the sector around the
+        // centre (the aim's miss moves it sideways); a nanometre for rounding.
+        reach.may_reach(t.rho_min_m + 1e-9, |p| {
+            tip_gap(
+                p - target.centre,
+                target.normal.into_inner(),
+                t.phi_max_deg.to_radians(),
+                t.d_min_m,
+                t.d_max_m,
+            )
+        })
     }
 
     /// A pose from which the stream hits `target` within the tool's limits,

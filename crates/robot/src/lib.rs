@@ -25,6 +25,7 @@ pub mod linalg;
 pub mod mesh;
 pub mod model;
 pub mod posture;
+pub mod reach;
 pub mod urdf;
 
 pub use builtin::{builtin, builtin_names};
@@ -37,3 +38,4 @@ pub use model::{
     Robot, ScannerMount,
 };
 pub use posture::Posture;
+pub use reach::ReachBound;

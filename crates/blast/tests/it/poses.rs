@@ -141,3 +141,47 @@ fn bad_blast_tools_are_refused() {
         );
     }
 }
+
+/// `may_reach` is a proof of unreachability: every wall disc with a pose
+/// passes it, and on the line from the shoulder it changes at the reach
+/// bound plus the stream, hand-computed from the bound's radius.
+#[test]
+fn may_reach_refuses_only_discs_out_of_reach() {
+    let grid = walled_grid();
+    let tool = BlastTool::default();
+    let robot = vm6083();
+    let blast = BlastPoses::new(
+        &robot,
+        Isometry3::identity(),
+        &PlanConfig::default(),
+        vec![1.0; 6],
+        &PoseConfig::default(),
+        tool,
+    )
+    .unwrap();
+    for iy in -3..=3 {
+        for iz in 0..=8 {
+            let target = wall_target(0.1 * Real::from(iy), 0.3 + 0.1 * Real::from(iz));
+            if blast.select(&grid, &target, &START).unwrap().valid() {
+                assert!(blast.may_reach(&target), "{target:?}");
+            }
+        }
+    }
+    // A disc facing the robot on the x axis at shoulder height: the nearest
+    // centre of the bound is the shoulder at (0.18, 0, 0.475), and the
+    // nearest tip position d_max in front of the disc.
+    let nozzle = blast.robot().scanner.unwrap();
+    let bound = blast
+        .robot()
+        .reach_bound(nozzle.link, &nozzle.link_from_scanner, 360)
+        .unwrap();
+    let edge = 0.18 + bound.radius + tool.d_max_m + tool.rho_min_m;
+    let facing = |x: Real| Target::new(Point3::new(x, 0.0, 0.475), -Vector3::x()).unwrap();
+    assert!(blast.may_reach(&facing(edge - 0.005)));
+    assert!(!blast.may_reach(&facing(edge + 0.005)));
+    // Far away, whatever it faces.
+    for n in [Vector3::x(), -Vector3::x(), Vector3::z()] {
+        let far = Target::new(Point3::new(-2.6, 0.5, 0.4), n).unwrap();
+        assert!(!blast.may_reach(&far));
+    }
+}

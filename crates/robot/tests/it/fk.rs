@@ -96,7 +96,7 @@ fn position(m: &M4) -> Vector3 {
     Vector3::new(m[0][3], m[1][3], m[2][3])
 }
 
-fn data(path: &str) -> std::path::PathBuf {
+pub(crate) fn data(path: &str) -> std::path::PathBuf {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/")).join(path)
 }
 

@@ -8,4 +8,5 @@ mod fk;
 mod fuzz;
 mod jacobian;
 mod nullspace;
+mod reach;
 mod shapes;

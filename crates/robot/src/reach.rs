@@ -1,0 +1,128 @@
+//! Where a point on a link can be at all: a bound on its reachable positions
+//! from the joint limits and the chain's lengths alone, with no search.
+//!
+//! The first actuated joint moves the axis of the second along a circle (a
+//! line for a prismatic joint); from the second joint on, whatever the
+//! joints do, the point stays within the summed lengths of the chain's
+//! offsets from that axis (rotations keep lengths). So every position of the
+//! point lies within [`ReachBound::radius`] of one of the second joint's
+//! origins at sampled values of the first ([`Robot::reach_bound`]). A test
+//! that a point *cannot* be placed somewhere (a blast nozzle out of reach of
+//! a disc) then costs a few hundred distances instead of an IK search.
+
+use crate::model::{JointKind, LinkId, Robot};
+use geom::{Isometry3, Point3, Real};
+
+/// Every position a point on a link takes over the joint limits lies within
+/// `radius` of one of `centres` (base frame).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReachBound {
+    /// Origins of the second actuated joint's frame at evenly spaced values
+    /// of the first (one centre when the chain has fewer than two joints
+    /// before the link), base frame.
+    pub centres: Vec<Point3>,
+    /// The chain's summed offsets beyond the centres plus the largest gap
+    /// between consecutive centres, metres.
+    pub radius: Real,
+}
+
+impl ReachBound {
+    /// `true` when the point can be within `distance` of somewhere for
+    /// which `gap(centre)` is the distance from `centre` to the nearest such
+    /// place: when some centre has `gap(centre) ≤ radius + distance`. A
+    /// `false` is a proof that no configuration within the limits brings the
+    /// point there.
+    pub fn may_reach(&self, distance: Real, mut gap: impl FnMut(&Point3) -> Real) -> bool {
+        let within = self.radius + distance;
+        self.centres.iter().any(|c| gap(c) <= within)
+    }
+}
+
+impl Robot {
+    /// A bound on where the point at `link_from_point` on `link` can be over
+    /// the joint limits ([`ReachBound`]), with the first actuated joint
+    /// sampled at `samples + 1` values across its range (at least 2).
+    ///
+    /// `None` when the bound is unbounded: a prismatic joint on the chain
+    /// without limits, or a first joint without limits that is not revolute.
+    /// An unlimited revolute first joint is sampled over a full turn.
+    pub fn reach_bound(
+        &self,
+        link: LinkId,
+        link_from_point: &Isometry3,
+        samples: usize,
+    ) -> Option<ReachBound> {
+        let chain = self.joints.get(..link.index())?;
+        let actuated: Vec<usize> = (0..chain.len())
+            .filter(|&i| chain[i].is_actuated())
+            .collect();
+        // The offsets from the second actuated joint's axis to the point.
+        let extent = |i: usize| -> Option<Real> {
+            let j = &chain[i];
+            let slide = match j.kind {
+                JointKind::Prismatic => {
+                    let l = j.limits?;
+                    (l.min + j.offset).abs().max((l.max + j.offset).abs())
+                }
+                _ => 0.0,
+            };
+            Some(slide + j.post.translation.vector.norm())
+        };
+        let point = link_from_point.translation.vector.norm();
+        let q0 = vec![0.0; self.dof()];
+        let Some(&first) = actuated.first() else {
+            // Nothing moves the point.
+            let frames = self.forward_kinematics(&q0).ok()?;
+            return Some(ReachBound {
+                centres: vec![Point3::from(
+                    (frames[link.index()] * link_from_point).translation.vector,
+                )],
+                radius: 0.0,
+            });
+        };
+        // The chain's lengths beyond the pivot: the second actuated joint,
+        // whose origin the first moves; with one actuated joint, that joint,
+        // whose origin stands still.
+        let pivot = actuated.get(1).copied().unwrap_or(first);
+        let mut radius = point + extent(pivot)?;
+        for i in pivot + 1..chain.len() {
+            radius += chain[i].origin.translation.vector.norm() + extent(i)?;
+        }
+        let origin_at = |q: &[Real]| -> Option<Point3> {
+            let frames = self.forward_kinematics(q).ok()?;
+            Some(Point3::from(
+                (frames[pivot] * chain[pivot].origin).translation.vector,
+            ))
+        };
+        if pivot == first {
+            return Some(ReachBound {
+                centres: vec![origin_at(&q0)?],
+                radius,
+            });
+        }
+        let joint = &chain[first];
+        let (lo, hi) = match (joint.limits, joint.kind) {
+            (Some(l), _) => (l.min, l.max),
+            (None, JointKind::Revolute) => (-std::f64::consts::PI, std::f64::consts::PI),
+            _ => return None,
+        };
+        // Steps of at most half a turn, so that every point of an arc between
+        // two samples is within its chord of the nearer one.
+        let n = samples
+            .max(2)
+            .max(((hi - lo) / std::f64::consts::PI).ceil() as usize);
+        let mut q = q0;
+        let mut centres = Vec::with_capacity(n + 1);
+        for s in 0..=n {
+            q[0] = lo + (hi - lo) * s as Real / n as Real;
+            centres.push(origin_at(&q)?);
+        }
+        // A value between two samples puts the centre on the arc (or line)
+        // between theirs, within one chord of the nearer.
+        radius += centres
+            .windows(2)
+            .map(|w| (w[1] - w[0]).norm())
+            .fold(0.0, Real::max);
+        Some(ReachBound { centres, radius })
+    }
+}
