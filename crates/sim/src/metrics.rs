@@ -147,6 +147,8 @@ pub struct SampleGrid {
     starts: Vec<u32>,
     /// Sample indices, by cell.
     items: Vec<u32>,
+    /// Per sample, its cell.
+    cell_of_item: Vec<u32>,
     /// The samples, by cell.
     points: Vec<[Real; 3]>,
     r2: Real,
@@ -213,11 +215,18 @@ impl SampleGrid {
             sorted[at] = *p;
             fill[c] += 1;
         }
+        let mut cell_of_item = vec![0u32; points.len()];
+        for c in 0..counts.len() - 1 {
+            for &i in &items[counts[c] as usize..counts[c + 1] as usize] {
+                cell_of_item[i as usize] = c as u32;
+            }
+        }
         Ok(Self {
             origin: lo,
             cell,
             dims,
             starts: counts,
+            cell_of_item,
             items,
             points: sorted,
             r2: r * r,
@@ -240,7 +249,18 @@ impl SampleGrid {
     }
 
     /// Call `f` with the index of every sample within `r` of `p`.
-    pub fn within(&self, p: &[Real; 3], mut f: impl FnMut(usize)) {
+    pub fn within(&self, p: &[Real; 3], f: impl FnMut(usize)) {
+        self.within_cells(p, |_| true, f);
+    }
+
+    /// [`SampleGrid::within`] over the cells (indices as
+    /// [`SampleGrid::cell_of`]) that `open` accepts only.
+    pub fn within_cells(
+        &self,
+        p: &[Real; 3],
+        open: impl Fn(usize) -> bool,
+        mut f: impl FnMut(usize),
+    ) {
         let mut range = [(0usize, 0usize); 3];
         for k in 0..3 {
             let x = (p[k] - self.origin[k]) / self.cell;
@@ -265,14 +285,17 @@ impl SampleGrid {
         for z in range[2].0..=range[2].1 {
             for y in range[1].0..=range[1].1 {
                 let row = (z * self.dims[1] + y) * self.dims[0];
-                let (s, e) = (
-                    self.starts[row + range[0].0] as usize,
-                    self.starts[row + range[0].1 + 1] as usize,
-                );
-                for (q, &i) in self.points[s..e].iter().zip(&self.items[s..e]) {
-                    let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
-                    if d2 <= self.r2 {
-                        f(i as usize);
+                for cell in row + range[0].0..=row + range[0].1 {
+                    if !open(cell) {
+                        continue;
+                    }
+                    let (s, e) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
+                    for (q, &i) in self.points[s..e].iter().zip(&self.items[s..e]) {
+                        let d2 =
+                            (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
+                        if d2 <= self.r2 {
+                            f(i as usize);
+                        }
                     }
                 }
             }
@@ -295,6 +318,9 @@ pub struct CoverageTracker {
     observable: Option<Vec<bool>>,
     material: Vec<u16>,
     covered: Vec<bool>,
+    /// Per grid cell, how many of its samples are not covered yet: a point
+    /// looks only in cells with some (a covered sample stays covered).
+    uncovered_in_cell: Vec<u32>,
     covered_within_m: Real,
     region: Option<Aabb>,
     samples_per_m2: Real,
@@ -340,8 +366,11 @@ impl CoverageTracker {
                 Point3::from(hi.map(|v| v + r)),
             )
         });
+        let grid = SampleGrid::new(&points, cfg.covered_within_m)?;
+        let uncovered_in_cell = grid.starts.windows(2).map(|w| w[1] - w[0]).collect();
         Ok(Self {
-            grid: SampleGrid::new(&points, cfg.covered_within_m)?,
+            grid,
+            uncovered_in_cell,
             reach,
             points,
             normals,
@@ -362,18 +391,22 @@ impl CoverageTracker {
             return;
         };
         let grid = &self.grid;
+        let open = &self.uncovered_in_cell;
         let hits: Vec<usize> = points
             .par_iter()
             .filter(|p| reach.contains_point(p))
             .fold(Vec::new, |mut out, p| {
-                grid.within(&[p.x, p.y, p.z], |i| out.push(i));
+                grid.within_cells(&[p.x, p.y, p.z], |c| open[c] > 0, |i| out.push(i));
                 out
             })
             .flatten()
             .collect();
         for i in hits {
-            if let Some(c) = self.covered.get_mut(i) {
+            if let Some(c) = self.covered.get_mut(i)
+                && !*c
+            {
                 *c = true;
+                self.uncovered_in_cell[grid.cell_of_item[i] as usize] -= 1;
             }
         }
     }
