@@ -5,6 +5,7 @@ use crate::SimError;
 use geom::{Aabb, Point3, Real};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
+use rustc_hash::FxHashSet;
 use scenario::MetricsConfig;
 use scene::{DEFAULT_SAMPLE_CHUNK, RayCast, Scene, SurfaceSampler};
 use serde::Serialize;
@@ -249,26 +250,31 @@ impl SampleGrid {
     }
 
     /// Call `f` with the index of every sample within `r` of `p`.
-    pub fn within(&self, p: &[Real; 3], f: impl FnMut(usize)) {
-        self.within_cells(p, |_| true, f);
+    pub fn within(&self, p: &[Real; 3], mut f: impl FnMut(usize)) {
+        self.within_cells(
+            p,
+            |_| true,
+            |v| {
+                if let Visit::Sample {
+                    index,
+                    within: true,
+                } = v
+                {
+                    f(index);
+                }
+            },
+        );
     }
 
-    /// [`SampleGrid::within`] over the cells (indices as
-    /// [`SampleGrid::cell_of`]) that `open` accepts only.
-    pub fn within_cells(
-        &self,
-        p: &[Real; 3],
-        open: impl Fn(usize) -> bool,
-        mut f: impl FnMut(usize),
-    ) {
+    /// The cells a sphere of radius `r ≤ cell/2` about `p` can reach: per
+    /// axis, the nearer neighbour cell only (`None`: none).
+    fn cell_range(&self, p: &[Real; 3]) -> Option<[(usize, usize); 3]> {
         let mut range = [(0usize, 0usize); 3];
         for k in 0..3 {
             let x = (p[k] - self.origin[k]) / self.cell;
-            // The sphere of radius r ≤ cell/2 reaches the nearer neighbour
-            // cell only.
             let c = x.floor();
             if !(c >= -1.0 && c <= self.dims[k] as Real) {
-                return;
+                return None;
             }
             let (a, b) = if x - c < 0.5 {
                 (c - 1.0, c)
@@ -278,10 +284,25 @@ impl SampleGrid {
             let a = a.max(0.0) as usize;
             let b = (b.min(self.dims[k] as Real - 1.0)).max(-1.0);
             if b < 0.0 || a > b as usize {
-                return;
+                return None;
             }
             range[k] = (a, b as usize);
         }
+        Some(range)
+    }
+
+    /// Visit the samples of each cell within reach of `p` (cell indices as
+    /// [`SampleGrid::cell_of`]) that `open` accepts: `f` sees each sample
+    /// ([`Visit::Sample`]), then the end of its cell ([`Visit::CellEnd`]).
+    pub fn within_cells(
+        &self,
+        p: &[Real; 3],
+        open: impl Fn(usize) -> bool,
+        mut f: impl FnMut(Visit),
+    ) {
+        let Some(range) = self.cell_range(p) else {
+            return;
+        };
         for z in range[2].0..=range[2].1 {
             for y in range[1].0..=range[1].1 {
                 let row = (z * self.dims[1] + y) * self.dims[0];
@@ -293,14 +314,30 @@ impl SampleGrid {
                     for (q, &i) in self.points[s..e].iter().zip(&self.items[s..e]) {
                         let d2 =
                             (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
-                        if d2 <= self.r2 {
-                            f(i as usize);
-                        }
+                        f(Visit::Sample {
+                            index: i as usize,
+                            within: d2 <= self.r2,
+                        });
                     }
+                    f(Visit::CellEnd(cell));
                 }
             }
         }
     }
+}
+
+/// What [`SampleGrid::within_cells`] shows its visitor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Visit {
+    /// A sample of the cell being visited, and whether it is within `r`.
+    Sample {
+        /// The sample's index.
+        index: usize,
+        /// Within `r` of the query point.
+        within: bool,
+    },
+    /// Every sample of this cell has been shown.
+    CellEnd(usize),
 }
 
 /// Coverage kept up to date as points arrive: the true-surface samples of
@@ -396,7 +433,19 @@ impl CoverageTracker {
             .par_iter()
             .filter(|p| reach.contains_point(p))
             .fold(Vec::new, |mut out, p| {
-                grid.within_cells(&[p.x, p.y, p.z], |c| open[c] > 0, |i| out.push(i));
+                grid.within_cells(
+                    &[p.x, p.y, p.z],
+                    |c| open[c] > 0,
+                    |v| {
+                        if let Visit::Sample {
+                            index,
+                            within: true,
+                        } = v
+                        {
+                            out.push(index);
+                        }
+                    },
+                );
                 out
             })
             .flatten()
@@ -428,8 +477,32 @@ impl CoverageTracker {
             })
             .collect();
         inside.sort_unstable_by_key(|(c, _)| *c);
+        // Cells whose samples are all marked: the points after the first
+        // few of a surface patch find nothing new there.
+        let mut full: FxHashSet<usize> = FxHashSet::default();
+        let mut all = true;
+        let mut now_full = Vec::new();
         for (_, q) in &inside {
-            self.grid.within(q, |i| bits[i / 64] |= 1 << (i % 64));
+            self.grid.within_cells(
+                q,
+                |cell| !full.contains(&cell),
+                |v| match v {
+                    Visit::Sample { index, within } => {
+                        let (word, bit) = (index / 64, 1u64 << (index % 64));
+                        if within {
+                            bits[word] |= bit;
+                        }
+                        all &= bits[word] & bit != 0;
+                    }
+                    Visit::CellEnd(cell) => {
+                        if all {
+                            now_full.push(cell);
+                        }
+                        all = true;
+                    }
+                },
+            );
+            full.extend(now_full.drain(..));
         }
         bits
     }

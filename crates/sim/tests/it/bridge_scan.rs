@@ -220,5 +220,10 @@ fn coverage_tracker_matches_coverage_of_all_points_after_each_batch() {
         let direct = coverage(scene, &all, &metrics).unwrap();
         assert_eq!(tracker.report(), direct);
         assert!(direct.covered > 0);
+        // `bits_of` (the oracle's: cells whose samples are all marked are
+        // skipped) marks as many samples as there are covered.
+        let bits = tracker.bits_of(&all);
+        let marked: u32 = bits.iter().map(|w| w.count_ones()).sum();
+        assert_eq!(marked as usize, direct.covered);
     }
 }
