@@ -357,9 +357,12 @@ fn select_poses(
     let mut found: Vec<Option<Found>> = scope
         .par_iter()
         .zip(&open)
-        .map(|(&i, &open)| match open {
-            true => disc_pose(poses, grid, inputs, i, &inputs.start_joints[i]),
-            false => Ok(None),
+        .map(|(&i, &open)| {
+            if open {
+                disc_pose(poses, grid, inputs, i, &inputs.start_joints[i])
+            } else {
+                Ok(None)
+            }
         })
         .collect::<Result<_, _>>()?;
     let retry = poses.with_starts(1)?;

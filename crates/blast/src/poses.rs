@@ -200,7 +200,8 @@ fn tip_gap(v: geom::Vector3, n: geom::Vector3, phi_max: Real, d_min: Real, d_max
         // `v` straight behind the disc: every boundary ray is as near.
         n.cross(&geom::Vector3::x())
             .try_normalize(1e-9)
-            .unwrap_or_else(|| n.cross(&geom::Vector3::y()).normalize())
+            .or_else(|| n.cross(&geom::Vector3::y()).try_normalize(1e-9))
+            .unwrap_or_else(geom::Vector3::x)
     };
     let u = n * phi_max.cos() + w * phi_max.sin();
     let t = v.dot(&u).clamp(d_min, d_max);
@@ -293,7 +294,8 @@ impl BlastPoses {
     /// `false` when no configuration within the joint limits puts the
     /// nozzle tip where its stream could meet `target` within the tool's
     /// angle, stream length and aim limits (the arm's reach bound,
-    /// [`robot::ReachBound`], against the tip positions of [`tip_gap`]):
+    /// [`robot::ReachBound`], against the solid sector of tip positions
+    /// from which a stream through the centre meets it within the limits):
     /// such a target has no pose, whatever the map. `true` says only that
     /// it may have one.
     pub fn may_reach(&self, target: &Target) -> bool {

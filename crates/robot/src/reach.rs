@@ -57,8 +57,7 @@ impl Robot {
             .filter(|&i| chain[i].is_actuated())
             .collect();
         // The offsets from the second actuated joint's axis to the point.
-        let extent = |i: usize| -> Option<Real> {
-            let j = &chain[i];
+        let extent = |j: &crate::model::Joint| -> Option<Real> {
             let slide = match j.kind {
                 JointKind::Prismatic => {
                     let l = j.limits?;
@@ -84,9 +83,9 @@ impl Robot {
         // whose origin the first moves; with one actuated joint, that joint,
         // whose origin stands still.
         let pivot = actuated.get(1).copied().unwrap_or(first);
-        let mut radius = point + extent(pivot)?;
-        for i in pivot + 1..chain.len() {
-            radius += chain[i].origin.translation.vector.norm() + extent(i)?;
+        let mut radius = point + extent(&chain[pivot])?;
+        for j in &chain[pivot + 1..] {
+            radius += j.origin.translation.vector.norm() + extent(j)?;
         }
         let origin_at = |q: &[Real]| -> Option<Point3> {
             let frames = self.forward_kinematics(q).ok()?;

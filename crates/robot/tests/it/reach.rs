@@ -17,7 +17,9 @@ fn configurations(robot: &Robot, n: usize, seed: u64) -> Vec<Vec<Real>> {
                 .limits()
                 .iter()
                 .map(|l| {
-                    let (lo, hi) = l.map_or((-3.14, 3.14), |l| (l.min, l.max));
+                    let (lo, hi) = l.map_or((-std::f64::consts::PI, std::f64::consts::PI), |l| {
+                        (l.min, l.max)
+                    });
                     rng.random_range(lo..=hi)
                 })
                 .collect()
@@ -54,7 +56,11 @@ fn worst(robot: &Robot, link_from_point: &Isometry3, qs: &[Vec<Real>]) -> (Real,
 fn every_configuration_is_within_the_bound() {
     let nozzle = Isometry3::translation(0.0, 0.0, 0.15);
     let ur5 = Robot::from_urdf_file(&data("robots/ur5/ur5_robot.urdf"), Some("tool0")).unwrap();
-    for robot in [builtin("denso-vm6083").unwrap(), builtin("arm4").unwrap(), ur5] {
+    for robot in [
+        builtin("denso-vm6083").unwrap(),
+        builtin("arm4").unwrap(),
+        ur5,
+    ] {
         let qs = configurations(&robot, 20_000, 7);
         let (far, radius) = worst(&robot, &nozzle, &qs);
         // Not vacuous: random configurations come within 20 % of it (the
