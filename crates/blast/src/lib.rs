@@ -13,7 +13,7 @@ pub mod poses;
 pub mod sequence;
 
 pub use plans::{
-    BlastConfig, BlastInputs, BlastInputsFile, BlastPlan, discs_with_pose, plan_blast,
+    BLAST_STARTS, BlastConfig, BlastInputs, BlastInputsFile, BlastPlan, discs_with_pose, plan_blast,
 };
 pub use poses::{BlastMeasure, BlastPoses, BlastTool};
 

@@ -23,7 +23,8 @@ beside it. With the default tool and seed the plan is the one `surveyor explore`
   d_min_m = 0.2                      # shortest effective stream
   d_max_m = 0.5                      # longest effective stream
   rho_min_m = 0.015                  # largest miss of the disc centre
-  nozzle_radius_m = 0.03             # the nozzle's collision capsule")]
+  nozzle_radius_m = 0.03             # the nozzle's collision capsule
+  aim_scale_m = 0.01                 # scale of the aim cost's sigmoid (g3)")]
 pub struct PlanBlastArgs {
     /// A folder written by `surveyor explore`.
     #[arg(long)]

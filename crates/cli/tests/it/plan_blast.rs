@@ -36,6 +36,10 @@ fn broken_tool_files_and_missing_run_files_are_named() {
             "nozzle_radius_m = -0.01\n",
             &["tool.toml", "nozzle_radius_m"],
         ),
+        (
+            "aim_scale_m = 0.0\n",
+            &["tool.toml", "aim_scale_m", "positive"],
+        ),
         // As thick as the shortest stream: no pose could clear the surface.
         (
             "nozzle_radius_m = 1.0\n",
