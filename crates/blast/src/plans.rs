@@ -245,55 +245,62 @@ pub fn plan_blast(
         by_disc[i] = t;
     }
     let with_pose = by_disc.iter().filter(|t| t.is_some()).count();
-    let mut segments = Vec::new();
-    for (s, members) in inputs.segments.iter().enumerate() {
-        let members: Vec<usize> = members
-            .iter()
-            .map(|id| id.0)
-            .filter(|&i| in_scope[i])
-            .collect();
-        if members.is_empty() {
-            continue;
-        }
-        let no_pose: Vec<usize> = members
-            .iter()
-            .copied()
-            .filter(|&i| by_disc[i].is_none())
-            .collect();
-        let targets: Vec<BlastTarget> =
-            members.iter().filter_map(|&i| by_disc[i].clone()).collect();
-        let centres: Vec<geom::Point3> = targets.iter().map(|t| discs[t.disc].centre).collect();
-        let joints: Vec<Vec<Real>> = targets.iter().map(|t| t.joints.clone()).collect();
-        let table = Targets::new(&centres, &joints).ok_or_else(|| BlastError::Invalid {
-            what: "blast plan".into(),
-            message: "targets and poses disagree".into(),
-        })?;
-        let nn0 = nearest_neighbour(&table, 0, Weights::normalising(1.0, 1.0));
-        let weights = Weights::of_population(&table, std::slice::from_ref(&nn0));
-        let nn = nearest_neighbour(&table, 0, weights);
-        let opt = two_opt(&table, &nn, weights);
-        let ga = genetic(
-            &table,
-            &opt,
-            weights,
-            &GaConfig {
-                seed: config.ga.seed ^ (s as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
-                ..config.ga
-            },
-        );
-        segments.push(SegmentPlan {
-            segment: s,
-            targets: ga.order.iter().map(|&k| targets[k].clone()).collect(),
-            no_pose,
-            weights: PathWeights {
-                alpha: weights.alpha,
-                beta: weights.beta,
-            },
-            cost_nearest_neighbour: table.cost(&nn, weights),
-            cost_two_opt: table.cost(&opt, weights),
-            cost_ga: ga.cost,
-        });
-    }
+    // Each segment's order on its own (the GA seeded by its index), in
+    // parallel, collected in segment order.
+    let segments: Vec<Option<SegmentPlan>> = inputs
+        .segments
+        .par_iter()
+        .enumerate()
+        .map(|(s, members)| -> Result<Option<SegmentPlan>, BlastError> {
+            let members: Vec<usize> = members
+                .iter()
+                .map(|id| id.0)
+                .filter(|&i| in_scope[i])
+                .collect();
+            if members.is_empty() {
+                return Ok(None);
+            }
+            let no_pose: Vec<usize> = members
+                .iter()
+                .copied()
+                .filter(|&i| by_disc[i].is_none())
+                .collect();
+            let targets: Vec<BlastTarget> =
+                members.iter().filter_map(|&i| by_disc[i].clone()).collect();
+            let centres: Vec<geom::Point3> = targets.iter().map(|t| discs[t.disc].centre).collect();
+            let joints: Vec<Vec<Real>> = targets.iter().map(|t| t.joints.clone()).collect();
+            let table = Targets::new(&centres, &joints).ok_or_else(|| BlastError::Invalid {
+                what: "blast plan".into(),
+                message: "targets and poses disagree".into(),
+            })?;
+            let nn0 = nearest_neighbour(&table, 0, Weights::normalising(1.0, 1.0));
+            let weights = Weights::of_population(&table, std::slice::from_ref(&nn0));
+            let nn = nearest_neighbour(&table, 0, weights);
+            let opt = two_opt(&table, &nn, weights);
+            let ga = genetic(
+                &table,
+                &opt,
+                weights,
+                &GaConfig {
+                    seed: config.ga.seed ^ (s as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+                    ..config.ga
+                },
+            );
+            Ok(Some(SegmentPlan {
+                segment: s,
+                targets: ga.order.iter().map(|&k| targets[k].clone()).collect(),
+                no_pose,
+                weights: PathWeights {
+                    alpha: weights.alpha,
+                    beta: weights.beta,
+                },
+                cost_nearest_neighbour: table.cost(&nn, weights),
+                cost_two_opt: table.cost(&opt, weights),
+                cost_ga: ga.cost,
+            }))
+        })
+        .collect::<Result<_, _>>()?;
+    let segments = segments.into_iter().flatten().collect();
     Ok(BlastPlan {
         tool: config.tool,
         discs_in_scope: scope.len(),
