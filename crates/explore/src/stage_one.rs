@@ -342,12 +342,14 @@ impl StageOne {
     /// is predicted to reveal, and the number of unknown voxels: the sweep's
     /// predicted rays cast through the grid up to the scanner's range,
     /// stopping at occupied voxels (A§4.2, Fig. 4.3), each unknown voxel
-    /// counted once. `stamp` is scratch of `slot_count()` entries; `mark` must
-    /// differ from every value in it.
+    /// counted once. `information` is the grid's
+    /// [`OccupancyGrid::information_by_slot`]; `stamp` is scratch of
+    /// `slot_count()` entries; `mark` must differ from every value in it.
     fn predict(
         &self,
         q: &[Real],
         from: Option<&[Real]>,
+        information: &[[Real; 2]],
         stamp: &mut [u32],
         mark: u32,
     ) -> Result<(Real, Real, usize), ExploreError> {
@@ -358,7 +360,6 @@ impl StageOne {
             .ceil()
             .max(0.0) as usize;
         let world_from_base = *self.safety().world_from_base();
-        let geometry = self.grid.geometry();
         let (mut g1, mut g2, mut n) = (0.0, 0.0, 0usize);
         let mut configs: Vec<Vec<Real>> = Vec::new();
         let mut c = lo.clone();
@@ -388,13 +389,12 @@ impl StageOne {
             for d in &self.dirs {
                 let dir = UnitVector3::new_unchecked(pose.rotation * d.into_inner());
                 self.grid
-                    .cast_through_unknown(&origin, &dir, self.max_range_m, |key| {
-                        if let Some(slot) = geometry.slot_of(key)
-                            && stamp[slot] != mark
-                        {
+                    .cast_through_unknown_slots(&origin, &dir, self.max_range_m, |_, slot| {
+                        if stamp[slot] != mark {
                             stamp[slot] = mark;
-                            g1 += self.grid.h1_weight(key);
-                            g2 += self.grid.cspace_information(key);
+                            let [h1, h2] = information[slot];
+                            g1 += h1;
+                            g2 += h2;
                             n += 1;
                         }
                     });
@@ -447,6 +447,7 @@ impl StageOne {
         let (h1, h2) = self.information();
         let slots = self.grid.geometry().slot_count();
         let contenders = self.contenders(q);
+        let information = self.grid.information_by_slot();
         let scored: Vec<Option<Candidate>> = contenders
             .into_par_iter()
             .enumerate()
@@ -461,7 +462,8 @@ impl StageOne {
                     let Some(f4) = self.sweep_dist(&c)? else {
                         return Ok(None);
                     };
-                    let (g1, g2, revealed) = self.predict(&c, Some(q), stamp, i as u32 + 1)?;
+                    let (g1, g2, revealed) =
+                        self.predict(&c, Some(q), &information, stamp, i as u32 + 1)?;
                     Ok(Some(Candidate {
                         node,
                         q: c,

@@ -1116,6 +1116,24 @@ impl OccupancyGrid {
             .map_or(0.0, |c| Real::from(self.cspace.get(c)))
     }
 
+    /// Per storage slot ([`GridGeometry::slot_of`]), what an unknown voxel
+    /// there would reveal: `[`[`OccupancyGrid::h1_weight`]`,
+    /// `[`OccupancyGrid::cspace_information`]`]` (zeros for known voxels and
+    /// padding). The same numbers as those calls, looked up by slot: a
+    /// prediction that visits many voxels reads them once made.
+    pub fn information_by_slot(&self) -> Vec<[Real; 2]> {
+        let g = &self.geometry;
+        let mut out = vec![[0.0; 2]; g.slot_count()];
+        for key in g.keys() {
+            if let Some(slot) = g.slot_of(key)
+                && self.state(key) == VoxelState::Unknown
+            {
+                out[slot] = [self.h1_weight(key), self.cspace_information(key)];
+            }
+        }
+        out
+    }
+
     /// The C-space information a voxel holds now: [`h2_term`] of its `P(x_c)`
     /// when unknown, 0 when known.
     pub fn cspace_information(&self, key: VoxelKey) -> Real {
@@ -1170,6 +1188,18 @@ impl OccupancyGrid {
         max_range_m: Real,
         mut visit: impl FnMut(VoxelKey),
     ) -> UnknownRun {
+        self.cast_through_unknown_slots(origin, dir, max_range_m, |key, _| visit(key))
+    }
+
+    /// [`OccupancyGrid::cast_through_unknown`], `visit` also given each
+    /// unknown voxel's storage slot ([`GridGeometry::slot_of`]).
+    pub fn cast_through_unknown_slots(
+        &self,
+        origin: &Point3,
+        dir: &UnitVector3,
+        max_range_m: Real,
+        mut visit: impl FnMut(VoxelKey, usize),
+    ) -> UnknownRun {
         let mut run = UnknownRun::default();
         if !(max_range_m.is_finite() && max_range_m >= 0.0 && geom::math::is_finite_point(origin)) {
             return run;
@@ -1188,7 +1218,7 @@ impl OccupancyGrid {
                 match cells.state_bits(idx) {
                     BITS_UNKNOWN => {
                         run.unknown += 1;
-                        visit(g.key(cell));
+                        visit(g.key(cell), idx);
                     }
                     BITS_OCCUPIED => {
                         run.blocked_by = Some(g.key(cell));

@@ -460,6 +460,24 @@ fn prediction_ray_lists_unknown_voxels_until_an_occupied_one() {
     // Limited by range.
     let run = grid.cast_through_unknown(&Point3::new(-1.5, 1.5, 0.5), &dir, 1.2, |_| {});
     assert_eq!(run.unknown, 2);
+    // The slots given beside the keys, and the information table read by
+    // them, agree with the per-key calls.
+    let table = grid.information_by_slot();
+    let mut slots = 0;
+    grid.cast_through_unknown_slots(&Point3::new(-1.5, 1.5, 0.5), &dir, 10.0, |k, slot| {
+        assert_eq!(grid.geometry().slot_of(k), Some(slot));
+        assert_eq!(table[slot], [grid.h1_weight(k), grid.cspace_information(k)]);
+        slots += 1;
+    });
+    assert_eq!(slots, 4);
+    for k in all_keys(&grid) {
+        let slot = grid.geometry().slot_of(k).unwrap();
+        let expected = match grid.state(k) {
+            VoxelState::Unknown => [grid.h1_weight(k), grid.cspace_information(k)],
+            _ => [0.0, 0.0],
+        };
+        assert_eq!(table[slot], expected, "{k:?}");
+    }
 }
 
 #[test]
