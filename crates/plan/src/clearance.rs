@@ -19,6 +19,9 @@ pub const POINT_DEDUP_M: Real = 0.01;
 /// Side of the cells the kept points are looked up by, metres.
 const CELL_M: Real = 0.05;
 
+/// Half a cell's diagonal, metres (with a margin for rounding).
+const CELL_HALF_DIAGONAL_M: Real = 0.5 * 1.732_050_808 * CELL_M + 1e-9;
+
 fn key(p: &Point3, side: Real) -> [i32; 3] {
     [p.x, p.y, p.z].map(|v| (v / side).floor() as i32)
 }
@@ -91,6 +94,16 @@ impl PointClearance {
                         let Some(points) = self.cells.get(&[x, y, z]) else {
                             continue;
                         };
+                        // No point of a cell is nearer than its centre less
+                        // half its diagonal (the distance is 1-Lipschitz).
+                        let centre = Point3::new(
+                            (Real::from(x) + 0.5) * CELL_M,
+                            (Real::from(y) + 0.5) * CELL_M,
+                            (Real::from(z) + 0.5) * CELL_M,
+                        );
+                        if c.distance_to_point(&centre) - CELL_HALF_DIAGONAL_M >= best {
+                            continue;
+                        }
                         for p in points {
                             best = best.min(c.distance_to_point(p).max(0.0));
                         }
