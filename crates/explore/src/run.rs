@@ -532,15 +532,16 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                     if clearance_m <= 0.0 {
                         return true;
                     }
-                    let clear =
-                        ClearanceChecker::new((), fine, points, clearance_m - GUARD_MARGIN_M, at);
-                    let least = *bound.get_or_insert_with(|| clear.clearance(at));
+                    let clearance = |q: &[Real]| {
+                        points.configuration_clearance(fine, q, clearance_m - GUARD_MARGIN_M)
+                    };
+                    let least = *bound.get_or_insert_with(|| clearance(at));
                     let ok = fine
                         .interpolate(at, next)
                         .iter()
-                        .all(|c| clear.clearance(c) >= least - GUARD_TOLERANCE_M);
+                        .all(|c| clearance(c) >= least - GUARD_TOLERANCE_M);
                     if ok {
-                        bound = Some(least.max(clear.clearance(next)));
+                        bound = Some(least.max(clearance(next)));
                     }
                     ok
                 },

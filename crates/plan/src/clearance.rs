@@ -61,6 +61,16 @@ impl PointClearance {
         self.kept.is_empty()
     }
 
+    /// [`PointClearance::robot_clearance`] of `safety`'s robot at the
+    /// configuration `q`, placed as `safety` places it, up to `search_m` (0
+    /// when its kinematics fail).
+    pub fn configuration_clearance(&self, safety: &Safety, q: &[Real], search_m: Real) -> Real {
+        let robot = safety.robot();
+        robot.forward_kinematics(q).map_or(0.0, |frames| {
+            self.robot_clearance(robot, &frames, safety.world_from_base(), search_m)
+        })
+    }
+
     /// The smallest distance from the collision capsules of `robot`'s moving
     /// links (posed by `base_from_link`, placed by `world_from_base`) to the
     /// kept points, or `search_m` when none is closer (0 when a point is
@@ -156,15 +166,8 @@ impl<'a, C> ClearanceChecker<'a, C> {
     /// The clearance of the configuration `q`, up to `clearance_m` (0 when
     /// its kinematics fail).
     pub fn clearance(&self, q: &[Real]) -> Real {
-        let robot = self.safety.robot();
-        robot.forward_kinematics(q).map_or(0.0, |frames| {
-            self.points.robot_clearance(
-                robot,
-                &frames,
-                self.safety.world_from_base(),
-                self.clearance_m,
-            )
-        })
+        self.points
+            .configuration_clearance(self.safety, q, self.clearance_m)
     }
 
     /// The clearance a configuration needs: `clearance_m`, or where the arm
