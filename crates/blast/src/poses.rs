@@ -59,8 +59,8 @@ pub struct BlastTool {
     /// centre; an LM run that strays further while it fixes the angle and
     /// the range has nothing to bring it back (on bridge1's run, most failed
     /// runs ended 0.26–0.78 m off with every other limit met). With 10 mm
-    /// the plan of that run has poses for 5896 discs instead of 5515, in
-    /// less time.
+    /// the plan of that run has poses for 5898 discs instead of 5515 (five
+    /// first starts; 5896 with [`crate::BLAST_STARTS`]), in less time.
     pub aim_scale_m: Real,
 }
 
