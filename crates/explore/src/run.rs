@@ -513,6 +513,12 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         // after arriving) and back away; the bound rises as it does, up to
         // `clearance_m`, and never falls.
         let mut bound: Option<Real> = None;
+        // The last step's goal and its clearance when measured, and the
+        // points kept since: a step that starts there measures the new
+        // points only (the same number as measuring them all).
+        let mut last: Option<(Vec<Real>, Real)> = None;
+        let mut fresh = PointClearance::new();
+        let search_m = clearance_m - GUARD_MARGIN_M;
         for w in waypoints.windows(2) {
             let s = &self.setup;
             let (fine, points) = (&self.fine, &mut self.points);
@@ -527,21 +533,40 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                 step,
                 &mut builder,
                 &mut |at, next, b| {
-                    points.insert(b.points()[kept..].iter().map(|p| &p.point));
+                    fresh.clear();
+                    points.insert_noting(
+                        b.points()[kept..].iter().map(|p| &p.point),
+                        Some(&mut fresh),
+                    );
                     kept = b.points().len();
                     if clearance_m <= 0.0 {
                         return true;
                     }
-                    let clearance = |q: &[Real]| {
-                        points.configuration_clearance(fine, q, clearance_m - GUARD_MARGIN_M)
+                    let clearance = |q: &[Real]| points.configuration_clearance(fine, q, search_m);
+                    let here = match last.take() {
+                        Some((q, c)) if q.as_slice() == at => {
+                            c.min(fresh.configuration_clearance(fine, at, search_m))
+                        }
+                        _ => clearance(at),
                     };
-                    let least = *bound.get_or_insert_with(|| clearance(at));
-                    let ok = fine
-                        .interpolate(at, next)
-                        .iter()
-                        .all(|c| clearance(c) >= least - GUARD_TOLERANCE_M);
+                    let least = *bound.get_or_insert(here);
+                    let mut at_next = None;
+                    let ok = fine.interpolate(at, next).iter().all(|c| {
+                        let v = if c.as_slice() == at {
+                            here
+                        } else {
+                            let v = clearance(c);
+                            if c.as_slice() == next {
+                                at_next = Some(v);
+                            }
+                            v
+                        };
+                        v >= least - GUARD_TOLERANCE_M
+                    });
                     if ok {
-                        bound = Some(least.max(clearance(next)));
+                        let there = at_next.unwrap_or_else(|| clearance(next));
+                        bound = Some(least.max(there));
+                        last = Some((next.to_vec(), there));
                     }
                     ok
                 },

@@ -41,14 +41,36 @@ impl PointClearance {
 
     /// Add measured points (world frame); non-finite ones are ignored.
     pub fn insert<'a>(&mut self, points: impl IntoIterator<Item = &'a Point3>) {
+        self.insert_noting(points, None);
+    }
+
+    /// [`PointClearance::insert`], and the points it keeps also into
+    /// `added`: a clearance from this index after the call is then the
+    /// smaller of the one before it and the one from `added` (when `added`
+    /// was empty before; the distances of a point do not depend on what
+    /// else is kept).
+    pub fn insert_noting<'a>(
+        &mut self,
+        points: impl IntoIterator<Item = &'a Point3>,
+        mut added: Option<&mut PointClearance>,
+    ) {
         for p in points {
             if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
                 continue;
             }
             if self.kept.insert(key(p, POINT_DEDUP_M)) {
                 self.cells.entry(key(p, CELL_M)).or_default().push(*p);
+                if let Some(a) = added.as_deref_mut() {
+                    a.insert(std::iter::once(p));
+                }
             }
         }
+    }
+
+    /// Forget every point (the allocations are kept).
+    pub fn clear(&mut self) {
+        self.kept.clear();
+        self.cells.clear();
     }
 
     /// Points kept.
@@ -289,6 +311,61 @@ mod tests {
         let c = Point3::new(0.5, 0.0, 0.0);
         points.insert([a, b, c, Point3::new(Real::NAN, 0.0, 0.0)].iter());
         assert_eq!(points.len(), 2);
+    }
+
+    /// The clearance after [`PointClearance::insert_noting`] is the smaller
+    /// of the one before and the one from the noted points alone, at many
+    /// poses, in batches of random points around the arm (some within a
+    /// centimetre of kept ones, which are not kept again).
+    #[test]
+    fn noted_points_give_the_clearance_of_all() {
+        use rand::{RngExt, SeedableRng};
+        let robot = robot::builtin("denso-vm6083").unwrap();
+        let safety = Safety::new(
+            robot,
+            Isometry3::identity(),
+            &PlanConfig::default(),
+            vec![1.0; 6],
+        )
+        .unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let mut all = PointClearance::new();
+        let mut added = PointClearance::new();
+        let poses: Vec<Vec<Real>> = (0..20)
+            .map(|_| (0..6).map(|_| rng.random_range(-1.5..1.5)).collect())
+            .collect();
+        let mut checked = 0;
+        for _ in 0..30 {
+            let batch: Vec<Point3> = (0..200)
+                .map(|_| {
+                    Point3::new(
+                        rng.random_range(-0.8..0.8),
+                        rng.random_range(-0.8..0.8),
+                        rng.random_range(-0.2..1.2),
+                    )
+                })
+                .collect();
+            let before: Vec<Real> = poses
+                .iter()
+                .map(|q| all.configuration_clearance(&safety, q, 0.2))
+                .collect();
+            added.clear();
+            all.insert_noting(batch.iter(), Some(&mut added));
+            // Again: nothing is kept twice, nothing noted.
+            let mut again = PointClearance::new();
+            all.insert_noting(batch.iter(), Some(&mut again));
+            assert!(again.is_empty());
+            for (q, b) in poses.iter().zip(before) {
+                let now = all.configuration_clearance(&safety, q, 0.2);
+                let new = added.configuration_clearance(&safety, q, 0.2);
+                assert_eq!(now, b.min(new));
+                checked += usize::from(now < 0.2);
+            }
+        }
+        assert!(
+            checked > 100,
+            "only {checked} poses had a point within reach"
+        );
     }
 
     /// A checker that admits everything, under the clearance rule.
