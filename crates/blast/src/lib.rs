@@ -13,7 +13,8 @@ pub mod poses;
 pub mod sequence;
 
 pub use plans::{
-    BLAST_STARTS, BlastConfig, BlastInputs, BlastInputsFile, BlastPlan, discs_with_pose, plan_blast,
+    BLAST_GIVE_UP_SCALES, BLAST_STARTS, BlastConfig, BlastInputs, BlastInputsFile, BlastPlan,
+    discs_with_pose, plan_blast,
 };
 pub use poses::{BlastMeasure, BlastPoses, BlastTool};
 

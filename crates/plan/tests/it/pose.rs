@@ -8,7 +8,9 @@
 use geom::{Isometry3, Point3, Real, UnitVector3, Vector3};
 use map::{OccupancyConfig, OccupancyGrid, RegionsConfig, VoxelKey};
 use plan::pose::sigmoid;
-use plan::{PlanConfig, PlanError, PoseConfig, PoseSelector, Safety, Target, view_geometry};
+use plan::{
+    PlanConfig, PlanError, PoseConfig, PoseSelector, PoseTermination, Safety, Target, view_geometry,
+};
 use robot::JointLimits;
 
 const VOXEL: Real = 0.1;
@@ -369,6 +371,90 @@ fn lm_alone_moves_the_arm_off_unexplored_space() {
     let after = one.select(&grid, &target, &q).unwrap();
     assert!(after.valid(), "{:?}", after.pose);
     check_independently(&safety, &grid, &target, after.joints());
+}
+
+/// The blast plan's settings (backtracking aimed starts, runs given up when
+/// the aim strays ten scales) still solve every wall target, re-measured.
+#[test]
+fn backtracking_starts_with_give_up_solve_the_wall() {
+    let safety = safety();
+    let grid = walled_grid();
+    let config = PoseConfig {
+        aim_backtracking: true,
+        give_up_scales: 10.0,
+        ..PoseConfig::default()
+    };
+    let selector = PoseSelector::new(&safety, config).unwrap();
+    for (y, z) in [(0.0, 0.5), (0.3, 0.8), (-0.3, 0.3), (0.2, 1.1), (-0.5, 0.6)] {
+        let target = wall_target(y, z);
+        let solution = selector.select(&grid, &target, &START).unwrap();
+        assert!(solution.valid(), "target ({y}, {z}): {:?}", solution.pose);
+        check_independently(&safety, &grid, &target, solution.joints());
+    }
+}
+
+/// The give-up rule as stated: from a start whose aim misses the target by
+/// two centimetres, LM alone with a threshold far below that miss stops at
+/// the iteration the rule starts at, and without the rule the same run goes
+/// on and succeeds.
+#[test]
+fn a_run_whose_aim_strays_is_given_up() {
+    let safety = safety();
+    let grid = walled_grid();
+    let target = wall_target(0.2, 0.6);
+    let valid = PoseSelector::new(&safety, PoseConfig::default())
+        .unwrap()
+        .select(&grid, &target, &START)
+        .unwrap();
+    let mut start = valid.joints().to_vec();
+    start[0] += 2f64.to_radians();
+    let one = |give_up_scales| {
+        PoseSelector::new(
+            &safety,
+            PoseConfig {
+                starts: 1,
+                give_up_scales,
+                ..PoseConfig::default()
+            },
+        )
+        .unwrap()
+        .select(&grid, &target, &start)
+        .unwrap()
+    };
+    let before = PoseSelector::new(&safety, PoseConfig::default())
+        .unwrap()
+        .evaluate(&grid, &target, &start)
+        .unwrap();
+    assert!(before.view.hit.unwrap().rho_m > 0.02, "{:?}", before.view);
+    let free = one(0.0);
+    assert!(free.valid(), "{:?}", free.pose);
+    assert!(free.runs[0].iterations > plan::pose::GIVE_UP_AFTER);
+    // A micrometre: every run that has not hit the centre by then stops.
+    let strict = one(1e-3);
+    assert_eq!(strict.runs[0].termination, PoseTermination::GaveUp);
+    assert_eq!(strict.runs[0].iterations, plan::pose::GIVE_UP_AFTER);
+}
+
+#[test]
+fn give_up_scales_must_be_finite_and_not_negative() {
+    let safety = safety();
+    for bad in [-1.0, Real::NAN, Real::INFINITY] {
+        let config = PoseConfig {
+            give_up_scales: bad,
+            ..PoseConfig::default()
+        };
+        let err = PoseSelector::new(&safety, config).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                PlanError::Config {
+                    field: "pose.give_up_scales",
+                    ..
+                }
+            ),
+            "{bad}: {err}"
+        );
+    }
 }
 
 #[test]
