@@ -494,7 +494,7 @@ fn select_poses(
 }
 
 /// Side of the cubes (world axes) that cut a segment into patches for
-/// [`select_poses`], metres. Ours: two and a half times the largest disc's
+/// the plan's first poses, metres. Ours: two and a half times the largest disc's
 /// radius (Paul's discs are 1–4 cm), so a patch is a few discs of one
 /// surface, blasted from nearly one pose. On bridge1's run (5462 of the
 /// 7685 discs in reach are seeds) the plan has poses for 5893 discs instead
