@@ -177,7 +177,7 @@ use geom::{Isometry3, Point3, Real, UnitVector3, Vector3};
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt, TerminationReason};
 use map::OccupancyGrid;
 use nalgebra::storage::Owned;
-use nalgebra::{DVector, Dyn, Matrix6xX, OMatrix, SVector, U7};
+use nalgebra::{DMatrix, DVector, Dyn, Matrix6xX, OMatrix, SVector, U7};
 use robot::{JointLimits, Robot};
 use serde::{Deserialize, Serialize};
 use std::cell::Cell;
@@ -1080,7 +1080,6 @@ impl<'a> PoseSelector<'a> {
         target: &Target,
         ray: &Vector3,
     ) -> Result<Vec<Real>, PlanError> {
-        use nalgebra::DMatrix;
         const ITERATIONS: usize = 100;
         const DAMPING: Real = 0.03;
         /// Metres per radian: weighs direction, tilt and limit rows against
@@ -1112,6 +1111,9 @@ impl<'a> PoseSelector<'a> {
         let mut frames = Vec::with_capacity(robot.links.len());
         let mut jac = Matrix6xX::zeros(n);
         let mut row = vec![0.0; n];
+        // The normal equations, filled afresh each iteration.
+        let mut normal = DMatrix::<Real>::zeros(n, n);
+        let mut gradient = DVector::<Real>::zeros(n);
         // The step's bound, halved each time a step raised the cost (the
         // step is taken back), and the last pose whose cost did not rise.
         let mut bound = MAX_STEP_RAD;
@@ -1127,8 +1129,9 @@ impl<'a> PoseSelector<'a> {
             let a = scanner.rotation * Vector3::z();
             let w = centre - p;
             let s = w.dot(&a);
-            let mut normal = DMatrix::<Real>::identity(n, n) * (DAMPING * DAMPING);
-            let mut gradient = DVector::<Real>::zeros(n);
+            normal.fill(0.0);
+            normal.fill_diagonal(DAMPING * DAMPING);
+            gradient.fill(0.0);
             let mut cost = 0.0;
             let mut add = |row: &[Real], r: Real| {
                 cost += r * r;
@@ -1212,8 +1215,9 @@ impl<'a> PoseSelector<'a> {
                     break;
                 }
             }
-            let Some(chol) = normal.cholesky() else { break };
-            let mut step = chol.solve(&(-gradient));
+            let Some(mut step) = solve_normal(&normal, &gradient) else {
+                break;
+            };
             let largest = step.amax();
             if !largest.is_finite() {
                 break;
@@ -1231,6 +1235,20 @@ impl<'a> PoseSelector<'a> {
         }
         Ok(kept.map_or(q, |(q, _)| q))
     }
+}
+
+/// `x` with `normal · x = −gradient` by Cholesky (`None` when `normal` is
+/// not positive definite). Six unknowns (every arm we ship) are solved on
+/// the stack; nalgebra's decomposition is the same generic code for both,
+/// so the numbers are too.
+fn solve_normal(normal: &DMatrix<Real>, gradient: &DVector<Real>) -> Option<DVector<Real>> {
+    if normal.nrows() == 6 && normal.ncols() == 6 && gradient.len() == 6 {
+        let m = nalgebra::Matrix6::from_iterator(normal.iter().copied());
+        let g = nalgebra::Vector6::from_iterator(gradient.iter().copied());
+        let x = m.cholesky()?.solve(&(-g));
+        return Some(DVector::from_column_slice(x.as_slice()));
+    }
+    Some(normal.clone().cholesky()?.solve(&(-gradient)))
 }
 
 /// Links are measured at the evaluated point up to `dist_bound +
@@ -1344,5 +1362,33 @@ impl LeastSquaresProblem<Real, U7, Dyn> for Problem<'_, '_> {
             return None;
         }
         Some(jacobian)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    /// The stack solve of six unknowns gives the heap solve's numbers to
+    /// the bit, on random damped normal equations `JᵀJ + λ²I` (and a
+    /// matrix that is not positive definite is refused by both).
+    #[test]
+    fn six_unknowns_on_the_stack_match_the_heap_to_the_bit() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..500 {
+            let j = DMatrix::<Real>::from_fn(9, 6, |_, _| rng.random_range(-1.0..1.0));
+            let mut normal = j.transpose() * &j;
+            for d in 0..6 {
+                normal[(d, d)] += 0.03 * 0.03;
+            }
+            let gradient = DVector::<Real>::from_fn(6, |_, _| rng.random_range(-1.0..1.0));
+            let heap = normal.clone().cholesky().unwrap().solve(&(-&gradient));
+            let stack = solve_normal(&normal, &gradient).unwrap();
+            assert_eq!(heap.as_slice(), stack.as_slice());
+        }
+        let not_definite = DMatrix::<Real>::from_diagonal_element(6, 6, -1.0);
+        assert!(solve_normal(&not_definite, &DVector::zeros(6)).is_none());
     }
 }
