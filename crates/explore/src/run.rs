@@ -591,17 +591,22 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             let sweep = builder.finish()?;
             self.setup.stage.integrate_motion(&sweep);
             self.tsdf.integrate_sweep(&sweep);
-            self.add_points(k, &sweep);
+            // The guard kept the points before `kept` (the sweep holds the
+            // builder's points in order): the same index, without looking
+            // each up again.
+            self.add_points(k, &sweep, kept);
         }
         Ok(completed)
     }
 
     /// Keep the points `sweep` measured for viewpoint `k` (the cloud, the
-    /// clearance index) and show them to the judge.
-    fn add_points(&mut self, k: usize, sweep: &Sweep) {
+    /// clearance index from its point `kept` on: the ones before are in it
+    /// already) and show them to the judge.
+    fn add_points(&mut self, k: usize, sweep: &Sweep, kept: usize) {
         self.cloud.extend_from_slice(sweep.points());
         self.cloud_viewpoint.resize(self.cloud.len(), k);
-        self.points.insert(sweep.points().iter().map(|p| &p.point));
+        let new = sweep.points().get(kept..).unwrap_or_default();
+        self.points.insert(new.iter().map(|p| &p.point));
         self.judge.sweep(sweep);
     }
 
@@ -645,7 +650,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             m.observe(discs, &sweep)?;
         }
         let integrate_ms = self.timed(t);
-        self.add_points(k, &sweep);
+        self.add_points(k, &sweep, 0);
         Ok((
             sweep,
             Taken {
