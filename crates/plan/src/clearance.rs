@@ -315,8 +315,8 @@ mod tests {
 
     /// The clearance after [`PointClearance::insert_noting`] is the smaller
     /// of the one before and the one from the noted points alone, at many
-    /// poses, in batches of random points around the arm (some within a
-    /// centimetre of kept ones, which are not kept again).
+    /// poses, in batches of random points around the arm; a batch inserted
+    /// again keeps and notes nothing.
     #[test]
     fn noted_points_give_the_clearance_of_all() {
         use rand::{RngExt, SeedableRng};

@@ -1389,6 +1389,7 @@ mod tests {
             assert_eq!(heap.as_slice(), stack.as_slice());
         }
         let not_definite = DMatrix::<Real>::from_diagonal_element(6, 6, -1.0);
+        assert!(not_definite.clone().cholesky().is_none());
         assert!(solve_normal(&not_definite, &DVector::zeros(6)).is_none());
     }
 }
