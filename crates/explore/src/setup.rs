@@ -42,7 +42,7 @@ pub struct SetupInputs {
 }
 
 /// Everything a run starts from.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Setup {
     /// The robot (scanner mounted).
     pub robot: Robot,

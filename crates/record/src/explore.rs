@@ -92,8 +92,9 @@ pub struct PhaseTimings {
     /// The scenario's world, the C-space model (built or loaded), the
     /// planning grid, the judge.
     pub setup_s: Real,
-    /// The coverage oracle, computed or read from its cache (0 without
-    /// one).
+    /// The coverage oracle: read from its cache, or the wait for it after
+    /// the run when computed (it runs beside the run, on the cores the run
+    /// leaves idle; 0 without one).
     #[serde(default)]
     pub oracle_s: Real,
     /// Stage One: decisions, motions, sweeps, integration (a resumed run's

@@ -300,6 +300,9 @@ pub struct Scene {
     /// The four-wide collapse of `bvh`, for bulk ray casting; its leaf payloads
     /// are `first packet << PACKET_BITS | packet count`.
     bvh4: Bvh4,
+    /// Each closed object's index and bounding box: a point outside every
+    /// box (but its own object's) is inside no closed object.
+    closed_bounds: Vec<(u32, Aabb)>,
     /// Each leaf's triangles in packets of four.
     packets: Vec<Tri4>,
     /// The triangle (face index) of each packet lane; `u32::MAX` for padding.
@@ -394,6 +397,17 @@ impl Scene {
             (start << PACKET_BITS) | (packets.len() as u32 - start)
         })
         .ok_or_else(|| SceneError::invalid("scene", "too many triangles for the wide BVH"))?;
+        let closed_bounds = list
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.closed)
+            .map(|(k, o)| {
+                let corners = mesh.triangles[o.triangles.clone()]
+                    .iter()
+                    .flat_map(|t| t.iter().map(|&v| &mesh.vertices[v as usize]));
+                (k as u32, Aabb::from_points(corners))
+            })
+            .collect();
         Ok(Self {
             materials,
             objects: list,
@@ -401,6 +415,7 @@ impl Scene {
             tri_object,
             bvh,
             tris,
+            closed_bounds,
             bvh4,
             packets,
             packet_faces,
@@ -695,6 +710,20 @@ impl Scene {
     /// its back. Triangles of `except` and of open objects are ignored, so a
     /// face flush against another object's face resolves to the other object.
     pub fn is_inside_closed_object(&self, p: &Point3, except: Option<ObjectId>) -> bool {
+        // Outside every closed object's box no ray needs casting.
+        if !self
+            .closed_bounds
+            .iter()
+            .any(|(k, b)| Some(ObjectId(*k)) != except && b.contains_point(p))
+        {
+            return false;
+        }
+        self.ray_exits_closed_object(p, except)
+    }
+
+    /// The ray test of [`Scene::is_inside_closed_object`], without its box
+    /// test.
+    fn ray_exits_closed_object(&self, p: &Point3, except: Option<ObjectId>) -> bool {
         // A direction off every axis avoids grazing axis-aligned edges.
         let dir = Vector3::new(0.267_261_241_9, 0.534_522_483_8, 0.801_783_725_7);
         let ray = RayF32::new(
@@ -751,5 +780,62 @@ impl RayCast for Scene {
             object: Some(ObjectId(object)),
             element: face,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use crate::sampling::{SamplingConfig, SurfaceSampler};
+    use rand::{RngExt, SeedableRng};
+
+    /// The box test only skips rays that would find no closed object from
+    /// behind: on the built-in scenes, the probes of every surface sample
+    /// (as the exposure test places them) and random points in the scene's
+    /// box get the ray test's answer.
+    #[test]
+    fn the_box_test_keeps_the_ray_tests_answer() {
+        for name in ["bridge3", "cube", "block1", "block2", "cylinder"] {
+            let world = crate::builtin::scene(name)
+                .unwrap()
+                .build(std::path::Path::new("."))
+                .unwrap();
+            let scene = world.as_scene().unwrap();
+            let cfg = SamplingConfig {
+                samples_per_m2: 2000.0,
+                exposed_only: false,
+                ..SamplingConfig::default()
+            };
+            let mut checked = 0;
+            for s in SurfaceSampler::new(scene, &cfg).unwrap().flatten() {
+                for side in [1e-4, -1e-4, 1e-2] {
+                    let p = s.point + s.normal.into_inner() * side;
+                    for except in [Some(s.object), None] {
+                        assert_eq!(
+                            scene.is_inside_closed_object(&p, except),
+                            scene.ray_exits_closed_object(&p, except),
+                            "{name}: {p:?} except {except:?}"
+                        );
+                        checked += 1;
+                    }
+                }
+            }
+            let b = scene.bounding_box();
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+            for _ in 0..20_000 {
+                let p = Point3::new(
+                    rng.random_range(b.min.x - 0.1..b.max.x + 0.1),
+                    rng.random_range(b.min.y - 0.1..b.max.y + 0.1),
+                    rng.random_range(b.min.z - 0.1..b.max.z + 0.1),
+                );
+                assert_eq!(
+                    scene.is_inside_closed_object(&p, None),
+                    scene.ray_exits_closed_object(&p, None),
+                    "{name}: {p:?}"
+                );
+            }
+            assert!(checked > 1000, "{name}: {checked} probes");
+        }
     }
 }

@@ -430,16 +430,23 @@ impl SimExplore {
             oracle,
         } = self;
         let t = Instant::now();
-        let oracle = match oracle {
-            OracleOption::On(cache) if world.as_scene().is_some() => {
-                Some(crate::oracle::run_oracle(&loaded, &setup, &world, cache.as_deref())?.0)
-            }
+        let pending = match oracle {
+            OracleOption::On(cache) if world.as_scene().is_some() => Some(
+                crate::oracle::OracleJob::start(&loaded, &setup, &world, cache.as_deref())?,
+            ),
             _ => None,
         };
-        let oracle_s = t.elapsed().as_secs_f64();
-        let mut run = explore::run(setup, &mut rig, &mut judge, &run_options, progress)?;
-        if let Some(t) = &mut run.timings {
-            t.oracle_s = oracle_s;
+        let loaded_s = t.elapsed().as_secs_f64();
+        // A computed oracle runs beside the exploration (it depends on the
+        // scenario and the setup only): the run waits for it at the end.
+        let run = explore::run(setup, &mut rig, &mut judge, &run_options, progress);
+        // A failed run does not wait (the oracle's thread is left to end
+        // with the process; its cache file is written whole or not at all).
+        let mut run = run?;
+        let t = Instant::now();
+        let oracle = pending.map(crate::oracle::OracleJob::finish).transpose()?;
+        if let Some(t_run) = &mut run.timings {
+            t_run.oracle_s = loaded_s + t.elapsed().as_secs_f64();
         }
         Ok(ExploreOutcome {
             coverage: judge.coverage(),

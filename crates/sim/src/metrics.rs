@@ -5,7 +5,6 @@ use crate::SimError;
 use geom::{Aabb, Point3, Real};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
-use rustc_hash::FxHashSet;
 use scenario::MetricsConfig;
 use scene::{DEFAULT_SAMPLE_CHUNK, RayCast, Scene, SurfaceSampler};
 use serde::Serialize;
@@ -266,6 +265,62 @@ impl SampleGrid {
         );
     }
 
+    /// Cells of the grid.
+    pub fn cells(&self) -> usize {
+        self.starts.len() - 1
+    }
+
+    /// [`SampleGrid::cell_range`] packed: the lowest cell a sphere of
+    /// radius `r` about `p` can reach (as [`SampleGrid::cell_of`]), and per
+    /// axis `k` (bit `k`) whether it reaches the next cell along it too.
+    fn reach_of(&self, p: &[Real; 3]) -> Option<(usize, u8)> {
+        let range = self.cell_range(p)?;
+        let corner = (range[2].0 * self.dims[1] + range[1].0) * self.dims[0] + range[0].0;
+        let upper = (0..3).fold(0u8, |m, k| m | (u8::from(range[k].1 > range[k].0) << k));
+        Some((corner, upper))
+    }
+
+    /// Set the bit (in `bits`, by sample index) of every sample within `r`
+    /// of `p` in the cells of [`SampleGrid::reach_of`]'s `(corner, upper)`,
+    /// skipping the cells `full` (one bit per cell) holds and adding those
+    /// whose samples are now all set.
+    fn mark_within(
+        &self,
+        corner: usize,
+        upper: u8,
+        p: &[Real; 3],
+        full: &mut [u64],
+        bits: &mut [u64],
+    ) {
+        let (sy, sz) = (self.dims[0], self.dims[0] * self.dims[1]);
+        let up = |k: u8| usize::from(upper >> k & 1);
+        for z in 0..=up(2) {
+            for y in 0..=up(1) {
+                for x in 0..=up(0) {
+                    let cell = corner + z * sz + y * sy + x;
+                    let (fw, fb) = (cell / 64, 1u64 << (cell % 64));
+                    if full[fw] & fb != 0 {
+                        continue;
+                    }
+                    let (s, e) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
+                    let mut all = true;
+                    for (q, &i) in self.points[s..e].iter().zip(&self.items[s..e]) {
+                        let d2 =
+                            (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
+                        let (word, bit) = (i as usize / 64, 1u64 << (i % 64));
+                        if d2 <= self.r2 {
+                            bits[word] |= bit;
+                        }
+                        all &= bits[word] & bit != 0;
+                    }
+                    if all {
+                        full[fw] |= fb;
+                    }
+                }
+            }
+        }
+    }
+
     /// The cells a sphere of radius `r ≤ cell/2` about `p` can reach: per
     /// axis, the nearer neighbour cell only (`None`: none).
     fn cell_range(&self, p: &[Real; 3]) -> Option<[(usize, usize); 3]> {
@@ -467,42 +522,23 @@ impl CoverageTracker {
         let Some(reach) = &self.reach else {
             return bits;
         };
-        // In the grid's cell order, so the lookups walk memory in order.
-        let mut inside: Vec<(usize, [Real; 3])> = points
+        let grid = &self.grid;
+        // Each point's cells, by their lowest corner, so the lookups walk
+        // memory in order.
+        let mut inside: Vec<(usize, u8, [Real; 3])> = points
             .iter()
             .filter(|p| reach.contains_point(p))
-            .map(|p| {
+            .filter_map(|p| {
                 let q = [p.x, p.y, p.z];
-                (self.grid.cell_of(&q).unwrap_or(usize::MAX), q)
+                grid.reach_of(&q).map(|(corner, upper)| (corner, upper, q))
             })
             .collect();
-        inside.sort_unstable_by_key(|(c, _)| *c);
+        inside.sort_unstable_by_key(|(c, _, _)| *c);
         // Cells whose samples are all marked: the points after the first
         // few of a surface patch find nothing new there.
-        let mut full: FxHashSet<usize> = FxHashSet::default();
-        let mut all = true;
-        let mut now_full = Vec::new();
-        for (_, q) in &inside {
-            self.grid.within_cells(
-                q,
-                |cell| !full.contains(&cell),
-                |v| match v {
-                    Visit::Sample { index, within } => {
-                        let (word, bit) = (index / 64, 1u64 << (index % 64));
-                        if within {
-                            bits[word] |= bit;
-                        }
-                        all &= bits[word] & bit != 0;
-                    }
-                    Visit::CellEnd(cell) => {
-                        if all {
-                            now_full.push(cell);
-                        }
-                        all = true;
-                    }
-                },
-            );
-            full.extend(now_full.drain(..));
+        let mut full = vec![0u64; grid.cells().div_ceil(64)];
+        for (corner, upper, q) in &inside {
+            grid.mark_within(*corner, *upper, q, &mut full, &mut bits);
         }
         bits
     }

@@ -296,14 +296,114 @@ pub fn run_oracle(
     cache: Option<&Path>,
 ) -> Result<(CoverageOracle, bool), SimError> {
     let inputs = oracle_inputs(loaded, setup)?;
-    if let Some(path) = cache
-        && let Ok(text) = std::fs::read(path)
-        && let Ok(file) = serde_json::from_slice::<CacheFile>(&text)
-        && file.format == CACHE_FORMAT
-        && file.inputs == inputs
-    {
-        return Ok((file.oracle, true));
+    if let Some(oracle) = cached_oracle(cache, &inputs) {
+        return Ok((oracle, true));
     }
+    Ok((compute_oracle(loaded, setup, world, cache, inputs)?, false))
+}
+
+/// The run's oracle of [`run_oracle`], computed beside the caller: read at
+/// once when `cache` holds it, else computed on a thread of its own (with
+/// a thread pool of its own, so the caller's parallel work does not queue
+/// behind it) until [`OracleJob::finish`] waits for it. The same oracle as
+/// [`run_oracle`]'s, whatever the caller does meanwhile.
+#[derive(Debug)]
+pub struct OracleJob(OracleState);
+
+#[derive(Debug)]
+enum OracleState {
+    Ready(CoverageOracle),
+    Running(std::thread::JoinHandle<Result<CoverageOracle, SimError>>),
+}
+
+impl OracleJob {
+    /// Read the oracle of `loaded` set up as `setup` in `world` from
+    /// `cache`, or start computing it (a copy of `setup` goes to the
+    /// thread). Fails when the scenario cannot be described for the cache
+    /// or the thread cannot start.
+    pub fn start(
+        loaded: &LoadedScenario,
+        setup: &Setup,
+        world: &Arc<World>,
+        cache: Option<&Path>,
+    ) -> Result<Self, SimError> {
+        let inputs = oracle_inputs(loaded, setup)?;
+        if let Some(oracle) = cached_oracle(cache, &inputs) {
+            return Ok(Self(OracleState::Ready(oracle)));
+        }
+        let (loaded, setup, world) = (loaded.clone(), setup.clone(), Arc::clone(world));
+        let cache = cache.map(Path::to_path_buf);
+        let threads = rayon::current_num_threads();
+        let thread_error = |e: std::io::Error| SimError::InvalidArgument {
+            what: "coverage oracle".into(),
+            message: format!("cannot start its thread: {e}"),
+        };
+        let handle = std::thread::Builder::new()
+            .name("oracle".into())
+            .spawn(move || {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .thread_name(|i| format!("oracle-{i}"))
+                    .start_handler(|_| idle_priority())
+                    .build()
+                    .map_err(|e| SimError::InvalidArgument {
+                        what: "coverage oracle".into(),
+                        message: format!("cannot start its thread pool: {e}"),
+                    })?;
+                pool.install(|| compute_oracle(&loaded, &setup, &world, cache.as_deref(), inputs))
+            })
+            .map_err(thread_error)?;
+        Ok(Self(OracleState::Running(handle)))
+    }
+
+    /// The oracle, once computed (and written to the cache).
+    pub fn finish(self) -> Result<CoverageOracle, SimError> {
+        match self.0 {
+            OracleState::Ready(oracle) => Ok(oracle),
+            OracleState::Running(handle) => {
+                handle.join().map_err(|_| SimError::InvalidArgument {
+                    what: "coverage oracle".into(),
+                    message: "its thread panicked".into(),
+                })?
+            }
+        }
+    }
+}
+
+/// Let the calling thread run only on a core nothing else wants (Linux's
+/// `SCHED_IDLE`): the oracle beside a run takes the cores the run leaves
+/// idle and slows it as little as it can. Where the system refuses, the
+/// thread keeps its priority (the oracle is the same either way).
+fn idle_priority() {
+    #[cfg(target_os = "linux")]
+    {
+        use thread_priority::unix::{
+            NormalThreadSchedulePolicy, ThreadSchedulePolicy, set_thread_priority_and_policy,
+            thread_native_id,
+        };
+        let _ = set_thread_priority_and_policy(
+            thread_native_id(),
+            thread_priority::ThreadPriority::Min,
+            ThreadSchedulePolicy::Normal(NormalThreadSchedulePolicy::Idle),
+        );
+    }
+}
+
+/// The oracle in `cache` when that file holds one made for `inputs`.
+fn cached_oracle(cache: Option<&Path>, inputs: &str) -> Option<CoverageOracle> {
+    let text = std::fs::read(cache?).ok()?;
+    let file = serde_json::from_slice::<CacheFile>(&text).ok()?;
+    (file.format == CACHE_FORMAT && file.inputs == inputs).then_some(file.oracle)
+}
+
+/// The run's oracle computed, and written to `cache` (with its `inputs`).
+fn compute_oracle(
+    loaded: &LoadedScenario,
+    setup: &Setup,
+    world: &Arc<World>,
+    cache: Option<&Path>,
+    inputs: String,
+) -> Result<CoverageOracle, SimError> {
     let scanner = loaded.scenario.scanner.clone().unwrap_or_default().config;
     let pool = OraclePool::new(setup, world, &scanner, &loaded.scenario.metrics, 0)?;
     let oracle = pool.oracle(OracleRule::Run);
@@ -319,7 +419,7 @@ pub fn run_oracle(
         })?;
         record::output::replace_file(path, &text)?;
     }
-    Ok((oracle, false))
+    Ok(oracle)
 }
 
 /// The configurations of the tilt sweep from `q`: every `CHECK_TILT_DEG` of
