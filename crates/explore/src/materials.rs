@@ -183,16 +183,17 @@ impl Materials {
 
     /// Write the posteriors and `H3` into the disc map.
     pub(crate) fn finish(&self, d: &mut DiscMap) {
-        d.posterior = d
+        use rayon::prelude::*;
+        (d.posterior, d.h3) = d
             .discs
-            .iter()
-            .map(|disc| self.belief.disc_probabilities(disc).unwrap_or_default())
-            .collect();
-        d.h3 = d
-            .discs
-            .iter()
-            .map(|disc| self.belief.h3_disc(disc))
-            .collect();
+            .par_iter()
+            .map(|disc| {
+                (
+                    self.belief.disc_probabilities(disc).unwrap_or_default(),
+                    self.belief.h3_disc(disc),
+                )
+            })
+            .unzip();
         d.h3_total = Some(self.h3_total());
     }
 }

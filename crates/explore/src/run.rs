@@ -181,14 +181,23 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
     let termination = episode.stage_one(&mut replay_one, progress)?;
     phases.stage_one_s = lap();
     let mesh = episode.tsdf.extract_mesh();
-    let mut discs = disc_map(
-        &mesh,
-        (&episode.cloud, &episode.cloud_viewpoint),
-        &episode.viewpoints,
-        (&episode.setup.materials, &*episode.judge),
-        &episode.setup.config.mapping,
-        options.seed,
-    )?;
+    // Stage Two's map world is built beside the disc map: both only read
+    // the mesh, and each is mostly serial work.
+    let two = options.stage_two && !episode.setup.materials.is_empty();
+    let (discs, built_world) = std::thread::scope(|s| {
+        let world = two.then(|| s.spawn(|| map_world(&mesh)));
+        let discs = disc_map(
+            &mesh,
+            (&episode.cloud, &episode.cloud_viewpoint),
+            &episode.viewpoints,
+            (&episode.setup.materials, &*episode.judge),
+            &episode.setup.config.mapping,
+            options.seed,
+        );
+        let world = world.map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)));
+        (discs, world)
+    });
+    let mut discs = discs?;
     phases.discs_s = lap();
     let mut materials = Materials::new(
         &mut discs,
@@ -212,7 +221,18 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
     phases.lrc_s = lap();
     let mut stage_two_termination = None;
     if let (true, Some(m)) = (options.stage_two, materials.as_mut()) {
-        let end = episode.stage_two(m, &mut discs, &mesh, &tried_before, replay_two, progress)?;
+        let map_world = match built_world {
+            Some(w) => w?,
+            None => map_world(&mesh)?,
+        };
+        let end = episode.stage_two(
+            m,
+            &mut discs,
+            map_world,
+            &tried_before,
+            replay_two,
+            progress,
+        )?;
         stage_two_termination = Some(end.to_owned());
     }
     if let Some(m) = &materials {
@@ -880,7 +900,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         &mut self,
         m: &mut Materials,
         discs: &mut DiscMap,
-        mesh: &TriMesh,
+        map_world: Arc<scene::World>,
         tried_before: &[usize],
         mut replay: VecDeque<ViewpointRecord>,
         progress: &mut dyn FnMut(&ViewpointRecord),
@@ -892,7 +912,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             }
         }
         let safety = self.stage().model().safety().clone();
-        let mut aimer = Aimer::new(self, mesh, &safety)?;
+        let mut aimer = Aimer::new(self, map_world, &safety)?;
         loop {
             let done = self.viewpoints.iter().filter(|r| r.stage == 2).count();
             if done >= self.config().stage_two_max_viewpoints {
@@ -960,27 +980,31 @@ struct Aimer<'s> {
     uniform: Real,
 }
 
+/// The map as the scanner would see it: a simulated sweep of the mapped
+/// surface (Stage One's mesh) from a candidate pose, with the scanner's own
+/// model and noise, predicts the observation the LRC will get; a pose
+/// whose predicted observation fails the LRC's geometric checks (range,
+/// incidence, returns and span in the fit window, flatness) is not a
+/// viewpoint for that disc.
+fn map_world(mesh: &TriMesh) -> Result<Arc<scene::World>, ExploreError> {
+    Ok(Arc::new(scene::World::Mesh(scene::Scene::from_mesh(
+        "map",
+        mesh.clone(),
+        vec![scene::Material::new("map", 0.5, 0.5)],
+        scene::MaterialId(0),
+    )?)))
+}
+
 impl<'s> Aimer<'s> {
     /// `safety` is the C-space model's (the selector keeps it).
+    /// `map_world` is Stage One's mesh as a world ([`map_world`]).
     fn new<H: Arm + LineScanner + ?Sized>(
         episode: &Episode<'_, H>,
-        mesh: &TriMesh,
+        map_world: Arc<scene::World>,
         safety: &'s Safety,
     ) -> Result<Self, ExploreError> {
         let s = &episode.setup;
         let selector = plan::PoseSelector::new(safety, s.config.pose.clone())?;
-        // The map as the scanner would see it: a simulated sweep of the
-        // mapped surface (Stage One's mesh) from a candidate pose, with the
-        // scanner's own model and noise, predicts the observation the LRC
-        // will get; a pose whose predicted observation fails the LRC's
-        // geometric checks (range, incidence, returns and span in the fit
-        // window, flatness) is not a viewpoint for that disc.
-        let map_world = Arc::new(scene::World::Mesh(scene::Scene::from_mesh(
-            "map",
-            mesh.clone(),
-            vec![scene::Material::new("map", 0.5, 0.5)],
-            scene::MaterialId(0),
-        )?));
         let probe = MapProbe::new(
             s.robot.clone(),
             Arc::clone(&map_world),

@@ -221,9 +221,9 @@ impl Judge for ExploreJudge {
 
     fn sweep(&mut self, sweep: &Sweep) {
         let positions = sweep.positions();
-        for t in &mut self.trackers {
-            t.add_points(&positions);
-        }
+        self.trackers
+            .par_iter_mut()
+            .for_each(|t| t.add_points(&positions));
     }
 
     fn coverage_a1(&self) -> Option<Real> {
