@@ -265,11 +265,6 @@ impl SampleGrid {
         );
     }
 
-    /// Cells of the grid.
-    pub fn cells(&self) -> usize {
-        self.starts.len() - 1
-    }
-
     /// [`SampleGrid::cell_range`] packed: the lowest cell a sphere of
     /// radius `r` about `p` can reach (as [`SampleGrid::cell_of`]), and per
     /// axis `k` (bit `k`) whether it reaches the next cell along it too.
@@ -280,41 +275,33 @@ impl SampleGrid {
         Some((corner, upper))
     }
 
-    /// Set the bit (in `bits`, by sample index) of every sample within `r`
-    /// of `p` in the cells of [`SampleGrid::reach_of`]'s `(corner, upper)`,
-    /// skipping the cells `full` (one bit per cell) holds and adding those
-    /// whose samples are now all set.
-    fn mark_within(
-        &self,
-        corner: usize,
-        upper: u8,
-        p: &[Real; 3],
-        full: &mut [u64],
-        bits: &mut [u64],
-    ) {
+    /// Set the bit (in `bits`, by position in the grid's storage order) of
+    /// every sample within `r` of `p` in the cells of
+    /// [`SampleGrid::reach_of`]'s `(corner, upper)`. A cell's samples are
+    /// one run of bits: a cell whose bits are all set is skipped, and so is
+    /// each sample already set.
+    fn mark_within(&self, corner: usize, upper: u8, p: &[Real; 3], bits: &mut [u64]) {
         let (sy, sz) = (self.dims[0], self.dims[0] * self.dims[1]);
         let up = |k: u8| usize::from(upper >> k & 1);
         for z in 0..=up(2) {
             for y in 0..=up(1) {
                 for x in 0..=up(0) {
                     let cell = corner + z * sz + y * sy + x;
-                    let (fw, fb) = (cell / 64, 1u64 << (cell % 64));
-                    if full[fw] & fb != 0 {
+                    let (s, e) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
+                    if all_set(bits, s, e) {
                         continue;
                     }
-                    let (s, e) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
-                    let mut all = true;
-                    for (q, &i) in self.points[s..e].iter().zip(&self.items[s..e]) {
+                    for (k, q) in self.points[s..e].iter().enumerate() {
+                        let at = s + k;
+                        let (word, bit) = (at / 64, 1u64 << (at % 64));
+                        if bits[word] & bit != 0 {
+                            continue;
+                        }
                         let d2 =
                             (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
-                        let (word, bit) = (i as usize / 64, 1u64 << (i % 64));
                         if d2 <= self.r2 {
                             bits[word] |= bit;
                         }
-                        all &= bits[word] & bit != 0;
-                    }
-                    if all {
-                        full[fw] |= fb;
                     }
                 }
             }
@@ -379,6 +366,25 @@ impl SampleGrid {
             }
         }
     }
+}
+
+/// Whether bits `s..e` of `bits` are all set.
+fn all_set(bits: &[u64], s: usize, e: usize) -> bool {
+    let mut at = s;
+    while at < e {
+        let (word, from) = (at / 64, at % 64);
+        let to = (e - word * 64).min(64);
+        let mask = if to - from == 64 {
+            u64::MAX
+        } else {
+            ((1u64 << (to - from)) - 1) << from
+        };
+        if bits[word] & mask != mask {
+            return false;
+        }
+        at = word * 64 + to;
+    }
+    true
 }
 
 /// What [`SampleGrid::within_cells`] shows its visitor.
@@ -518,6 +524,23 @@ impl CoverageTracker {
     /// The samples within the threshold of any of `points`, one bit per
     /// sample (`⌈samples / 64⌉` words), whatever is covered so far.
     pub fn bits_of(&self, points: &[Point3]) -> Vec<u64> {
+        let stored = self.stored_bits_of(points);
+        let mut bits = vec![0u64; stored.len()];
+        for (w, &word) in stored.iter().enumerate() {
+            let mut rest = word;
+            while rest != 0 {
+                let i = self.grid.items[w * 64 + rest.trailing_zeros() as usize] as usize;
+                bits[i / 64] |= 1u64 << (i % 64);
+                rest &= rest - 1;
+            }
+        }
+        bits
+    }
+
+    /// [`CoverageTracker::bits_of`] in the tracker's storage order (the
+    /// same for every call, not the samples' own): for counting, comparing
+    /// and uniting such sets, as the oracle does, without the reordering.
+    pub fn stored_bits_of(&self, points: &[Point3]) -> Vec<u64> {
         let mut bits = vec![0u64; self.points.len().div_ceil(64)];
         let Some(reach) = &self.reach else {
             return bits;
@@ -534,11 +557,8 @@ impl CoverageTracker {
             })
             .collect();
         inside.sort_unstable_by_key(|(c, _, _)| *c);
-        // Cells whose samples are all marked: the points after the first
-        // few of a surface patch find nothing new there.
-        let mut full = vec![0u64; grid.cells().div_ceil(64)];
         for (corner, upper, q) in &inside {
-            grid.mark_within(*corner, *upper, q, &mut full, &mut bits);
+            grid.mark_within(*corner, *upper, q, &mut bits);
         }
         bits
     }
@@ -689,6 +709,67 @@ mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
     use rand::{RngExt, SeedableRng};
+
+    /// `bits_of` (and the storage-order bits it is made from) marks
+    /// exactly the samples a brute-force scan finds within the threshold of
+    /// some point: points near the cube's faces, batch by batch.
+    #[test]
+    fn bits_of_matches_brute_force() {
+        let world = scene::builtin::scene("cube")
+            .unwrap()
+            .build(std::path::Path::new("."))
+            .unwrap();
+        let scene = world.as_scene().unwrap();
+        let mut cfg = MetricsConfig {
+            covered_within_m: 0.02,
+            ..MetricsConfig::default()
+        };
+        cfg.sampling.samples_per_m2 = 2000.0;
+        let tracker = CoverageTracker::new(scene, &cfg).unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for n in [0, 1, 300, 3000] {
+            // Points on and near random samples, and some far off.
+            let points: Vec<Point3> = (0..n)
+                .map(|_| {
+                    let s = tracker.points[rng.random_range(0..tracker.points.len())];
+                    let j = if rng.random_range(0.0..1.0) < 0.1 {
+                        0.5
+                    } else {
+                        0.03
+                    };
+                    Point3::new(
+                        s[0] + rng.random_range(-j..j),
+                        s[1] + rng.random_range(-j..j),
+                        s[2] + rng.random_range(-j..j),
+                    )
+                })
+                .collect();
+            let r2 = tracker.grid.r2;
+            let want: Vec<bool> = tracker
+                .points
+                .iter()
+                .map(|q| {
+                    points.iter().any(|p| {
+                        (q[0] - p.x).powi(2) + (q[1] - p.y).powi(2) + (q[2] - p.z).powi(2) <= r2
+                    })
+                })
+                .collect();
+            let bits = tracker.bits_of(&points);
+            let got: Vec<bool> = (0..want.len())
+                .map(|i| bits[i / 64] >> (i % 64) & 1 == 1)
+                .collect();
+            assert_eq!(got, want, "{n} points");
+            let stored: u32 = tracker
+                .stored_bits_of(&points)
+                .iter()
+                .map(|w| w.count_ones())
+                .sum();
+            assert_eq!(stored as usize, want.iter().filter(|c| **c).count());
+            if n >= 300 {
+                assert!(want.iter().any(|c| *c) && !want.iter().all(|c| *c));
+            }
+        }
+    }
 
     /// The grid finds exactly the samples a brute-force scan finds, for
     /// queries inside, at the edge of and outside the samples' box.

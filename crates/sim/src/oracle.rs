@@ -157,7 +157,7 @@ impl OraclePool {
                 let bits = if i == 0 || contact || run {
                     let points =
                         simulated_sweep(setup, world, robot, &world_from_base, scanner, q, i)?;
-                    tracker.bits_of(&points)
+                    tracker.stored_bits_of(&points)
                 } else {
                     Vec::new()
                 };
