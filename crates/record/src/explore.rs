@@ -125,7 +125,7 @@ impl PhaseTimings {
     pub fn phases(&self) -> [(&'static str, Real); 10] {
         [
             ("setup", self.setup_s),
-            ("oracle", self.oracle_s),
+            ("oracle (wait)", self.oracle_s),
             ("stage one", self.stage_one_s),
             ("mesh and discs", self.discs_s),
             ("LRC", self.lrc_s),
