@@ -881,7 +881,8 @@ impl<'a> PoseSelector<'a> {
         for d in link_dist.iter_mut().skip(1) {
             *d = reach.min(self.safety.cap());
         }
-        for (k, e) in self.safety.posed_links(&qc)? {
+        let frames = self.robot().forward_kinematics(&qc)?;
+        for (k, e) in self.safety.posed_links_in(&frames) {
             if let Some(d) = link_dist.get_mut(k).filter(|_| k >= 1) {
                 *d = self.safety.ellipsoid_dist(grid, &e, *d, Real::NEG_INFINITY);
             }
@@ -892,7 +893,7 @@ impl<'a> PoseSelector<'a> {
             still[k] = still[k - 1].min(link_dist[k - 1]);
         }
         let dist = still[self.link_count];
-        let (world_from_scanner, view) = self.view(target, &qc)?;
+        let (world_from_scanner, view) = self.view(target, &frames)?;
         Ok(Point {
             residuals: self.residuals(x, target, &view, dist),
             world_from_scanner,
@@ -903,15 +904,20 @@ impl<'a> PoseSelector<'a> {
         })
     }
 
-    /// The scanner pose in the world and the view of `target` at `qc`.
-    fn view(&self, target: &Target, qc: &[Real]) -> Result<(Isometry3, ViewGeometry), PlanError> {
-        let base_from_scanner = self
-            .robot()
-            .scanner_pose(qc)?
-            .ok_or_else(|| PlanError::Robot {
-                robot: self.robot().name.clone(),
-                message: "Stage Two pose selection needs a scanner".into(),
-            })?;
+    /// The scanner pose in the world and the view of `target` with the
+    /// link frames `frames` (the forward kinematics at the joints).
+    fn view(
+        &self,
+        target: &Target,
+        frames: &[Isometry3],
+    ) -> Result<(Isometry3, ViewGeometry), PlanError> {
+        let base_from_scanner =
+            self.robot()
+                .scanner_pose_in(frames)?
+                .ok_or_else(|| PlanError::Robot {
+                    robot: self.robot().name.clone(),
+                    message: "Stage Two pose selection needs a scanner".into(),
+                })?;
         let world_from_scanner = self.safety.world_from_base() * base_from_scanner;
         Ok((
             world_from_scanner,
@@ -1017,11 +1023,12 @@ impl<'a> PoseSelector<'a> {
         at: &Point,
     ) -> Result<Residuals, PlanError> {
         let qc = self.robot().clamp_to_limits(xp);
+        let frames = self.robot().forward_kinematics(&qc)?;
         let first = self.first_moved_link[j].min(self.link_count);
         let mut dist = at.still[first];
         if (first..self.link_count).any(|k| at.link_dist[k] < self.dist_bound + DIST_MARGIN) {
             dist = dist.min(self.safety.cap());
-            for (k, e) in self.safety.posed_links(&qc)? {
+            for (k, e) in self.safety.posed_links_in(&frames) {
                 if (first..self.link_count).contains(&k)
                     && at.link_dist[k] < self.dist_bound + DIST_MARGIN
                 {
@@ -1031,7 +1038,7 @@ impl<'a> PoseSelector<'a> {
                 }
             }
         }
-        let (_, view) = self.view(target, &qc)?;
+        let (_, view) = self.view(target, &frames)?;
         Ok(self.residuals(xp, target, &view, dist))
     }
 

@@ -107,14 +107,20 @@ impl Safety {
     /// [`Safety::ellipsoid_dist`]).
     pub fn posed_links(&self, q: &[Real]) -> Result<Vec<(usize, Ellipsoid)>, PlanError> {
         let frames = self.robot.forward_kinematics(q)?;
+        Ok(self.posed_links_in(&frames))
+    }
+
+    /// [`Safety::posed_links`] of the link frames `frames` (the robot's
+    /// forward kinematics at some `q`), for callers that need the frames
+    /// for more than the links.
+    pub fn posed_links_in(&self, frames: &[Isometry3]) -> Vec<(usize, Ellipsoid)> {
         let mounted = self.robot.mounted_links();
-        Ok(self
-            .robot
-            .posed_ellipsoids(&frames)
+        self.robot
+            .posed_ellipsoids(frames)
             .into_iter()
             .filter(|(link, _)| link.index() >= mounted)
             .map(|(link, e)| (link.index(), e.transformed(&self.world_from_base)))
-            .collect())
+            .collect()
     }
 
     /// `dist(Q)` of one posed ellipsoid `e` (from [`Safety::posed_links`]),

@@ -533,11 +533,20 @@ impl Robot {
 
     /// `base_from_scanner` (Paul: `⁰T_s = ⁰T_f ᶠT_s`), `None` without a scanner.
     pub fn scanner_pose(&self, q: &[Real]) -> Result<Option<Isometry3>, RobotError> {
-        let Some(mount) = self.scanner else {
+        if self.scanner.is_none() {
             self.check_joints(q)?;
             return Ok(None);
+        }
+        self.scanner_pose_in(&self.forward_kinematics(q)?)
+    }
+
+    /// [`Robot::scanner_pose`] in the link frames `frames` (this robot's
+    /// [`Robot::forward_kinematics`] at some `q`): the same pose, without
+    /// computing the frames again.
+    pub fn scanner_pose_in(&self, frames: &[Isometry3]) -> Result<Option<Isometry3>, RobotError> {
+        let Some(mount) = self.scanner else {
+            return Ok(None);
         };
-        let frames = self.forward_kinematics(q)?;
         let base_from_mount_link = frames
             .get(mount.link.0)
             .ok_or_else(|| self.link_error(mount.link))?;

@@ -162,6 +162,24 @@ fn vm6083_reference_poses() {
     assert!((scanner.translation.vector - crouched.translation.vector - z * 0.05).norm() < 1e-12);
 }
 
+/// The scanner pose from frames already computed is the scanner pose, to
+/// the bit (callers reuse one forward kinematics for the links and the
+/// scanner).
+#[test]
+fn scanner_pose_in_frames_is_scanner_pose() {
+    let robot = robot::builtin("denso-vm6083").unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    for _ in 0..200 {
+        let q: Vec<Real> = (0..6).map(|_| rng.random_range(-2.5..2.5)).collect();
+        let frames = robot.forward_kinematics(&q).unwrap();
+        assert_eq!(
+            robot.scanner_pose_in(&frames).unwrap(),
+            robot.scanner_pose(&q).unwrap()
+        );
+    }
+    assert!(robot.scanner_pose_in(&[]).is_err());
+}
+
 #[test]
 fn vm6083_joint5_tilts_the_scan_plane() {
     // With the identity mount, joint 5's axis is the scanner's y axis (the ±90° ray),
