@@ -249,20 +249,8 @@ impl SampleGrid {
     }
 
     /// Call `f` with the index of every sample within `r` of `p`.
-    pub fn within(&self, p: &[Real; 3], mut f: impl FnMut(usize)) {
-        self.within_cells(
-            p,
-            |_| true,
-            |v| {
-                if let Visit::Sample {
-                    index,
-                    within: true,
-                } = v
-                {
-                    f(index);
-                }
-            },
-        );
+    pub fn within(&self, p: &[Real; 3], f: impl FnMut(usize)) {
+        self.within_cells(p, |_| true, f);
     }
 
     /// [`SampleGrid::cell_range`] packed: the lowest cell a sphere of
@@ -333,14 +321,14 @@ impl SampleGrid {
         Some(range)
     }
 
-    /// Visit the samples of each cell within reach of `p` (cell indices as
-    /// [`SampleGrid::cell_of`]) that `open` accepts: `f` sees each sample
-    /// ([`Visit::Sample`]), then the end of its cell ([`Visit::CellEnd`]).
+    /// Call `f` with the index of every sample within `r` of `p` in the
+    /// cells within reach of `p` (cell indices as [`SampleGrid::cell_of`])
+    /// that `open` accepts.
     pub fn within_cells(
         &self,
         p: &[Real; 3],
         open: impl Fn(usize) -> bool,
-        mut f: impl FnMut(Visit),
+        mut f: impl FnMut(usize),
     ) {
         let Some(range) = self.cell_range(p) else {
             return;
@@ -356,12 +344,10 @@ impl SampleGrid {
                     for (q, &i) in self.points[s..e].iter().zip(&self.items[s..e]) {
                         let d2 =
                             (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
-                        f(Visit::Sample {
-                            index: i as usize,
-                            within: d2 <= self.r2,
-                        });
+                        if d2 <= self.r2 {
+                            f(i as usize);
+                        }
                     }
-                    f(Visit::CellEnd(cell));
                 }
             }
         }
@@ -385,20 +371,6 @@ fn all_set(bits: &[u64], s: usize, e: usize) -> bool {
         at = word * 64 + to;
     }
     true
-}
-
-/// What [`SampleGrid::within_cells`] shows its visitor.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Visit {
-    /// A sample of the cell being visited, and whether it is within `r`.
-    Sample {
-        /// The sample's index.
-        index: usize,
-        /// Within `r` of the query point.
-        within: bool,
-    },
-    /// Every sample of this cell has been shown.
-    CellEnd(usize),
 }
 
 /// Coverage kept up to date as points arrive: the true-surface samples of
@@ -494,19 +466,7 @@ impl CoverageTracker {
             .par_iter()
             .filter(|p| reach.contains_point(p))
             .fold(Vec::new, |mut out, p| {
-                grid.within_cells(
-                    &[p.x, p.y, p.z],
-                    |c| open[c] > 0,
-                    |v| {
-                        if let Visit::Sample {
-                            index,
-                            within: true,
-                        } = v
-                        {
-                            out.push(index);
-                        }
-                    },
-                );
+                grid.within_cells(&[p.x, p.y, p.z], |c| open[c] > 0, |i| out.push(i));
                 out
             })
             .flatten()

@@ -75,7 +75,8 @@ pub struct OraclePool {
     samples: usize,
     poses: usize,
     /// Per pose: clear by the run's rule, by the contact rule, and the bits
-    /// of the A1 samples its sweep covers.
+    /// of the A1 samples its sweep covers (in the tracker's storage order,
+    /// [`CoverageTracker::stored_bits_of`]: only counted and united).
     per_pose: Vec<(bool, bool, Vec<u64>)>,
 }
 
@@ -360,12 +361,11 @@ impl OracleJob {
     pub fn finish(self) -> Result<CoverageOracle, SimError> {
         match self.0 {
             OracleState::Ready(oracle) => Ok(oracle),
-            OracleState::Running(handle) => {
-                handle.join().map_err(|_| SimError::InvalidArgument {
-                    what: "coverage oracle".into(),
-                    message: "its thread panicked".into(),
-                })?
-            }
+            // A panic in the oracle is a bug: it goes on as if the oracle
+            // had run on this thread.
+            OracleState::Running(handle) => handle
+                .join()
+                .unwrap_or_else(|p| std::panic::resume_unwind(p)),
         }
     }
 }
