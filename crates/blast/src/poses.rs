@@ -227,6 +227,30 @@ fn tip_gap(v: geom::Vector3, n: geom::Vector3, phi_max: Real, d_min: Real, d_max
     (v - u * t).norm()
 }
 
+/// The wrist of `robot` (carrying the nozzle `mount`, from `tool`):
+/// where the origin of [`Robot::fixed_point_link`]'s link can be, its offset
+/// along the nozzle's stream from the tip, and its distance from the
+/// nozzle's axis. `None` when that point stands `d_min` or more in front
+/// of the tip (its positions would not form a sector of the same kind) or
+/// the arm has no bound.
+fn wrist_reach(
+    robot: &Robot,
+    mount: &ScannerMount,
+    tool: &BlastTool,
+) -> Option<(ReachBound, Real, Real)> {
+    let link = robot.fixed_point_link(mount.link)?;
+    let frames = robot.forward_kinematics(&vec![0.0; robot.dof()]).ok()?;
+    let nozzle = frames[mount.link.index()] * mount.link_from_scanner;
+    let p = nozzle.inverse() * geom::Point3::from(frames[link.index()].translation.vector);
+    // The sector's stream lengths for the wrist, `d − along`, must stay
+    // positive for it to be the same kind of sector.
+    if tool.d_min_m - p.z <= 0.0 {
+        return None;
+    }
+    let bound = robot.reach_bound(link, &Isometry3::identity(), REACH_SAMPLES)?;
+    Some((bound, p.z, p.x.hypot(p.y)))
+}
+
 /// A blast pose re-measured from the nozzle's forward kinematics.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BlastMeasure {
@@ -251,6 +275,23 @@ pub struct BlastPoses {
     tool: BlastTool,
     /// Where the nozzle tip can be at all, world frame (`None`: unbounded).
     reach: Option<ReachBound>,
+    /// Where the arm's wrist can be, and where it stands from the tip.
+    wrist: Option<WristReach>,
+}
+
+/// A point fixed to the nozzle behind its tip ([`Robot::fixed_point_link`]:
+/// a spherical wrist's centre) and where it can be: with the nozzle's
+/// direction known, a tip in front of a disc puts this point farther back
+/// along the stream, which the arm may not reach although it reaches the
+/// tip.
+#[derive(Clone, Debug)]
+struct WristReach {
+    /// Where the point can be, world frame.
+    bound: ReachBound,
+    /// Its offset along the stream from the tip, metres (negative: behind).
+    along_m: Real,
+    /// Its distance from the nozzle's axis, metres.
+    side_m: Real,
 }
 
 /// First-joint samples of the nozzle's reach bound: 1° steps over a
@@ -275,17 +316,24 @@ impl BlastPoses {
         let config = tool.pose_config(pose);
         config.validate()?;
         let mount = tool.mount(&robot);
+        let in_world = |b: ReachBound| ReachBound {
+            centres: b.centres.iter().map(|c| world_from_base * c).collect(),
+            radius: b.radius,
+        };
         let reach = robot
             .reach_bound(mount.link, &mount.link_from_scanner, REACH_SAMPLES)
-            .map(|b| ReachBound {
-                centres: b.centres.iter().map(|c| world_from_base * c).collect(),
-                radius: b.radius,
-            });
+            .map(in_world);
+        let wrist = wrist_reach(&robot, &mount, &tool).map(|(bound, along_m, side_m)| WristReach {
+            bound: in_world(bound),
+            along_m,
+            side_m,
+        });
         Ok(Self {
             safety: Safety::new(robot, world_from_base, plan, weights)?,
             config,
             tool,
             reach,
+            wrist,
         })
     }
 
@@ -302,6 +350,7 @@ impl BlastPoses {
             config,
             tool: self.tool,
             reach: self.reach.clone(),
+            wrist: self.wrist.clone(),
         })
     }
 
@@ -314,24 +363,35 @@ impl BlastPoses {
     /// nozzle tip where its stream could meet `target` within the tool's
     /// angle, stream length and aim limits (the arm's reach bound,
     /// [`robot::ReachBound`], against the solid sector of tip positions
-    /// from which a stream through the centre meets it within the limits):
-    /// such a target has no pose, whatever the map. `true` says only that
-    /// it may have one.
+    /// from which a stream through the centre meets it within the limits),
+    /// or none puts the wrist (a point fixed to the nozzle behind the tip,
+    /// [`Robot::fixed_point_link`]) where it must then be: the same sector
+    /// with the stream lengthened by the wrist's distance behind the tip
+    /// (the stream's direction is the sector's), widened by its distance
+    /// from the nozzle's axis. Such a target has no pose, whatever the map.
+    /// `true` says only that it may have one.
     pub fn may_reach(&self, target: &Target) -> bool {
-        let Some(reach) = &self.reach else {
-            return true;
-        };
         let t = &self.tool;
-        // The tip stands within ρ_min of a point of the sector around the
-        // centre (the aim's miss moves it sideways); a nanometre for rounding.
-        reach.may_reach(t.rho_min_m + 1e-9, |p| {
-            tip_gap(
-                p - target.centre,
-                target.normal.into_inner(),
-                t.phi_max_deg.to_radians(),
-                t.d_min_m,
-                t.d_max_m,
-            )
+        let phi_max = t.phi_max_deg.to_radians();
+        let n = target.normal.into_inner();
+        // The tip (or the wrist) stands within ρ_min of a point of the
+        // sector around the centre (the aim's miss moves it sideways); a
+        // nanometre for rounding.
+        let tip = self.reach.as_ref().is_none_or(|reach| {
+            reach.may_reach(t.rho_min_m + 1e-9, |p| {
+                tip_gap(p - target.centre, n, phi_max, t.d_min_m, t.d_max_m)
+            })
+        });
+        tip && self.wrist.as_ref().is_none_or(|w| {
+            w.bound.may_reach(t.rho_min_m + w.side_m + 1e-8, |p| {
+                tip_gap(
+                    p - target.centre,
+                    n,
+                    phi_max,
+                    t.d_min_m - w.along_m,
+                    t.d_max_m - w.along_m,
+                )
+            })
         })
     }
 

@@ -3,8 +3,10 @@
 //!
 //! The first actuated joint moves the axis of the second along a circle (a
 //! line for a prismatic joint); from the second joint on, whatever the
-//! joints do, the point stays within the summed lengths of the chain's
-//! offsets from that axis (rotations keep lengths). So every position of the
+//! joints do, the point stays within the summed lengths of the chain from
+//! that joint's origin (rotations keep lengths: a revolute joint keeps the
+//! point's distance from its axis, and a point on the axis not at all, as a
+//! spherical wrist's centre). So every position of the
 //! point lies within [`ReachBound::radius`] of one of the second joint's
 //! origins at sampled values of the first ([`Robot::reach_bound`]). A test
 //! that a point *cannot* be placed somewhere (a blast nozzle out of reach of
@@ -56,22 +58,17 @@ impl Robot {
         let actuated: Vec<usize> = (0..chain.len())
             .filter(|&i| chain[i].is_actuated())
             .collect();
-        // The offsets from the second actuated joint's axis to the point.
-        let extent = |j: &crate::model::Joint| -> Option<Real> {
-            let slide = match j.kind {
-                JointKind::Prismatic => {
-                    let l = j.limits?;
-                    (l.min + j.offset).abs().max((l.max + j.offset).abs())
-                }
-                _ => 0.0,
-            };
-            Some(slide + j.post.translation.vector.norm())
+        // How far a prismatic joint's motion can carry what follows it from
+        // where the configuration of zeros puts it (the zeros apply the
+        // offset, so that much more).
+        let slide = |j: &crate::model::Joint| -> Option<Real> {
+            let l = j.limits?;
+            Some(j.offset.abs() + (l.min + j.offset).abs().max((l.max + j.offset).abs()))
         };
-        let point = link_from_point.translation.vector.norm();
         let q0 = vec![0.0; self.dof()];
+        let frames = self.forward_kinematics(&q0).ok()?;
         let Some(&first) = actuated.first() else {
             // Nothing moves the point.
-            let frames = self.forward_kinematics(&q0).ok()?;
             return Some(ReachBound {
                 centres: vec![Point3::from(
                     (frames[link.index()] * link_from_point).translation.vector,
@@ -81,11 +78,42 @@ impl Robot {
         };
         // The chain's lengths beyond the pivot: the second actuated joint,
         // whose origin the first moves; with one actuated joint, that joint,
-        // whose origin stands still.
+        // whose origin stands still. From the point back to the pivot, each
+        // revolute joint's axis is fixed to the links before it, and its
+        // motion keeps the distance from the point (and whatever the later
+        // joints leave of it) to the axis: that distance is one length of
+        // the chain, and the foot of the perpendicular, a point fixed to the
+        // links before the joint, is where the next one is measured from. A
+        // point on the axis costs nothing (a spherical wrist's centre). A
+        // prismatic joint adds the distance to its origin and its slide.
         let pivot = actuated.get(1).copied().unwrap_or(first);
-        let mut radius = point + extent(&chain[pivot])?;
-        for j in &chain[pivot + 1..] {
-            radius += j.origin.translation.vector.norm() + extent(j)?;
+        let joint_frame = |m: usize| frames[m] * chain[m].origin;
+        let mut at = Point3::from((frames[link.index()] * link_from_point).translation.vector);
+        let mut radius = 0.0;
+        for m in (pivot + 1..chain.len()).rev() {
+            let j = &chain[m];
+            let frame = joint_frame(m);
+            let origin = Point3::from(frame.translation.vector);
+            match j.kind {
+                JointKind::Fixed => {}
+                JointKind::Revolute => {
+                    let axis = frame.rotation * j.axis.into_inner();
+                    let foot = origin + axis * (at - origin).dot(&axis);
+                    radius += (at - foot).norm();
+                    at = foot;
+                }
+                JointKind::Prismatic => {
+                    radius += (at - origin).norm() + slide(j)?;
+                    at = origin;
+                }
+            }
+        }
+        // The pivot's origin is on its own axis: the distance to it is kept
+        // by a rotation, grown by a slide.
+        let centre = Point3::from(joint_frame(pivot).translation.vector);
+        radius += (at - centre).norm();
+        if chain[pivot].kind == JointKind::Prismatic {
+            radius += slide(&chain[pivot])?;
         }
         let origin_at = |q: &[Real]| -> Option<Point3> {
             let frames = self.forward_kinematics(q).ok()?;
@@ -124,4 +152,39 @@ impl Robot {
             .fold(0.0, Real::max);
         Some(ReachBound { centres, radius })
     }
+
+    /// The link nearest the base whose frame origin stays put in `link`'s
+    /// frame whatever the joints between them do: on the axis of each, all
+    /// revolute (within [`ON_AXIS_M`]). For a spherical wrist the wrist
+    /// centre's link; `link` itself when no earlier one qualifies. Its
+    /// origin's place in `link`'s frame is then one fixed offset, so where
+    /// the tool can point from a place is bounded by where that origin can
+    /// be ([`Robot::reach_bound`] of it).
+    pub fn fixed_point_link(&self, link: LinkId) -> Option<LinkId> {
+        let chain = self.joints.get(..link.index())?;
+        let frames = self.forward_kinematics(&vec![0.0; self.dof()]).ok()?;
+        let stays = |j: usize| {
+            let p = Point3::from(frames[j].translation.vector);
+            chain[j..]
+                .iter()
+                .enumerate()
+                .all(|(k, joint)| match joint.kind {
+                    JointKind::Fixed => true,
+                    JointKind::Prismatic => false,
+                    JointKind::Revolute => {
+                        let frame = frames[j + k] * joint.origin;
+                        let origin = Point3::from(frame.translation.vector);
+                        let axis = frame.rotation * joint.axis.into_inner();
+                        let v = p - origin;
+                        (v - axis * v.dot(&axis)).norm() <= ON_AXIS_M
+                    }
+                })
+        };
+        (0..=link.index()).find(|&j| stays(j)).map(LinkId)
+    }
 }
+
+/// How near a joint's axis a point counts as on it for
+/// [`Robot::fixed_point_link`], metres: rounding, not geometry (the joint's
+/// motion moves it twice as far).
+pub const ON_AXIS_M: Real = 1e-9;

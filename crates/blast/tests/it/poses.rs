@@ -184,4 +184,82 @@ fn may_reach_refuses_only_discs_out_of_reach() {
         let far = Target::new(Point3::new(-2.6, 0.5, 0.4), n).unwrap();
         assert!(!blast.may_reach(&far));
     }
+    // A disc facing away from the robot at shoulder height on the x axis:
+    // the tip stands beyond it, and the wrist centre (Table C.1: d₆ = 0.084
+    // behind the flange, the nozzle 0.15 m in front of it) 0.234 m farther
+    // along the stream, so at least s = d_min + 0.234 from the disc along
+    // a direction within φ_max of +x: beyond x + s cos φ_max, while every
+    // centre of the bound (the shoulder's circle) has x ≤ 0.18. The
+    // wrist's bound is the arm to the wrist centre.
+    let wrist = blast
+        .robot()
+        .reach_bound(robot::LinkId(4), &Isometry3::identity(), 360)
+        .unwrap();
+    let s = tool.d_min_m + 0.234;
+    let phi = tool.phi_max_deg.to_radians();
+    let within = wrist.radius + tool.rho_min_m;
+    let away = |x: Real| Target::new(Point3::new(x, 0.0, 0.475), Vector3::x()).unwrap();
+    let refused = 0.18 + within - s * phi.cos() + 0.005;
+    assert!(!blast.may_reach(&away(refused)));
+    // The tip alone would have taken it: d_min in front of it is within
+    // the tip's bound of the shoulder.
+    assert!(refused + tool.d_min_m - 0.18 < bound.radius);
+    // Nearer, the wrist at s along φ_max (towards −z) is within its bound
+    // of the shoulder: (x − 0.18 + s cos φ)² + (s sin φ)² = within².
+    let taken = 0.18 - s * phi.cos() + ((within - 0.005).powi(2) - (s * phi.sin()).powi(2)).sqrt();
+    assert!(blast.may_reach(&away(taken)));
+}
+
+/// Every target that some configuration within the limits blasts within
+/// the tool's limits passes `may_reach`: 20 000 random configurations of
+/// the VM-6083, each nozzle pose (forward kinematics) aimed at a disc
+/// placed at a random stream length along it, within a random aim error,
+/// facing back at a random angle below φ_max.
+#[test]
+fn may_reach_passes_every_target_a_configuration_reaches() {
+    use rand::{RngExt, SeedableRng};
+    let tool = BlastTool::default();
+    let robot = vm6083();
+    let base = Isometry3::translation(0.3, -0.2, 0.1);
+    let blast = BlastPoses::new(
+        &robot,
+        base,
+        &PlanConfig::default(),
+        vec![1.0; 6],
+        &PoseConfig::default(),
+        tool,
+    )
+    .unwrap();
+    let limits = blast.robot().limits();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let phi_max = tool.phi_max_deg.to_radians();
+    let random_dir =
+        |rng: &mut rand_chacha::ChaCha8Rng| Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0));
+    for _ in 0..20_000 {
+        let q: Vec<Real> = limits
+            .iter()
+            .map(|l| {
+                let l = l.unwrap();
+                rng.random_range(l.min..=l.max)
+            })
+            .collect();
+        let nozzle = base * blast.robot().scanner_pose(&q).unwrap().unwrap();
+        let tip = Point3::from(nozzle.translation.vector);
+        let w = nozzle.rotation * Vector3::z();
+        // A normal within φ_max of −w (near the limit half the time).
+        let side = w.cross(&random_dir(&mut rng));
+        let Some(side) = side.try_normalize(1e-6) else {
+            continue;
+        };
+        let phi = phi_max * rng.random_range(0.0..0.999_f64).sqrt();
+        let normal = -w * phi.cos() + side * phi.sin();
+        let d = rng.random_range(tool.d_min_m..=tool.d_max_m);
+        let hit = tip + w * d;
+        // The centre within ρ_min of the hit, in the disc's plane.
+        let off = normal.cross(&random_dir(&mut rng));
+        let off = off.try_normalize(1e-6).unwrap_or_else(Vector3::zeros);
+        let centre = hit + off * (tool.rho_min_m * rng.random_range(0.0..1.0));
+        let target = Target::new(centre, normal).unwrap();
+        assert!(blast.may_reach(&target), "q = {q:?}: {target:?}");
+    }
 }
