@@ -241,6 +241,29 @@ impl<C: MotionChecker> MotionChecker for ClearanceChecker<'_, C> {
     fn motion_may_be_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
         self.inner.motion_may_be_ok(a, b)
     }
+
+    /// The wrapped checker's answers, then the clearance of the poses they
+    /// pass, in parallel.
+    fn poses_ok(&mut self, qs: &[&[Real]]) -> Vec<bool> {
+        use rayon::prelude::*;
+        let inner = self.inner.poses_ok(qs);
+        if self.clearance_m <= 0.0 {
+            return inner;
+        }
+        let (points, safety, clearance_m) = (self.points, self.safety, self.clearance_m);
+        let here = self.here.0.as_slice();
+        qs.par_iter()
+            .zip(inner)
+            .map(|(q, ok)| {
+                ok && (*q == here
+                    || points.configuration_clearance(safety, q, clearance_m) >= clearance_m)
+            })
+            .collect()
+    }
+
+    fn motions_may_be_ok(&mut self, motions: &[(&[Real], &[Real])]) -> Vec<bool> {
+        self.inner.motions_may_be_ok(motions)
+    }
 }
 
 #[cfg(test)]

@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use robot::{JointKind, Robot};
 use serde::{Deserialize, Serialize};
 use std::cell::RefCell;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// Lazy searches of [`Roadmap::plan`] before it checks edges as A* meets them.
 const LAZY_ROUNDS: usize = 32;
@@ -35,6 +35,31 @@ pub trait MotionChecker {
     /// motions and confirm with `motion_ok` on the few of the path found.
     fn motion_may_be_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
         self.motion_ok(a, b)
+    }
+    /// [`MotionChecker::pose_ok`] of each of `qs`, in order. The default
+    /// asks one at a time; a checker whose answers depend on the
+    /// configuration alone may answer them in parallel.
+    fn poses_ok(&mut self, qs: &[&[Real]]) -> Vec<bool> {
+        qs.iter().map(|q| self.pose_ok(q)).collect()
+    }
+    /// [`MotionChecker::motion_may_be_ok`] of each motion of `motions`, in
+    /// order (as [`MotionChecker::poses_ok`]).
+    fn motions_may_be_ok(&mut self, motions: &[(&[Real], &[Real])]) -> Vec<bool> {
+        motions
+            .iter()
+            .map(|(a, b)| self.motion_may_be_ok(a, b))
+            .collect()
+    }
+    /// `pose_ok` of each of `qs` will be asked soon: a checker that
+    /// remembers its answers ([`MemoChecker`]) may find them now, together.
+    /// The default does nothing.
+    fn prefetch_poses(&mut self, qs: &[&[Real]]) {
+        let _ = qs;
+    }
+    /// `motion_may_be_ok` of each motion of `motions` will be asked soon (as
+    /// [`MotionChecker::prefetch_poses`]).
+    fn prefetch_motions_may_be(&mut self, motions: &[(&[Real], &[Real])]) {
+        let _ = motions;
     }
 }
 
@@ -104,10 +129,99 @@ impl<C: MotionChecker> MotionChecker for MemoChecker<C> {
         self.may_be.insert(key, ok);
         ok
     }
+
+    /// The poses of `qs` not yet known, each once, through the wrapped
+    /// checker's [`MotionChecker::poses_ok`].
+    fn prefetch_poses(&mut self, qs: &[&[Real]]) {
+        let mut todo: Vec<(Vec<u64>, &[Real])> = qs
+            .iter()
+            .map(|q| (bits(q), *q))
+            .filter(|(k, _)| !self.poses.contains_key(k))
+            .collect();
+        todo.sort_by(|a, b| a.0.cmp(&b.0));
+        todo.dedup_by(|a, b| a.0 == b.0);
+        let ask: Vec<&[Real]> = todo.iter().map(|(_, q)| *q).collect();
+        let answers = self.inner.poses_ok(&ask);
+        for ((key, _), ok) in todo.into_iter().zip(answers) {
+            self.poses.insert(key, ok);
+        }
+    }
+
+    /// The motions of `motions` whose answer (or full check) is not yet
+    /// known, each once, through the wrapped checker's
+    /// [`MotionChecker::motions_may_be_ok`].
+    fn prefetch_motions_may_be(&mut self, motions: &[(&[Real], &[Real])]) {
+        let mut todo: Vec<(MotionKey, Motion<'_>)> = motions
+            .iter()
+            .map(|&(a, b)| (motion_key(a, b), (a, b)))
+            .filter(|(k, _)| !self.motions.contains_key(k) && !self.may_be.contains_key(k))
+            .collect();
+        todo.sort_by(|a, b| a.0.cmp(&b.0));
+        todo.dedup_by(|a, b| a.0 == b.0);
+        let ask: Vec<Motion<'_>> = todo.iter().map(|(_, m)| *m).collect();
+        let answers = self.inner.motions_may_be_ok(&ask);
+        for ((key, _), ok) in todo.into_iter().zip(answers) {
+            self.may_be.insert(key, ok);
+        }
+    }
 }
 
+/// Tell `checker` what A* is about to ask about the edges of `u` in
+/// `graph`: the poses of the neighbours not known unusable and, with
+/// `motions`, the coarse check of the motions to those that are safe
+/// (`node_ok` and `edge_ok`: the search's answers so far, by node and edge
+/// index; `config`: a node's configuration). Nothing when `u` itself is
+/// unsafe: A* asks nothing more about its edges.
+fn announce_edges<'c>(
+    graph: &UnGraph<(), Real>,
+    u: NodeIndex,
+    motions: bool,
+    node_ok: &mut HashMap<usize, bool>,
+    edge_ok: &HashMap<usize, bool>,
+    checker: &mut dyn MotionChecker,
+    config: impl Fn(NodeIndex) -> &'c [Real],
+) {
+    let ok_u = *node_ok
+        .entry(u.index())
+        .or_insert_with(|| checker.pose_ok(config(u)));
+    if !ok_u {
+        return;
+    }
+    let open: Vec<_> = graph
+        .edges(u)
+        .filter(|e| edge_ok.get(&e.id().index()) != Some(&false))
+        .collect();
+    let poses: Vec<&[Real]> = open
+        .iter()
+        .map(EdgeRef::target)
+        .filter(|v| !node_ok.contains_key(&v.index()))
+        .map(&config)
+        .collect();
+    checker.prefetch_poses(&poses);
+    if !motions {
+        return;
+    }
+    let motions: Vec<Motion<'_>> = open
+        .iter()
+        .filter(|e| !edge_ok.contains_key(&e.id().index()))
+        .filter(|e| {
+            *node_ok
+                .entry(e.target().index())
+                .or_insert_with(|| checker.pose_ok(config(e.target())))
+        })
+        .map(|e| (config(u), config(e.target())))
+        .collect();
+    checker.prefetch_motions_may_be(&motions);
+}
+
+/// A straight joint-space motion, from the first configuration to the second.
+type Motion<'a> = (&'a [Real], &'a [Real]);
+
+/// A motion's key in [`MemoChecker`] ([`motion_key`]).
+type MotionKey = (Vec<u64>, Vec<u64>);
+
 /// The key of the motion `a → b`, the same as `b → a`'s.
-fn motion_key(a: &[Real], b: &[Real]) -> (Vec<u64>, Vec<u64>) {
+fn motion_key(a: &[Real], b: &[Real]) -> MotionKey {
     let (ka, kb) = (bits(a), bits(b));
     if ka <= kb { (ka, kb) } else { (kb, ka) }
 }
@@ -416,6 +530,21 @@ impl Roadmap {
             HashMap::<usize, bool>::new(),
             checker,
         ));
+        // A* asks about every edge of a node it expands, one after another
+        // with nothing checked in between: the first time it asks about one
+        // of `u`'s, the checker is told what comes (the poses of `u`'s
+        // neighbours and, in the eager rounds, the motions to them), so that
+        // a checker that remembers ([`MemoChecker`]) answers them together,
+        // in parallel. The answers are the same as one by one.
+        let (lazy_told, eager_told) = (RefCell::new(HashSet::new()), RefCell::new(HashSet::new()));
+        let tell = |u: NodeIndex, motions: bool| {
+            let told = if motions { &eager_told } else { &lazy_told };
+            if told.borrow_mut().insert(u.index()) {
+                let mut guard = checks.borrow_mut();
+                let (node_ok, edge_ok, checker) = &mut *guard;
+                announce_edges(&graph, u, motions, node_ok, edge_ok, &mut **checker, config);
+            }
+        };
         let check_edge = |e: petgraph::graph::EdgeReference<'_, Real>| -> bool {
             let mut guard = checks.borrow_mut();
             let (node_ok, edge_ok, checker) = &mut *guard;
@@ -432,6 +561,7 @@ impl Roadmap {
             ok
         };
         let may_be_usable = |e: petgraph::graph::EdgeReference<'_, Real>| -> bool {
+            tell(e.source(), true);
             let mut guard = checks.borrow_mut();
             let (node_ok, edge_ok, checker) = &mut *guard;
             if let Some(&ok) = edge_ok.get(&e.id().index()) {
@@ -447,6 +577,7 @@ impl Roadmap {
         // The lazy rounds check the nodes A* meets (one configuration each)
         // and leave the motions (many) to the paths found.
         let not_known_bad = |e: petgraph::graph::EdgeReference<'_, Real>| -> bool {
+            tell(e.source(), false);
             let mut guard = checks.borrow_mut();
             let (node_ok, edge_ok, checker) = &mut *guard;
             edge_ok.get(&e.id().index()) != Some(&false)

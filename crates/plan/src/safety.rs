@@ -299,9 +299,7 @@ impl SafetyChecker<'_> {
 impl MotionChecker for SafetyChecker<'_> {
     fn pose_ok(&mut self, q: &[Real]) -> bool {
         self.checked += 1;
-        self.safety
-            .dist_of_links(self.grid, q, 1..usize::MAX, self.safety.cap, 1.0)
-            .is_ok_and(|d| d > 1.0)
+        safe_pose(self.safety, self.grid, q)
     }
 
     fn motion_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
@@ -316,14 +314,55 @@ impl MotionChecker for SafetyChecker<'_> {
     /// Every `COARSE_STRIDE`th configuration `motion_ok` checks, and the
     /// last: a subset, so `false` only where `motion_ok` is.
     fn motion_may_be_ok(&mut self, a: &[Real], b: &[Real]) -> bool {
-        let checked = self.safety.interpolate(a, b);
-        let n = checked.len();
-        checked
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| i % COARSE_STRIDE == 0 || *i + 1 == n)
-            .all(|(_, q)| self.pose_ok(q))
+        let (ok, checked) = coarse_motion(self.safety, self.grid, a, b);
+        self.checked += checked;
+        ok
     }
+
+    /// In parallel (the answers depend on the configuration and the grid
+    /// alone).
+    fn poses_ok(&mut self, qs: &[&[Real]]) -> Vec<bool> {
+        use rayon::prelude::*;
+        let (safety, grid) = (self.safety, self.grid);
+        self.checked += qs.len();
+        qs.par_iter().map(|q| safe_pose(safety, grid, q)).collect()
+    }
+
+    /// In parallel, one motion per task.
+    fn motions_may_be_ok(&mut self, motions: &[(&[Real], &[Real])]) -> Vec<bool> {
+        use rayon::prelude::*;
+        let (safety, grid) = (self.safety, self.grid);
+        let answers: Vec<(bool, usize)> = motions
+            .par_iter()
+            .map(|(a, b)| coarse_motion(safety, grid, a, b))
+            .collect();
+        self.checked += answers.iter().map(|a| a.1).sum::<usize>();
+        answers.into_iter().map(|a| a.0).collect()
+    }
+}
+
+/// `dist(Q) > 1` at `q` ([`SafetyChecker`]'s `pose_ok`).
+fn safe_pose(safety: &Safety, grid: &OccupancyGrid, q: &[Real]) -> bool {
+    safety
+        .dist_of_links(grid, q, 1..usize::MAX, safety.cap, 1.0)
+        .is_ok_and(|d| d > 1.0)
+}
+
+/// [`SafetyChecker`]'s `motion_may_be_ok` of `a → b`, and the number of
+/// configurations it checked.
+fn coarse_motion(safety: &Safety, grid: &OccupancyGrid, a: &[Real], b: &[Real]) -> (bool, usize) {
+    let checked = safety.interpolate(a, b);
+    let n = checked.len();
+    let mut count = 0;
+    let ok = checked
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| i % COARSE_STRIDE == 0 || *i + 1 == n)
+        .all(|(_, q)| {
+            count += 1;
+            safe_pose(safety, grid, q)
+        });
+    (ok, count)
 }
 
 /// A search's first look at a motion checks one configuration in this many.

@@ -394,3 +394,66 @@ fn too_fine_a_planning_voxel_is_refused_up_front() {
     // The default voxel is well inside the budget.
     assert!(estimated * 1571.0 < plan::MAX_INTERFERENCE_PAIRS / 100.0);
 }
+
+/// The checkers' answers together (in parallel) are their answers one by
+/// one, with the same number of configurations checked; and a search whose
+/// checker remembers, and so answers A*'s questions about a node's edges
+/// together, finds the same paths as one asking one at a time.
+#[test]
+fn answers_together_are_the_answers_one_by_one() {
+    use plan::{ClearanceChecker, MemoChecker, MotionChecker, PointClearance};
+    let robot = vm6083();
+    let config = PlanConfig {
+        n_q: 400,
+        ..PlanConfig::default()
+    };
+    let model = CspaceModel::build(&robot, &Isometry3::identity(), VOXEL, &config).unwrap();
+    let safety = model.safety();
+    let g = explored_grid(|c| c.x > 0.7);
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    let qs: Vec<Vec<Real>> = (0..300).map(|_| random_q(&robot, &mut rng)).collect();
+    let refs: Vec<&[Real]> = qs.iter().map(Vec::as_slice).collect();
+    let motions: Vec<(&[Real], &[Real])> = refs.chunks(2).map(|p| (p[0], p[1])).collect();
+    // Measured points on the wall's face, for the clearance.
+    let mut points = PointClearance::new();
+    let wall: Vec<Point3> = (0..400)
+        .map(|k| {
+            Point3::new(
+                0.6,
+                -1.0 + 0.005 * Real::from(k),
+                0.2 + 0.003 * Real::from(k),
+            )
+        })
+        .collect();
+    points.insert(wall.iter());
+    let (mut one, mut all) = (safety.checker(&g), safety.checker(&g));
+    let each: Vec<bool> = refs.iter().map(|q| one.pose_ok(q)).collect();
+    assert_eq!(all.poses_ok(&refs), each);
+    assert!(each.iter().any(|&ok| ok) && each.iter().any(|&ok| !ok));
+    let each: Vec<bool> = motions
+        .iter()
+        .map(|(a, b)| one.motion_may_be_ok(a, b))
+        .collect();
+    assert_eq!(all.motions_may_be_ok(&motions), each);
+    assert!(each.iter().any(|&ok| ok) && each.iter().any(|&ok| !ok));
+    assert_eq!(one.configurations_checked(), all.configurations_checked());
+    let here = refs[0];
+    let clearance = |c| ClearanceChecker::new(c, safety, &points, 0.1, here);
+    let (mut one, mut all) = (clearance(safety.checker(&g)), clearance(safety.checker(&g)));
+    let each: Vec<bool> = refs.iter().map(|q| one.pose_ok(q)).collect();
+    assert_eq!(all.poses_ok(&refs), each);
+    // Paths: the roadmap's nodes in pairs, safe or not.
+    let map = model.roadmap();
+    let mut memo = MemoChecker::new(clearance(safety.checker(&g)));
+    let mut found = 0;
+    for pair in map.node_ids().collect::<Vec<_>>().chunks(2).take(40) {
+        let [a, b] = pair else { continue };
+        let (qa, qb) = (map.node(*a), map.node(*b));
+        let mut plain = clearance(safety.checker(&g));
+        let expected = map.plan(qa, qb, 10, &mut plain);
+        found += usize::from(expected.is_some());
+        assert_eq!(map.plan(qa, qb, 10, &mut memo), expected);
+    }
+    // Some reached, some not (29 of 40).
+    assert!((3..40).contains(&found), "{found}");
+}
