@@ -260,6 +260,17 @@ impl RunFolder {
         Ok(scene::io::load_cloud(&path)?.points)
     }
 
+    /// Every `stride`-th point of `cloud.ply` (`stride` from the number of
+    /// points, [`scene::io::sample_cloud_points`]) and the number of points,
+    /// reading only those points.
+    pub fn cloud_sample(
+        &self,
+        stride_of: impl FnOnce(usize) -> usize,
+    ) -> Result<(usize, Vec<Point3>), RecordError> {
+        let path = self.path(CLOUD_PLY);
+        Ok(scene::io::sample_cloud_points(&path, stride_of)?)
+    }
+
     /// The TSDF mesh of `mesh.ply`.
     pub fn mesh(&self) -> Result<TriMesh, RecordError> {
         let path = self.path(MESH_PLY);

@@ -102,13 +102,11 @@ fn view_3d(
     } else {
         notes.push("no ground truth to show (a point-cloud world)".to_owned());
     }
-    let cloud = folder.cloud()?;
-    let stride = stride_for(cloud.len(), MAX_CLOUD_POINTS);
-    let shown: Vec<Point3> = cloud.iter().step_by(stride).copied().collect();
+    let (count, shown) = folder.cloud_sample(|n| stride_for(n, MAX_CLOUD_POINTS))?;
+    let stride = stride_for(count, MAX_CLOUD_POINTS);
     let [x, y, z] = columns(&shown);
     notes.push(format!(
-        "cloud: 1 point in {stride} of {} drawn ({})",
-        cloud.len(),
+        "cloud: 1 point in {stride} of {count} drawn ({})",
         shown.len()
     ));
     traces.push(

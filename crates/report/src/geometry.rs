@@ -2,7 +2,7 @@
 //! cloud subsampled, meshes simplified by vertex clustering, convex outlines.
 
 use geom::{Point3, Real, TriMesh, Vector3};
-use std::collections::HashMap;
+use rustc_hash::{FxHashMap, FxHashSet};
 
 /// A coordinate rounded to the millimetre, as `f32` so it prints short.
 #[allow(clippy::cast_possible_truncation)]
@@ -59,7 +59,7 @@ pub fn stride_for(n: usize, max: usize) -> usize {
 /// vertex moves to the mean of its cell's vertices and triangles that
 /// collapse are dropped.
 pub fn cluster(mesh: &TriMesh, cell: Real) -> TriMesh {
-    let mut index: HashMap<[i64; 3], u32> = HashMap::new();
+    let mut index: FxHashMap<[i64; 3], u32> = FxHashMap::default();
     let mut sums: Vec<(Vector3, Real)> = Vec::new();
     #[allow(clippy::cast_possible_truncation)]
     let key = |p: &Point3| {
@@ -82,7 +82,7 @@ pub fn cluster(mesh: &TriMesh, cell: Real) -> TriMesh {
         remap.push(id);
     }
     let vertices = sums.iter().map(|(s, n)| Point3::from(s / *n)).collect();
-    let mut seen = std::collections::HashSet::new();
+    let mut seen = FxHashSet::default();
     let triangles = mesh
         .triangles
         .iter()

@@ -185,6 +185,22 @@ pub fn load_cloud(path: &Path) -> Result<PointCloud, SceneError> {
     }
 }
 
+/// Every `stride`-th point of the cloud file at `path`, `stride` being
+/// `stride_of(number of points)` (at least 1), and the number of points:
+/// [`load_cloud`]'s points `.step_by(stride)`. A binary PLY cloud is read
+/// only at those points (a report draws thousands of a run's millions).
+pub fn sample_cloud_points(
+    path: &Path,
+    stride_of: impl FnOnce(usize) -> usize,
+) -> Result<(usize, Vec<Point3>), SceneError> {
+    if extension(path).as_deref() == Some("ply") {
+        return ply::sample_cloud_points(path, stride_of);
+    }
+    let points = load_cloud(path)?.points;
+    let stride = stride_of(points.len()).max(1);
+    Ok((points.len(), points.into_iter().step_by(stride).collect()))
+}
+
 /// Load points from a cloud file, or the vertices of a mesh file (`.obj`,
 /// `.stl`), as a cloud. A `.ply` file is read as a cloud (its vertex element,
 /// with normals, labels and intensities when present), whether or not it has

@@ -227,6 +227,96 @@ pub(super) fn load_cloud_with_face_normals(
     Ok(cloud)
 }
 
+/// Every `stride`-th vertex position of the PLY cloud at `path` (the first,
+/// then each `stride` on; `stride` is `stride_of(vertex count)`, at least 1)
+/// and the vertex count: `load_cloud`'s points `.step_by(stride)`, reading
+/// only those rows when the file is binary with the vertex element first
+/// and of fixed-size rows (as `surveyor explore` writes `cloud.ply`: a
+/// cloud of millions of points is not read whole to draw thousands). Any
+/// other file is loaded whole. Every position read must be finite.
+pub(super) fn sample_cloud_points(
+    path: &Path,
+    stride_of: impl FnOnce(usize) -> usize,
+) -> Result<(usize, Vec<Point3>), SceneError> {
+    use std::io::{BufRead, BufReader, Read};
+    let io_err = |source| SceneError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let file = std::fs::File::open(path).map_err(io_err)?;
+    let mut reader = BufReader::with_capacity(1 << 20, file);
+    let mut head = Vec::new();
+    while !(head.ends_with(b"\nend_header\n") || head.ends_with(b"\nend_header\r\n"))
+        && head.len() < SAMPLED_HEADER_MAX
+    {
+        if reader.read_until(b'\n', &mut head).map_err(io_err)? == 0 {
+            break;
+        }
+    }
+    // Only the layout read row by row here; anything else (or a header
+    // this loop misread) is loaded whole, with the full checks.
+    let layout = parse_header(&head, path).ok().and_then(|h| {
+        let Encoding::Binary(order) = h.encoding else {
+            return None;
+        };
+        let vertex = h.elements.first().filter(|e| e.name == "vertex")?;
+        let row = vertex.fixed_row_size()?;
+        let at = |name: &str| {
+            let mut offset = 0;
+            for p in &vertex.props {
+                let Kind::Scalar(kind) = p.kind else {
+                    return None;
+                };
+                if p.name == name {
+                    return Some((offset, kind));
+                }
+                offset += kind.size();
+            }
+            None
+        };
+        Some((order, vertex.count, row, [at("x")?, at("y")?, at("z")?]))
+    });
+    let Some((order, count, row, xyz)) = layout else {
+        let cloud = load_cloud(path, &read_file(path)?)?;
+        let stride = stride_of(cloud.points.len()).max(1);
+        return Ok((
+            cloud.points.len(),
+            cloud.points.into_iter().step_by(stride).collect(),
+        ));
+    };
+    let stride = stride_of(count).max(1);
+    let mut points = Vec::with_capacity(count.div_ceil(stride));
+    let mut bytes = vec![0u8; row];
+    let skip = i64::try_from((stride - 1).saturating_mul(row)).unwrap_or(i64::MAX);
+    for i in (0..count).step_by(stride) {
+        if i > 0 {
+            reader.seek_relative(skip).map_err(io_err)?;
+        }
+        reader.read_exact(&mut bytes).map_err(|e| {
+            SceneError::parse(
+                path,
+                None,
+                format!("vertex {i} of {count}: the file ends inside it ({e}; truncated?)"),
+            )
+        })?;
+        let [x, y, z] = xyz.map(|(offset, kind)| kind.decode(&bytes[offset..], order));
+        if !(x.is_finite() && y.is_finite() && z.is_finite()) {
+            return Err(SceneError::parse(
+                path,
+                None,
+                format!("vertex {i}: non-finite position ({x}, {y}, {z})"),
+            ));
+        }
+        points.push(Point3::new(x, y, z));
+    }
+    Ok((count, points))
+}
+
+/// The longest header [`sample_cloud_points`] reads, bytes (a PLY header is
+/// a few lines; a longer one goes to the full reader, which says what is
+/// wrong with it).
+const SAMPLED_HEADER_MAX: usize = 1 << 16;
+
 fn cloud_of(path: &Path, ply: &Parsed) -> Result<PointCloud, SceneError> {
     let table = &ply.vertex;
     let (x, y, z) = xyz_columns(table, path)?;

@@ -368,3 +368,58 @@ fn text_layouts() {
     assert_eq!(c.intensities, Some(vec![-1200.0, 37.0]));
     assert!(c.normals.is_none());
 }
+
+/// `sample_cloud_points` gives `load_cloud`'s points `.step_by(stride)`: on
+/// the three encodings of the hand-written file (the binary ones read row
+/// by row, the ASCII one whole) and on a cloud as `surveyor explore` writes
+/// it, for several strides; a truncated file or a non-finite point read
+/// is an error naming the vertex.
+#[test]
+fn sampled_cloud_points_are_every_stride_th() {
+    let dir = tempfile::tempdir().unwrap();
+    let le = write(dir.path(), "le.ply", &ply_binary(false));
+    let be = write(dir.path(), "be.ply", &ply_binary(true));
+    let ascii = write(dir.path(), "ascii.PLY", &ply_ascii());
+    let n = 1001;
+    let col = |k: f32| (0..n).map(|i| k * i as f32 + 0.25).collect::<Vec<f32>>();
+    let cols = [col(0.5), col(-1.0), col(2.0), col(0.1), col(0.2), col(0.3)];
+    let names = ["x", "y", "z", "origin_x", "origin_y", "origin_z"];
+    let big = dir.path().join("cloud.ply");
+    io::write_ply_vertices_file(&big, &names, &cols.each_ref().map(Vec::as_slice)).unwrap();
+    for path in [&le, &be, &ascii, &big] {
+        let all = io::load_cloud(path).unwrap().points;
+        for stride in [1, 2, 3, 7, 1000, 5000] {
+            let (count, got) = io::sample_cloud_points(path, |c| {
+                assert_eq!(c, all.len());
+                stride
+            })
+            .unwrap();
+            assert_eq!(count, all.len());
+            let expected: Vec<Point3> = all.iter().step_by(stride).copied().collect();
+            assert_eq!(got, expected, "{} stride {stride}", path.display());
+        }
+    }
+    // Cut inside vertex 1000's row: the stride that reaches it says so.
+    let bytes = std::fs::read(&big).unwrap();
+    let cut = write(dir.path(), "cut.ply", &bytes[..bytes.len() - 4]);
+    assert!(io::sample_cloud_points(&cut, |_| 7).is_ok());
+    let e = io::sample_cloud_points(&cut, |_| 5)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("vertex 1000") && e.contains("truncated"), "{e}");
+    // A NaN as vertex 3's x (six floats a row): an error when read, not
+    // when skipped.
+    let body = bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .unwrap()
+        + 11;
+    let mut nan = bytes.clone();
+    nan[body + 3 * 24..body + 3 * 24 + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    let nan = write(dir.path(), "nan.ply", &nan);
+    let e = io::sample_cloud_points(&nan, |_| 1)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("vertex 3") && e.contains("non-finite"), "{e}");
+    assert!(io::sample_cloud_points(&nan, |_| 2).is_ok());
+}
