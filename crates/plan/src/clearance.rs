@@ -9,7 +9,7 @@ use crate::roadmap::MotionChecker;
 use crate::safety::Safety;
 use geom::{Isometry3, Point3, Real};
 use robot::{PosedShape, Robot};
-use rustc_hash::{FxHashMap, FxHashSet};
+use rustc_hash::FxHashMap;
 
 /// Measured points are kept one per cube of this side, metres: a point
 /// stands for the others within `√3 · 0.01 / 2 ≈ 9 mm` of it (the range
@@ -26,11 +26,63 @@ fn key(p: &Point3, side: Real) -> [i32; 3] {
     [p.x, p.y, p.z].map(|v| (v / side).floor() as i32)
 }
 
+/// Dedup cubes per cell side.
+const PER_CELL: i64 = 5;
+const _: () = assert!(
+    (CELL_M / POINT_DEDUP_M - PER_CELL as Real).abs() < 1e-9
+        && PER_CELL * PER_CELL * PER_CELL <= 128
+);
+
+/// The cell (of [`CELL_M`]) that records whether the dedup cube (of
+/// [`POINT_DEDUP_M`]) with key `k` is taken, and its bit there: the cell
+/// that contains the cube on the integer lattice (`k` divided by
+/// [`PER_CELL`], rounded down), so each cube has one bit wherever its
+/// points fall by their own cell key.
+fn dedup_slot(k: [i32; 3]) -> ([i32; 3], u32) {
+    let mut home = [0i32; 3];
+    let mut bit = 0;
+    for (axis, scale) in [(2, PER_CELL * PER_CELL), (1, PER_CELL), (0, 1)] {
+        let v = i64::from(k[axis]);
+        let c = v.div_euclid(PER_CELL);
+        // |c| ≤ |v| / 5 + 1 fits an i32; the remainder is in 0..PER_CELL.
+        home[axis] = c as i32;
+        bit += ((v - c * PER_CELL) * scale) as u32;
+    }
+    (home, bit)
+}
+
+/// Cells per brick side (a brick's cells are one `u64`'s bits).
+const PER_BRICK: i32 = 4;
+
+/// The brick holding the cell with key `c`, and the cell's bit in it.
+fn brick_of(c: [i32; 3]) -> ([i32; 3], u32) {
+    let mut brick = [0i32; 3];
+    let mut bit = 0;
+    for (axis, scale) in [(2, PER_BRICK * PER_BRICK), (1, PER_BRICK), (0, 1)] {
+        brick[axis] = c[axis].div_euclid(PER_BRICK);
+        bit += c[axis].rem_euclid(PER_BRICK) * scale;
+    }
+    (brick, bit as u32)
+}
+
+/// The kept points of one cell, and the dedup cubes it records as taken.
+#[derive(Clone, Debug, Default)]
+struct Cell {
+    taken: u128,
+    points: Vec<Point3>,
+}
+
 /// The measured points, indexed for clearance queries.
 #[derive(Clone, Debug, Default)]
 pub struct PointClearance {
-    kept: FxHashSet<[i32; 3]>,
-    cells: FxHashMap<[i32; 3], Vec<Point3>>,
+    /// By cell key ([`CELL_M`]): the points kept there, and which dedup
+    /// cubes the cell records as taken ([`dedup_slot`]; one hash lookup
+    /// for most points, where a set of cubes beside the cells took two).
+    cells: FxHashMap<[i32; 3], Cell>,
+    /// By brick key ([`brick_of`]): which of its cells hold points, so a
+    /// query looks up only those (most cells around the arm are empty).
+    bricks: FxHashMap<[i32; 3], u64>,
+    kept: usize,
 }
 
 impl PointClearance {
@@ -58,29 +110,44 @@ impl PointClearance {
             if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
                 continue;
             }
-            if self.kept.insert(key(p, POINT_DEDUP_M)) {
-                self.cells.entry(key(p, CELL_M)).or_default().push(*p);
-                if let Some(a) = added.as_deref_mut() {
-                    a.insert(std::iter::once(p));
-                }
+            // The first point of each dedup cube is kept.
+            let (home, bit) = dedup_slot(key(p, POINT_DEDUP_M));
+            let cell = self.cells.entry(home).or_default();
+            if cell.taken & (1u128 << bit) != 0 {
+                continue;
+            }
+            cell.taken |= 1u128 << bit;
+            self.kept += 1;
+            let own = key(p, CELL_M);
+            if own == home {
+                cell.points.push(*p);
+            } else {
+                // Rounding put it in a cell beside its cube's.
+                self.cells.entry(own).or_default().points.push(*p);
+            }
+            let (brick, bit) = brick_of(own);
+            *self.bricks.entry(brick).or_default() |= 1u64 << bit;
+            if let Some(a) = added.as_deref_mut() {
+                a.insert(std::iter::once(p));
             }
         }
     }
 
     /// Forget every point (the allocations are kept).
     pub fn clear(&mut self) {
-        self.kept.clear();
         self.cells.clear();
+        self.bricks.clear();
+        self.kept = 0;
     }
 
     /// Points kept.
     pub fn len(&self) -> usize {
-        self.kept.len()
+        self.kept
     }
 
     /// No point kept.
     pub fn is_empty(&self) -> bool {
-        self.kept.is_empty()
+        self.kept == 0
     }
 
     /// [`PointClearance::robot_clearance`] of `safety`'s robot at the
@@ -120,24 +187,44 @@ impl PointClearance {
             let c = capsule.transformed(world_from_base);
             let b = c.bounding_box().loosened(best);
             let (lo, hi) = (key(&b.min, CELL_M), key(&b.max, CELL_M));
-            for x in lo[0]..=hi[0] {
-                for y in lo[1]..=hi[1] {
-                    for z in lo[2]..=hi[2] {
-                        let Some(points) = self.cells.get(&[x, y, z]) else {
+            // The cells of the box that hold points, brick by brick (the
+            // minimum does not depend on the order).
+            let (blo, bhi) = (brick_of(lo).0, brick_of(hi).0);
+            for bx in blo[0]..=bhi[0] {
+                for by in blo[1]..=bhi[1] {
+                    for bz in blo[2]..=bhi[2] {
+                        let Some(&mask) = self.bricks.get(&[bx, by, bz]) else {
                             continue;
                         };
-                        // No point of a cell is nearer than its centre less
-                        // half its diagonal (the distance is 1-Lipschitz).
-                        let centre = Point3::new(
-                            (Real::from(x) + 0.5) * CELL_M,
-                            (Real::from(y) + 0.5) * CELL_M,
-                            (Real::from(z) + 0.5) * CELL_M,
-                        );
-                        if c.distance_to_point(&centre) - CELL_HALF_DIAGONAL_M >= best {
-                            continue;
-                        }
-                        for p in points {
-                            best = best.min(c.distance_to_point(p).max(0.0));
+                        let mut bits = mask;
+                        while bits != 0 {
+                            let bit = bits.trailing_zeros() as i32;
+                            bits &= bits - 1;
+                            let cell = [
+                                bx * PER_BRICK + bit % PER_BRICK,
+                                by * PER_BRICK + (bit / PER_BRICK) % PER_BRICK,
+                                bz * PER_BRICK + bit / (PER_BRICK * PER_BRICK),
+                            ];
+                            if (0..3).any(|k| cell[k] < lo[k] || cell[k] > hi[k]) {
+                                continue;
+                            }
+                            let Some(Cell { points, .. }) = self.cells.get(&cell) else {
+                                continue;
+                            };
+                            // No point of a cell is nearer than its centre
+                            // less half its diagonal (the distance is
+                            // 1-Lipschitz).
+                            let centre = Point3::new(
+                                (Real::from(cell[0]) + 0.5) * CELL_M,
+                                (Real::from(cell[1]) + 0.5) * CELL_M,
+                                (Real::from(cell[2]) + 0.5) * CELL_M,
+                            );
+                            if c.distance_to_point(&centre) - CELL_HALF_DIAGONAL_M >= best {
+                                continue;
+                            }
+                            for p in points {
+                                best = best.min(c.distance_to_point(p).max(0.0));
+                            }
                         }
                     }
                 }
@@ -272,6 +359,129 @@ mod tests {
     use super::*;
     use crate::{PlanConfig, Safety};
     use geom::Vector3;
+    use rustc_hash::FxHashSet;
+
+    /// The index keeps the first point of each 1 cm cube and files it by
+    /// its 5 cm cell, as a set of cube keys beside a map of cells does
+    /// (brute force): random points, and points on and around the cubes'
+    /// and cells' faces, where rounding may file a point in a cell beside
+    /// its cube's.
+    #[test]
+    fn the_index_keeps_the_first_point_of_each_cube() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut pts: Vec<Point3> = (0..20_000)
+            .map(|_| {
+                Point3::new(
+                    rng.random_range(-0.3..0.3),
+                    rng.random_range(-0.3..0.3),
+                    rng.random_range(-0.3..0.3),
+                )
+            })
+            .collect();
+        for i in -40..40 {
+            for eps in [0.0, 1e-17, -1e-17, 1e-12, -1e-12] {
+                let v = Real::from(i) * 0.01 + eps;
+                pts.push(Point3::new(v, -v, 0.5 * v));
+                pts.push(Point3::new(v, 0.05, -0.05));
+            }
+        }
+        pts.push(Point3::new(Real::NAN, 0.0, 0.0));
+        let mut index = PointClearance::new();
+        for chunk in pts.chunks(777) {
+            index.insert(chunk.iter());
+        }
+        let mut seen = FxHashSet::default();
+        let mut cells: FxHashMap<[i32; 3], Vec<Point3>> = FxHashMap::default();
+        for p in pts.iter().filter(|p| p.x.is_finite()) {
+            if seen.insert(key(p, POINT_DEDUP_M)) {
+                cells.entry(key(p, CELL_M)).or_default().push(*p);
+            }
+        }
+        assert_eq!(index.len(), seen.len());
+        let filed: FxHashMap<[i32; 3], Vec<Point3>> = index
+            .cells
+            .iter()
+            .filter(|(_, c)| !c.points.is_empty())
+            .map(|(k, c)| (*k, c.points.clone()))
+            .collect();
+        assert_eq!(filed, cells);
+        // The bricks name exactly the cells that hold points.
+        let mut named = 0;
+        for (brick, mask) in &index.bricks {
+            named += mask.count_ones() as usize;
+            for bit in 0..64u32 {
+                if mask & (1u64 << bit) != 0 {
+                    let b = bit as i32;
+                    let cell = [
+                        brick[0] * PER_BRICK + b % PER_BRICK,
+                        brick[1] * PER_BRICK + (b / PER_BRICK) % PER_BRICK,
+                        brick[2] * PER_BRICK + b / (PER_BRICK * PER_BRICK),
+                    ];
+                    assert_eq!(brick_of(cell), (*brick, bit));
+                    assert!(cells.contains_key(&cell), "{cell:?}");
+                }
+            }
+        }
+        assert_eq!(named, cells.len());
+    }
+
+    /// The clearance against the smallest capsule distance over every
+    /// point (brute force): the VM-6083 at random poses among points
+    /// scattered around it, for several search radii.
+    #[test]
+    fn robot_clearance_is_the_brute_force_minimum() {
+        use rand::{RngExt, SeedableRng};
+        let robot = robot::builtin("denso-vm6083").unwrap();
+        let world = Isometry3::translation(0.2, -0.1, 0.0);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let pts: Vec<Point3> = (0..30_000)
+            .map(|_| {
+                Point3::new(
+                    rng.random_range(-1.2..1.6),
+                    rng.random_range(-1.4..1.2),
+                    rng.random_range(-0.2..1.8),
+                )
+            })
+            .collect();
+        let mut index = PointClearance::new();
+        index.insert(pts.iter());
+        let kept: Vec<Point3> = index
+            .cells
+            .values()
+            .flat_map(|c| c.points.iter().copied())
+            .collect();
+        let mounted = robot.mounted_links();
+        let limits = robot.limits();
+        for _ in 0..40 {
+            let q: Vec<Real> = limits
+                .iter()
+                .map(|l| {
+                    let l = l.unwrap();
+                    rng.random_range(l.min..l.max)
+                })
+                .collect();
+            let frames = robot.forward_kinematics(&q).unwrap();
+            let capsules: Vec<geom::Capsule> = robot
+                .posed_collision_shapes(&frames)
+                .into_iter()
+                .filter_map(|s| match s {
+                    PosedShape::Capsule { link, capsule } if link.index() >= mounted => {
+                        Some(capsule.transformed(&world))
+                    }
+                    _ => None,
+                })
+                .collect();
+            for search in [0.02, 0.05, 0.2] {
+                let expected = kept
+                    .iter()
+                    .flat_map(|p| capsules.iter().map(|c| c.distance_to_point(p).max(0.0)))
+                    .fold(search, Real::min);
+                let got = index.robot_clearance(&robot, &frames, &world, search);
+                assert_eq!(got, expected, "q = {q:?}, search {search}");
+            }
+        }
+    }
 
     /// The clearance to points against the capsule distance by hand: for
     /// each capsule of the VM-6083 at a pose, points placed at known
