@@ -364,6 +364,9 @@ impl Sweep {
         if self.shape.is_none() {
             return out;
         }
+        // The points are in cell order, so the cells one scan on are too:
+        // one pointer walks them beside `k` (what `find` would give each).
+        let mut next = 0;
         for (k, p) in self.points.iter().enumerate() {
             let Some(c) = p.cell else { continue };
             if let Some(q) = self.points.get(k + 1).and_then(|q| q.cell)
@@ -372,11 +375,15 @@ impl Sweep {
             {
                 out.push((k, k + 1));
             }
-            if let Some(l) = self.find(GridCell {
+            let below = Some(GridCell {
                 scan: c.scan + 1,
                 ray: c.ray,
-            }) {
-                out.push((k, l));
+            });
+            while self.points.get(next).is_some_and(|q| q.cell < below) {
+                next += 1;
+            }
+            if self.points.get(next).is_some_and(|q| q.cell == below) {
+                out.push((k, next));
             }
         }
         out
@@ -497,6 +504,53 @@ fn is_finite_pose(p: &Isometry3) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The neighbour pairs against the definition (each return's next ray
+    /// on its scan, and its ray on the next scan found by `find`), on grids
+    /// with returns missing at random, whole scans missing, and none.
+    #[test]
+    fn grid_neighbours_are_the_next_ray_and_the_next_scan() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        for keep in [1.0, 0.9, 0.5, 0.1] {
+            let mut points = Vec::new();
+            for scan in 0..25u32 {
+                if scan % 7 == 3 {
+                    continue;
+                }
+                for ray in 0..40u32 {
+                    if rng.random_range(0.0..1.0) < keep {
+                        let v = Real::from(scan) + 0.01 * Real::from(ray);
+                        points.push(SweepPoint {
+                            point: Point3::new(v, 1.0, 0.0),
+                            origin: Point3::origin(),
+                            intensity: 0.0,
+                            material: None,
+                            cell: Some(GridCell { scan, ray }),
+                        });
+                    }
+                }
+            }
+            let sweep = Sweep::from_points(points).unwrap();
+            let mut expected = Vec::new();
+            for (k, p) in sweep.points().iter().enumerate() {
+                let c = p.cell.unwrap();
+                if let Some(l) = sweep.find(GridCell {
+                    scan: c.scan,
+                    ray: c.ray + 1,
+                }) {
+                    expected.push((k, l));
+                }
+                if let Some(l) = sweep.find(GridCell {
+                    scan: c.scan + 1,
+                    ray: c.ray,
+                }) {
+                    expected.push((k, l));
+                }
+            }
+            assert_eq!(sweep.grid_neighbours(), expected, "keep {keep}");
+        }
+    }
 
     #[test]
     fn default_sweep_has_151_scans_over_60_degrees() {
