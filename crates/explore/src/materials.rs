@@ -85,16 +85,18 @@ impl Materials {
             n_materials: materials.len(),
             ..map::MaterialConfig::default()
         })?;
-        for disc in &d.discs {
-            belief.insert_disc(disc);
-        }
-        let voxels = {
+        // Each disc's voxels (in parallel), then the belief's voxels in
+        // disc order, as `insert_disc` would insert them.
+        let voxels: Vec<Vec<map::VoxelKey>> = {
             use rayon::prelude::*;
             d.discs
                 .par_iter()
                 .map(|disc| belief.disc_voxels(disc))
                 .collect()
         };
+        for key in voxels.iter().flatten() {
+            belief.insert_surface(*key);
+        }
         let patch_m = training.patch_radius_m;
         let flat = flat_patches(
             &d.discs,

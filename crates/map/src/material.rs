@@ -55,8 +55,8 @@ use crate::MapError;
 pub use crate::key::VoxelKey;
 use crate::sld::Disc;
 use geom::{Point3, Real, Vector3};
+use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
 
 /// Parameters of the material belief.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -117,7 +117,7 @@ impl MaterialConfig {
 pub struct MaterialBelief {
     cfg: MaterialConfig,
     keys: Vec<VoxelKey>,
-    index: HashMap<VoxelKey, u32>,
+    index: FxHashMap<VoxelKey, u32>,
     /// `n_t` probabilities per voxel, voxel-major.
     probs: Vec<Real>,
     /// Cached `H3(ʲM)` per voxel.
@@ -139,7 +139,7 @@ impl MaterialBelief {
         Ok(Self {
             cfg,
             keys: Vec::new(),
-            index: HashMap::new(),
+            index: FxHashMap::default(),
             probs: Vec::new(),
             h3: Vec::new(),
         })
