@@ -14,9 +14,9 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use robot::{JointKind, Robot};
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use serde::{Deserialize, Serialize};
 use std::cell::RefCell;
-use std::collections::{HashMap, HashSet};
 
 /// Lazy searches of [`Roadmap::plan`] before it checks edges as A* meets them.
 const LAZY_ROUNDS: usize = 32;
@@ -80,9 +80,9 @@ impl<C: MotionChecker> MemoChecker<C> {
     pub fn new(inner: C) -> Self {
         Self {
             inner,
-            poses: HashMap::new(),
-            motions: HashMap::new(),
-            may_be: HashMap::new(),
+            poses: HashMap::default(),
+            motions: HashMap::default(),
+            may_be: HashMap::default(),
         }
     }
 
@@ -526,8 +526,8 @@ impl Roadmap {
         // checking the edges of nodes no safe path reaches. Every answer is
         // kept for the next round.
         let checks = RefCell::new((
-            HashMap::<usize, bool>::new(),
-            HashMap::<usize, bool>::new(),
+            HashMap::<usize, bool>::default(),
+            HashMap::<usize, bool>::default(),
             checker,
         ));
         // A* asks about every edge of a node it expands, one after another
@@ -536,7 +536,10 @@ impl Roadmap {
         // neighbours and, in the eager rounds, the motions to them), so that
         // a checker that remembers ([`MemoChecker`]) answers them together,
         // in parallel. The answers are the same as one by one.
-        let (lazy_told, eager_told) = (RefCell::new(HashSet::new()), RefCell::new(HashSet::new()));
+        let (lazy_told, eager_told) = (
+            RefCell::new(HashSet::default()),
+            RefCell::new(HashSet::default()),
+        );
         let tell = |u: NodeIndex, motions: bool| {
             let told = if motions { &eager_told } else { &lazy_told };
             if told.borrow_mut().insert(u.index()) {
