@@ -55,6 +55,31 @@ pub struct SurfaceConfig {
     /// 0.8 s, 100 000 about 45 s (release build). The default, 4 096, is 150
     /// times Pudney's 26-sensor sets (P§4.3) and five URG-04LX scan lines.
     pub max_set_points: usize,
+    /// The order in which a new point segment tries its merger candidates
+    /// (P§2.3 step 2(a)).
+    pub merge_order: MergeOrder,
+}
+
+/// The order in which a new point segment tries the segments near it for a
+/// merger (P§2.3 step 2(a)). Pudney processed them "in the order in which they
+/// are stored in memory", having said that the operation yielding the best
+/// result, the shortest gap first, should be tried first but is too costly
+/// to find (P§2.3). For a point and the polygons near it the shortest gap is
+/// cheap: the distance to each plane.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MergeOrder {
+    /// The polygons nearest the point's plane first (ties and everything else
+    /// in id order). Our rule, the default: where two faces meet at a fold of
+    /// less than about 45°, a point near the fold lies within λ of both
+    /// planes and of a polygon that straddles the fold; in id order it joined
+    /// whichever polygon was oldest, which let a straddling polygon grow over
+    /// both faces (block2's 30° chamfer and its top fused at a plane between
+    /// them). Nearest first, each point joins its own face.
+    #[default]
+    NearestPlane,
+    /// Id order, oldest first (P§2.3: the order of storage).
+    Thesis,
 }
 
 impl Default for SurfaceConfig {
@@ -66,6 +91,7 @@ impl Default for SurfaceConfig {
             phi: 0.05,
             collinear_fraction: 0.1,
             max_set_points: DEFAULT_MAX_SET_POINTS,
+            merge_order: MergeOrder::default(),
         }
     }
 }

@@ -23,7 +23,7 @@ pub mod testing;
 pub mod update;
 
 pub use changelog::{ChangeLog, Merger};
-pub use config::{DEFAULT_MAX_SET_POINTS, SurfaceConfig};
+pub use config::{DEFAULT_MAX_SET_POINTS, MergeOrder, SurfaceConfig};
 pub use error::{InvariantViolation, SurfaceError};
 pub use export::{EdgeJson, ModelJson, ModelStats, SegmentJson, StatsJson, UpdateTimes};
 pub use fissure::FissureType;

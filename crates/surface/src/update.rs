@@ -27,6 +27,7 @@
 //! they are).
 
 use crate::changelog::ChangeLog;
+use crate::config::MergeOrder;
 use crate::error::SurfaceError;
 use crate::fissure::{
     FissureMode, close_pockets, fill_fissures, remove_collinear, remove_nearly_collinear,
@@ -39,6 +40,10 @@ use crate::segment::{EdgeKey, PointSegment, Segment, SegmentId, SegmentKind};
 use crate::share::ShareOutcome;
 use geom::Moments;
 use std::collections::BTreeSet;
+
+/// The rank of merger candidates tried in id order, after every ranked one
+/// (above the bits of every finite distance).
+const BY_ID: u64 = u64::MAX;
 
 impl SurfaceModel {
     /// Update the model with one set of sensor points (P§2.3). Bad input (non-finite
@@ -123,18 +128,25 @@ impl SurfaceModel {
     }
 
     /// Step 2(a) for one modified segment and its successors. Candidates are
-    /// tried in id order, each once per chain: after a success the new S₁ also
-    /// meets the candidates near the absorbed S₂, which join the queue.
+    /// tried each once per chain, in id order ([`MergeOrder::Thesis`]) or, for
+    /// a new point segment, the polygons nearest its plane first
+    /// ([`MergeOrder::NearestPlane`], see there); after a success the new S₁
+    /// also meets the candidates near the absorbed S₂, which join the queue in
+    /// id order.
     fn merge_chain(&mut self, start: SegmentId) {
         if !self.segments.contains_key(&start) {
             return;
         }
         let mut s1 = start;
-        let mut queue: BTreeSet<SegmentId> = self.merge_candidates(s1).into_iter().collect();
+        let mut queue: BTreeSet<(u64, SegmentId)> = self
+            .merge_candidates(s1)
+            .into_iter()
+            .map(|s2| (self.merge_rank(s1, s2), s2))
+            .collect();
         let mut tried: BTreeSet<SegmentId> = BTreeSet::new();
         // Every iteration removes an id from the queue (ids join the queue at most
         // once, through `tried`), so the loop ends.
-        while let Some(s2) = queue.pop_first() {
+        while let Some((_, s2)) = queue.pop_first() {
             if !tried.insert(s2) || s2 == s1 || !self.segments.contains_key(&s2) {
                 continue;
             }
@@ -150,12 +162,36 @@ impl SurfaceModel {
                 queue.extend(
                     near_s2
                         .into_iter()
-                        .filter(|id| !tried.contains(id) && *id != s3),
+                        .filter(|id| !tried.contains(id) && *id != s3)
+                        .map(|id| (BY_ID, id)),
                 );
                 if let Some(p) = self.poly(s3) {
-                    queue.extend(p.neighbours().into_iter().filter(|id| !tried.contains(id)));
+                    queue.extend(
+                        p.neighbours()
+                            .into_iter()
+                            .filter(|id| !tried.contains(id))
+                            .map(|id| (BY_ID, id)),
+                    );
                 }
             }
+        }
+    }
+
+    /// Where `s2` stands in `s1`'s first merger queue (smaller first, ties by
+    /// id): under [`MergeOrder::NearestPlane`], a polygon's distance from a
+    /// point segment `s1` to its plane (the bits of a non-negative float order
+    /// as the float does); every other pair, and every pair under
+    /// [`MergeOrder::Thesis`], [`BY_ID`].
+    fn merge_rank(&self, s1: SegmentId, s2: SegmentId) -> u64 {
+        if self.config.merge_order == MergeOrder::Thesis {
+            return BY_ID;
+        }
+        match (self.get(s1).map(|s| &s.kind), self.get(s2).map(|s| &s.kind)) {
+            (Some(SegmentKind::Point(p)), Some(SegmentKind::Polygon(g))) => {
+                let d = (p.centroid - g.centroid).dot(&g.normal).abs();
+                if d.is_finite() { d.to_bits() } else { BY_ID }
+            }
+            _ => BY_ID,
         }
     }
 

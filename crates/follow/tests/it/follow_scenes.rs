@@ -11,6 +11,7 @@ use crate::support;
 use follow::{FollowConfig, Mode};
 use geom::{Point3, Real};
 use support::Run;
+use surface::{MergeOrder, SurfaceConfig};
 
 /// Fraction of a 1 cm grid over the cube's top face lying within λ of a model
 /// polygon whose normal is within μ of +z.
@@ -122,6 +123,14 @@ fn point3_completes_the_cube() {
 /// null-space term (α) keeps the links off the surface; with α = 0 they
 /// collide (eq. 3 alone) or come clearly closer (with our link guard and
 /// safety guard, which must not hide what redundancy does).
+///
+/// Measured on the path the thesis' merger order gives (`MergeOrder::Thesis`):
+/// the comparison is of the controller on one path. In the default order
+/// arm4 takes another path on block1 where eq. 3 alone and the link guard
+/// show the same (α = 0: −28 mm and 2 mm against 11 mm), but with every
+/// guard on the links outside the control zone keep 33 mm with α = 0 against
+/// 48 mm with α = 7000 over 1000 steps, and 33 against 26 mm over 2000: there
+/// the safety guard, not redundancy, decides (issue 24 keeps it open).
 #[test]
 fn redundancy_keeps_arm4_off_block1() {
     // The smallest clearance over `steps` steps of links outside the
@@ -133,7 +142,11 @@ fn redundancy_keeps_arm4_off_block1() {
             guard,
             ..FollowConfig::default()
         };
-        let mut run = Run::new("block1", "arm4", cfg, 1);
+        let surface = SurfaceConfig {
+            merge_order: MergeOrder::Thesis,
+            ..SurfaceConfig::default()
+        };
+        let mut run = Run::with_surface("block1", "arm4", cfg, surface, 1);
         let mut min_clearance = Real::INFINITY;
         for _ in 0..steps {
             if run.step().termination.is_some() {

@@ -44,13 +44,30 @@ impl Run {
     /// `robot` (point3 or arm4) δ above the top of `scene`, the table as an
     /// initial segment.
     pub fn new(scene_name: &str, robot_name: &str, config: FollowConfig, seed: u64) -> Self {
+        Self::with_surface(
+            scene_name,
+            robot_name,
+            config,
+            SurfaceConfig::default(),
+            seed,
+        )
+    }
+
+    /// [`Run::new`] with a surface model configuration of its own.
+    pub fn with_surface(
+        scene_name: &str,
+        robot_name: &str,
+        config: FollowConfig,
+        surface: SurfaceConfig,
+        seed: u64,
+    ) -> Self {
         let world = scene::builtin::scene(scene_name)
             .unwrap()
             .build(std::path::Path::new("."))
             .unwrap();
         let scene = world.as_scene().unwrap().clone();
         let robot = robot::builtin(robot_name).unwrap();
-        let mut model = SurfaceModel::new(SurfaceConfig::default()).unwrap();
+        let mut model = SurfaceModel::new(surface).unwrap();
         model
             .add_initial_segment(&[
                 Point3::new(-2.0, -2.0, 0.0),

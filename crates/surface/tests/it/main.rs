@@ -5,6 +5,7 @@ mod api;
 mod figures;
 mod follower_sets;
 mod fuzz;
+mod merge_order;
 mod proptests;
 mod real_data;
 #[path = "../support/mod.rs"]
