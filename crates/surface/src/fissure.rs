@@ -34,7 +34,7 @@
 use crate::perimeter::{PerimPoint, Poly2, SightGrid, cross2, param_on_segment, turn};
 use crate::segment::{Edge, EdgeKey};
 use geom::polygon2::distance_point_segment;
-use geom::{Point2, Real};
+use geom::{Point2, Real, Vector2};
 use std::f64::consts::FRAC_PI_2;
 
 /// The six fissure types of P§2.5 (Fig. 15).
@@ -67,6 +67,51 @@ pub(crate) enum FissureMode {
 /// Turns sharper than this count as turns (not collinear vertices).
 const MIN_TURN: Real = 1e-9;
 
+/// `turn(a, b) < -MIN_TURN` (a right turn), deciding by the signs of the
+/// cross and dot products where they decide it and calling the `atan2` of
+/// [`turn`] only near the thresholds and for zeros (whose signs `atan2` reads).
+fn turns_right(a: &Vector2, b: &Vector2) -> bool {
+    let c = cross2(a, b);
+    let d = a.dot(b);
+    if c > 0.0 {
+        // atan2 in (0, π].
+        return false;
+    }
+    if c < 0.0 {
+        if d < 0.0 {
+            // atan2 in (−π, −π/2].
+            return true;
+        }
+        if d > 0.0 {
+            // atan2 = −atan(|c|/d): beyond 10⁻⁶ rad, or within 10⁻¹².
+            if -c > 1e-6 * d {
+                return true;
+            }
+            if -c < 1e-12 * d {
+                return false;
+            }
+        }
+    }
+    turn(a, b) < -MIN_TURN
+}
+
+/// `turn(a, b) < -FRAC_PI_2` (a right turn sharper than 90°), as
+/// [`turns_right`] does it: the signs decide it unless the angle lies within
+/// about 10⁻¹² rad of −90° or a product is zero.
+fn turns_right_sharply(a: &Vector2, b: &Vector2) -> bool {
+    let c = cross2(a, b);
+    let d = a.dot(b);
+    if c > 0.0 || d > 0.0 {
+        // atan2 in (0, π], or in (−π/2, 0].
+        return false;
+    }
+    if c < 0.0 && d < 0.0 && -d > 1e-12 * -c {
+        // atan2 = −π/2 − atan(|d|/|c|), more than 10⁻¹² below −π/2.
+        return true;
+    }
+    turn(a, b) < -FRAC_PI_2
+}
+
 /// Fill fissures in `poly` (see the [module docs](self)); returns the types
 /// filled, in order.
 pub(crate) fn fill_fissures(
@@ -77,18 +122,41 @@ pub(crate) fn fill_fissures(
     fresh: &mut dyn FnMut() -> EdgeKey,
 ) -> Vec<FissureType> {
     let mut filled = Vec::new();
+    let mut next = Poly2 {
+        nodes: Vec::with_capacity(poly.len() + 2),
+    };
+    cascade(poly, mode, lambda, eps, fresh, &mut next, &mut |kind| {
+        filled.push(kind)
+    });
+    filled
+}
+
+/// The cascade of [`fill_fissures`], reporting each fill to `on_fill`; the
+/// windows' candidate perimeters are built in `next` (any content) and
+/// swapped in when kept.
+fn cascade(
+    poly: &mut Poly2,
+    mode: FissureMode,
+    lambda: Real,
+    eps: Real,
+    fresh: &mut dyn FnMut() -> EdgeKey,
+    next: &mut Poly2,
+    on_fill: &mut dyn FnMut(FissureType),
+) {
     let cap = 2 * poly.len() + 8;
+    let mut fills = 0usize;
     let mut i = 0usize;
     let mut without_fill = 0usize;
-    while filled.len() < cap {
+    while fills < cap {
         let n = poly.len();
         if n < 3 || without_fill >= n {
             break;
         }
         let at = i % n;
-        if let Some((kind, next)) = fill_window(poly, at, mode, lambda, eps, fresh) {
-            *poly = next;
-            filled.push(kind);
+        if let Some(kind) = fill_window(poly, at, mode, lambda, eps, fresh, next) {
+            std::mem::swap(poly, next);
+            fills += 1;
+            on_fill(kind);
             without_fill = 0;
             let m = poly.len().max(1);
             i = (at + 3 * m - 3) % m;
@@ -97,7 +165,6 @@ pub(crate) fn fill_fissures(
             without_fill += 1;
         }
     }
-    filled
 }
 
 /// Remove vertices that lie within `eps` of the straight edge joining their
@@ -231,6 +298,9 @@ pub(crate) fn close_pockets(
     fresh: &mut dyn FnMut() -> EdgeKey,
 ) -> usize {
     let mut closed = 0;
+    let mut free: Vec<usize> = Vec::new();
+    let mut pocket: Vec<Point2> = Vec::new();
+    let mut collapser = Collapser::default();
     // Each closure removes at least three vertices.
     'outer: loop {
         let n = poly.len();
@@ -249,15 +319,23 @@ pub(crate) fn close_pockets(
         // Sight tests against the unchanged perimeter go through an index.
         let mut grid: Option<SightGrid> = None;
         let mut area: Option<Real> = None;
+        // free[m]: how many edges from edge m on (over the perimeter taken
+        // twice) are not shared.
+        free.clear();
+        free.resize(2 * n + 1, 0);
+        for m in (0..2 * n).rev() {
+            free[m] = if poly.is_shared(m) {
+                0
+            } else {
+                free[m + 1] + 1
+            };
+        }
         // Sections start at each vertex and run over non-shared edges only.
         for i in 0..n {
             let vi = poly.pt(i);
             // Section v_i … v_{i+k}: k edges, k − 1 removed vertices, and at
             // least three vertices left.
-            let mut k_max = 0;
-            while k_max < n - 3 && !poly.is_shared(i + k_max) {
-                k_max += 1;
-            }
+            let k_max = free[i].min(n - 3);
             for k in (4..=k_max).rev() {
                 let vj = poly.pt(i + k);
                 if (vj - vi).norm() >= lambda {
@@ -271,8 +349,9 @@ pub(crate) fn close_pockets(
                 if !grid.sight(poly, &vi, &vj, eps, |_| false) {
                     continue;
                 }
-                let pocket: Vec<Point2> = (0..=k).map(|m| poly.pt(i + m)).collect();
-                if !collapse_hole(&pocket, lambda, eps) {
+                pocket.clear();
+                pocket.extend((0..=k).map(|m| poly.pt(i + m)));
+                if !collapser.collapses(&pocket, lambda, eps) {
                     continue;
                 }
                 let edge = Edge {
@@ -302,22 +381,44 @@ pub(crate) fn close_pockets(
 /// Collapse a hole's perimeter (clockwise, the polygon on its left) by filling
 /// fissures without restrictions. `true` when it collapsed.
 pub(crate) fn collapse_hole(hole: &[Point2], lambda: Real, eps: Real) -> bool {
-    let mut key = 0u32;
-    let mut fresh = || {
-        key += 1;
-        EdgeKey(key)
-    };
-    let mut poly = Poly2 {
-        nodes: hole
-            .iter()
-            .map(|p| crate::perimeter::Node2::plain(*p, EdgeKey(0)))
-            .collect(),
-    };
-    fill_fissures(&mut poly, FissureMode::Collapse, lambda, eps, &mut fresh);
-    poly.len() < 3
+    Collapser::default().collapses(hole, lambda, eps)
 }
 
-/// Try the fissure types at the window starting at vertex `i`.
+/// [`collapse_hole`] with its perimeters kept between calls, for callers that
+/// test many holes.
+#[derive(Default)]
+struct Collapser {
+    poly: Poly2,
+    next: Poly2,
+}
+
+impl Collapser {
+    fn collapses(&mut self, hole: &[Point2], lambda: Real, eps: Real) -> bool {
+        let mut key = 0u32;
+        let mut fresh = || {
+            key += 1;
+            EdgeKey(key)
+        };
+        self.poly.nodes.clear();
+        self.poly.nodes.extend(
+            hole.iter()
+                .map(|p| crate::perimeter::Node2::plain(*p, EdgeKey(0))),
+        );
+        cascade(
+            &mut self.poly,
+            FissureMode::Collapse,
+            lambda,
+            eps,
+            &mut fresh,
+            &mut self.next,
+            &mut |_| {},
+        );
+        self.poly.len() < 3
+    }
+}
+
+/// Try the fissure types at the window starting at vertex `i`; the filled
+/// perimeter is left in `next`.
 fn fill_window(
     poly: &Poly2,
     i: usize,
@@ -325,7 +426,8 @@ fn fill_window(
     lambda: Real,
     eps: Real,
     fresh: &mut dyn FnMut() -> EdgeKey,
-) -> Option<(FissureType, Poly2)> {
+    next: &mut Poly2,
+) -> Option<FissureType> {
     let n = poly.len();
     let restricted = mode == FissureMode::Restricted;
     let min_left = if restricted { 3 } else { 0 };
@@ -351,7 +453,8 @@ fn fill_window(
         }
         if n > min_left {
             // V: type II on v1 v3 v4.
-            if distance_point_segment(&v1, &v3, &v4) < lambda && turn(&(v3 - v1), &d34) < -FRAC_PI_2
+            if distance_point_segment(&v1, &v3, &v4) < lambda
+                && turns_right_sharply(&(v3 - v1), &d34)
             {
                 let t = param_on_segment(&v1, &v3, &v4);
                 candidates.push((
@@ -364,7 +467,8 @@ fn fill_window(
                 ));
             }
             // VI: type III on v1 v2 v4.
-            if distance_point_segment(&v4, &v1, &v2) < lambda && turn(&d12, &(v4 - v2)) < -FRAC_PI_2
+            if distance_point_segment(&v4, &v1, &v2) < lambda
+                && turns_right_sharply(&d12, &(v4 - v2))
             {
                 let t = param_on_segment(&v4, &v1, &v2);
                 candidates.push((
@@ -380,15 +484,14 @@ fn fill_window(
     let near_12 = |p: &Point2| distance_point_segment(p, &v1, &v2) < lambda;
     let near_23 = |p: &Point2| distance_point_segment(p, &v2, &v3) < lambda;
     if two_free && ((n > min_left && near13) || near_23(&v1) || near_12(&v3)) {
-        let t2 = turn(&d12, &d23);
-        if n > min_left && t2 < -MIN_TURN && near13 {
+        if n > min_left && near13 && turns_right(&d12, &d23) {
             candidates.push((
                 FissureType::I,
                 PerimPoint::vertex(i),
                 PerimPoint::vertex(i + 2),
             ));
         }
-        if t2 < -FRAC_PI_2 {
+        if turns_right_sharply(&d12, &d23) {
             if distance_point_segment(&v1, &v2, &v3) < lambda {
                 let t = param_on_segment(&v1, &v2, &v3);
                 candidates.push((
@@ -419,7 +522,8 @@ fn fill_window(
         };
         if !restricted && n < 3 + removes {
             // The hole's perimeter collapses.
-            return Some((kind, Poly2::default()));
+            next.nodes.clear();
+            return Some(kind);
         }
         let from = poly.snap(from, eps);
         let to = poly.snap(to, eps);
@@ -434,9 +538,12 @@ fn fill_window(
             key: fresh(),
             share: None,
         };
-        let Ok(next) = poly.replace_section(from, to, edge, &[], fresh) else {
+        if poly
+            .replace_section_into(from, to, edge, &[], fresh, &mut next.nodes)
+            .is_err()
+        {
             continue;
-        };
+        }
         if next.len() >= n && !matches!(kind, FissureType::II | FissureType::III) {
             continue;
         }
@@ -454,7 +561,7 @@ fn fill_window(
         {
             continue;
         }
-        return Some((kind, next));
+        return Some(kind);
     }
     None
 }
@@ -463,6 +570,52 @@ fn fill_window(
 mod tests {
     use super::*;
     use crate::perimeter::Node2;
+
+    /// The sign-decided turn tests give `turn`'s answers: on random
+    /// directions, on directions a hair off the thresholds (straight on, and
+    /// ±90°), and on zeros of either sign.
+    #[test]
+    fn turn_tests_agree_with_atan2() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let mut cases: Vec<(Vector2, Vector2)> = Vec::new();
+        let zeros = [0.0, -0.0];
+        for &x in &zeros {
+            for &y in &zeros {
+                for &u in &zeros {
+                    for &w in &zeros {
+                        cases.push((Vector2::new(x, y), Vector2::new(u, w)));
+                    }
+                    cases.push((Vector2::new(x, y), Vector2::new(1.0, -0.5)));
+                    cases.push((Vector2::new(1.0, 0.0), Vector2::new(x, y)));
+                }
+            }
+        }
+        for _ in 0..200_000 {
+            let a = Vector2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+            let angle: Real = match rng.random_range(0..4) {
+                0 => rng.random_range(-3.2..3.2),
+                1 => rng.random_range(-1e-8..1e-8) * rng.random_range(0.0..1.0f64).powi(8),
+                2 => {
+                    -FRAC_PI_2
+                        + rng.random_range(-1e-9..1e-9) * rng.random_range(0.0..1.0f64).powi(8)
+                }
+                _ => -MIN_TURN * rng.random_range(0.5..2.0),
+            };
+            let len = rng.random_range(1e-6..10.0);
+            let (s, c) = angle.sin_cos();
+            let b = Vector2::new(c * a.x - s * a.y, s * a.x + c * a.y) * len;
+            cases.push((a, b));
+        }
+        for (a, b) in cases {
+            assert_eq!(turns_right(&a, &b), turn(&a, &b) < -MIN_TURN, "{a:?} {b:?}");
+            assert_eq!(
+                turns_right_sharply(&a, &b),
+                turn(&a, &b) < -FRAC_PI_2,
+                "{a:?} {b:?}"
+            );
+        }
+    }
 
     fn poly(pts: &[(Real, Real)]) -> Poly2 {
         Poly2 {

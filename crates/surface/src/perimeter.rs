@@ -294,6 +294,24 @@ impl Poly2 {
         inserted: &[Node2],
         fresh: &mut dyn FnMut() -> EdgeKey,
     ) -> Result<Self, EditError> {
+        let mut out = Vec::with_capacity(self.len() + inserted.len() + 2);
+        self.replace_section_into(from, to, from_edge, inserted, fresh, &mut out)?;
+        Ok(Self { nodes: out })
+    }
+
+    /// [`Poly2::replace_section`] into `out` (cleared first; on an error it
+    /// holds a part of the result): for callers that try many edits and keep
+    /// few, without an allocation each.
+    pub fn replace_section_into(
+        &self,
+        from: PerimPoint,
+        to: PerimPoint,
+        from_edge: Edge,
+        inserted: &[Node2],
+        fresh: &mut dyn FnMut() -> EdgeKey,
+        out: &mut Vec<Node2>,
+    ) -> Result<(), EditError> {
+        out.clear();
         let n = self.len();
         if n < 2 {
             return Err(EditError::Degenerate);
@@ -303,7 +321,6 @@ impl Poly2 {
         if i == j && s == u {
             return Err(EditError::Degenerate);
         }
-        let mut out = Vec::with_capacity(n + inserted.len() + 2);
         // The vertex at `to`.
         if u == 0.0 {
             out.push(self.nodes[j]);
@@ -351,7 +368,7 @@ impl Poly2 {
         if out.len() < 3 {
             return Err(EditError::Degenerate);
         }
-        Ok(Self { nodes: out })
+        Ok(())
     }
 }
 
