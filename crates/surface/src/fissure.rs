@@ -126,7 +126,7 @@ pub(crate) fn fill_fissures(
         nodes: Vec::with_capacity(poly.len() + 2),
     };
     cascade(poly, mode, lambda, eps, fresh, &mut next, &mut |kind| {
-        filled.push(kind)
+        filled.push(kind);
     });
     filled
 }
