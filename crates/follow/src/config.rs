@@ -150,6 +150,11 @@ pub struct FollowConfig {
     /// the polygon, in its plane, metres (0: the polygons as they are);
     /// default λ/2 for Pudney's λ = 0.05 (see [`crate::guard`]).
     pub guard_edge_extension_m: Real,
+    /// The guard takes every edge of an initial segment (P§4.3: a table the
+    /// objects stand on, a face given a priori) to go on this far past it,
+    /// in its plane, metres: a brim that keeps the links from passing round
+    /// the segment's edge to behind it (0: the segments as they are).
+    pub guard_initial_extension_m: Real,
     /// How current edge following cuts slices (P§3.4.3): `thesis` (λ/2
     /// wide) or `lattice` (width from the control point's sensor lattice).
     pub slices: SliceRule,
@@ -182,6 +187,7 @@ impl Default for FollowConfig {
             guard_margin_m: 0.02,
             guard_recent_sets: 10,
             guard_edge_extension_m: 0.025,
+            guard_initial_extension_m: 0.2,
             slices: SliceRule::Thesis,
             slice_line: SliceLineRule::Thesis,
             gap_targets: GapTargetRule::Thesis,
@@ -236,6 +242,15 @@ impl FollowConfig {
                 "guard_edge_extension_m",
                 "a distance in 0..=1",
                 self.guard_edge_extension_m.to_string(),
+            );
+        }
+        if !(self.guard_initial_extension_m.is_finite()
+            && (0.0..=1.0).contains(&self.guard_initial_extension_m))
+        {
+            return bad(
+                "guard_initial_extension_m",
+                "a distance in 0..=1",
+                self.guard_initial_extension_m.to_string(),
             );
         }
         if self.guard_recent_sets > 1000 {

@@ -33,7 +33,7 @@ pub use record::follow::GuardCounts;
 use robot::Robot;
 use serde::Serialize;
 use std::collections::VecDeque;
-use surface::{Polygon, SegmentKind, SurfaceModel};
+use surface::{Polygon, SegmentId, SegmentKind, SurfaceModel};
 
 /// Longest travel of any link point between two checked sub-steps, metres.
 pub const SUB_STEP_M: Real = 0.01;
@@ -73,6 +73,10 @@ struct Ghost {
 pub(crate) struct Guard {
     margin: Real,
     extension: Real,
+    initial_extension: Real,
+    /// Initial segments that are the object's own faces (given a priori),
+    /// which get no brim: sorted.
+    object_faces: Vec<SegmentId>,
     keep_sets: usize,
     ghosts: Vec<Ghost>,
     recent: VecDeque<Vec<Point3>>,
@@ -92,6 +96,8 @@ impl Guard {
         Self {
             margin: config.guard_margin_m,
             extension: config.guard_edge_extension_m,
+            initial_extension: config.guard_initial_extension_m,
+            object_faces: Vec::new(),
             keep_sets: config.guard_recent_sets as usize,
             ghosts: Vec::new(),
             recent: VecDeque::new(),
@@ -102,6 +108,14 @@ impl Guard {
 
     pub(crate) fn counts(&self) -> GuardCounts {
         self.counts
+    }
+
+    /// Mark initial segments as the object's own faces given a priori: the
+    /// guard gives them no brim ([`FollowConfig::guard_initial_extension_m`]).
+    pub(crate) fn set_object_faces(&mut self, ids: &[SegmentId]) {
+        self.object_faces = ids.to_vec();
+        self.object_faces.sort_unstable();
+        self.object_faces.dedup();
     }
 
     /// How many deleted segments the guard keeps.
@@ -154,7 +168,17 @@ impl Guard {
         let axis = &link.axis;
         let mut d = reach;
         let mut pair = None;
-        model_nearest(model, self.extension, axis, &mut d, &mut pair);
+        model_nearest(
+            model,
+            Extensions {
+                model: self.extension,
+                initial: self.initial_extension,
+                object_faces: &self.object_faces,
+            },
+            axis,
+            &mut d,
+            &mut pair,
+        );
         for g in &self.ghosts {
             if axis.distance_to_point(&g.centre) - g.radius >= d {
                 continue;
@@ -440,15 +464,29 @@ impl Motion<'_> {
 /// but a strip also stands across a convex edge into the free space the
 /// robot follows in, so it is off by default
 /// ([`FollowConfig::guard_edge_extension_m`]).
+/// How far the guard takes polygons past their edges.
+#[derive(Clone, Copy)]
+struct Extensions<'a> {
+    /// Unshared edges of the model's polygons.
+    model: Real,
+    /// Every edge of an initial segment (the brim) ...
+    initial: Real,
+    /// ... except those of these (sorted): none.
+    object_faces: &'a [SegmentId],
+}
+
 fn model_nearest(
     model: &SurfaceModel,
-    extend: Real,
+    ext: Extensions<'_>,
     axis: &Segment3,
     best: &mut Real,
     pair: &mut Option<(Point3, Point3)>,
 ) {
     let mid = Point3::from((axis.a.coords + axis.b.coords) * 0.5);
-    let mut ids = model.segments_near(&mid, axis.length() * 0.5 + *best + extend);
+    let mut ids = model.segments_near(
+        &mid,
+        axis.length() * 0.5 + *best + ext.model.max(ext.initial),
+    );
     ids.sort_unstable();
     let offer = |best: &mut Real, pair: &mut Option<_>, d: Real, on_link, on_model| {
         if d < *best {
@@ -469,7 +507,14 @@ fn model_nearest(
             SegmentKind::Polygon(g) => {
                 let (d, on_link, on_model) = closest_segment_polygon(axis, g);
                 offer(best, pair, d, on_link, on_model);
-                if g.is_initial() || d - extend >= *best {
+                let extend = if !g.is_initial() {
+                    ext.model
+                } else if ext.object_faces.binary_search(&id).is_ok() {
+                    0.0
+                } else {
+                    ext.initial
+                };
+                if extend <= 0.0 || d - extend >= *best {
                     continue;
                 }
                 let n = g.normal().into_inner();
@@ -593,6 +638,36 @@ mod tests {
     /// point3 (a sphere of radius 0.02) 0.06 above the floor asked to drop
     /// 0.05: the guard halves the drop until the margin holds (two halvings:
     /// a quarter leaves 0.0275, half would leave 0.015).
+    #[test]
+    fn the_brim_keeps_a_link_from_passing_round_a_table_edge() {
+        // point3 0.1 outside the edge x = 0.5 of a table at z = 0, asked to
+        // drop 0.15 to 0.1 below the table's plane: 0.08 from the table's
+        // edge all the way, so without the brim the drop is taken whole.
+        let robot = robot::builtin("point3").unwrap();
+        let model = floor(0.0, 0.5);
+        let q = [0.6, 0.0, 0.05];
+        let drop = vec![0.0, 0.0, -0.15];
+        let no_brim = FollowConfig {
+            guard_initial_extension_m: 0.0,
+            ..FollowConfig::default()
+        };
+        let (dq, action) = check(&robot, &mut Guard::new(&no_brim), &model, &q, drop.clone());
+        assert_eq!((dq[2], action), (-0.15, GuardAction::Taken));
+        // With the default brim (0.2 past every edge) the table's plane goes
+        // on to x = 0.7: halved until the sphere keeps the margin above it
+        // (the oracle: the plane z = 0 under the whole motion).
+        let mut guard = Guard::new(&FollowConfig::default());
+        let (dq, action) = check(&robot, &mut guard, &model, &q, drop.clone());
+        assert_eq!(action, GuardAction::Scaled, "{dq:?}");
+        assert!(floor_clearance(&robot, 0.0, &q, &dq) >= 0.02, "{dq:?}");
+        // A face given a priori gets no brim: the robot works round the
+        // object's edges.
+        let table = model.segments().next().unwrap().id();
+        guard.set_object_faces(&[table]);
+        let (dq, action) = check(&robot, &mut guard, &model, &q, drop);
+        assert_eq!((dq[2], action), (-0.15, GuardAction::Taken));
+    }
+
     #[test]
     fn a_dive_at_the_model_is_scaled_to_the_margin() {
         let robot = robot::builtin("point3").unwrap();

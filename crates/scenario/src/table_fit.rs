@@ -36,6 +36,17 @@ pub struct TableFit {
     pub points: usize,
 }
 
+/// The points whose label is `label` (a labelled scan's points and labels,
+/// in the same order; the mOSD scans label the table 1).
+pub fn points_labelled(points: &[Point3], labels: &[i64], label: i64) -> Vec<Point3> {
+    points
+        .iter()
+        .zip(labels)
+        .filter(|(_, l)| **l == label)
+        .map(|(p, _)| *p)
+        .collect()
+}
+
 /// Fit the table plane to `points` seen from `sensor` (both in the scan's
 /// frame); see the [module documentation](self). `min_edge_m` thins the hull.
 ///

@@ -556,20 +556,31 @@ impl FollowSetup {
     /// The follower for this run: a new model with the initial segments.
     pub fn follower(&self) -> Result<Follower, FollowRunError> {
         let mut model = SurfaceModel::new(self.options.config.surface)?;
+        // The a-priori faces come last (`initial_segments` ends with them).
+        let first_face = self
+            .initial_segments
+            .len()
+            .saturating_sub(self.a_priori_faces.len());
+        let mut faces = Vec::new();
         for (i, seg) in self.initial_segments.iter().enumerate() {
-            model.add_initial_segment(seg).map_err(|e| match e {
+            let id = model.add_initial_segment(seg).map_err(|e| match e {
                 SurfaceError::InitialSegment { message } => {
                     bad("initial segments", format!("segment {i}: {message}"))
                 }
                 e => e.into(),
             })?;
+            if i >= first_face {
+                faces.push(id);
+            }
         }
-        Ok(Follower::new(
+        let mut follower = Follower::new(
             self.rig.robot().clone(),
             self.rig.world_from_base(),
             model,
             self.options.config.follow,
-        )?)
+        )?;
+        follower.mark_object_faces(&faces);
+        Ok(follower)
     }
 
     /// Run the episode (see [`follow::run_episode`]) and score the model against the

@@ -344,6 +344,17 @@ impl Follower {
         })
     }
 
+    /// Mark initial segments of the model as the object's own faces, given a
+    /// priori (P§4.3: faces the robot cannot reach): the safety guard takes
+    /// every other initial segment (a table the object stands on) to go on
+    /// past its edges ([`FollowConfig::guard_initial_extension_m`]), so the
+    /// links never pass round its edge to behind it, and these not (the
+    /// robot works round the object's edges). Ids that are not initial
+    /// segments are ignored.
+    pub fn mark_object_faces(&mut self, ids: &[surface::SegmentId]) {
+        self.guard.set_object_faces(ids);
+    }
+
     /// How often the safety guard took, scaled, replaced or held a change.
     pub fn guard_counts(&self) -> GuardCounts {
         self.guard.counts()

@@ -26,16 +26,17 @@ use std::sync::atomic::AtomicBool;
 /// pose; `sim::scan_check::scan_clearance`, cross-checked here against a
 /// brute-force pass over every scan point), and every non-initial model
 /// polygon must lie within λ of the scan (`sim::scan_check::model_to_scan`).
-// FAILS today (2026-11-26, with the safety guard: 2568 sets,
-// surface_complete): point3's 0.02 m body keeps 0.0204 m from the scan (the
-// guard's 0.02 m margin; before the guard it went into the scan points at
-// steps 390 and 437), but 820 poses come closer than δ/2 = 0.05 m to the scan
-// (by the nearest point: 153 label 1, 166 label 20, 501 label 30). The model
-// half passes: every non-initial polygon lies within 0.042 m of the scan
-// (λ = 0.05 m). Not weakened, not tuned: kept as the acceptance check for
-// when the follower meets it.
+// FAILS today (2026-11-27, default merger order, the guard's brim round the
+// table: 2734 sets, surface_complete): point3's 0.02 m body keeps 0.0213 m
+// from the scan (the guard's 0.02 m margin), but 776 poses come closer than
+// δ/2 = 0.05 m, and three of ten polygons reach 0.057 m from the scan
+// (λ = 0.05 m; 0.042 m in the thesis' merger order, 2026-11-26, with 820
+// close poses). learn5 and learn17 (`data/scenarios/mosd_learn5.toml`,
+// `mosd_learn17.toml`) keep the model within λ but have 377 and 103 close
+// poses. Not weakened, not tuned: kept as the acceptance check for when the
+// follower meets it.
 #[test]
-#[ignore = "fails acceptance 5 today: 820 poses closer than δ/2 to the scan (0.0204 m at the closest); whole run, release profile"]
+#[ignore = "fails acceptance 5 today: 776 poses closer than δ/2 to the scan (0.0213 m at the closest), three polygons beyond λ; whole run, release profile"]
 fn point3_follows_the_mosd_boxes_clear_of_the_scan() {
     let loaded = Scenario::load(concat!(
         env!("CARGO_MANIFEST_DIR"),
