@@ -11,7 +11,14 @@
 //!   as it was when deleted;
 //! * the raw readings of the last few sensor sets (every range finder: the
 //!   control point's and the links'), which are surface even before the
-//!   model holds them.
+//!   model holds them;
+//! * past the edges of the model's polygons: a strip of
+//!   [`FollowConfig::guard_edge_extension_m`] beyond each unshared edge (the
+//!   true face goes on past the outermost points sensed on it), and a brim
+//!   of [`FollowConfig::guard_initial_extension_m`] beyond every edge of an
+//!   initial segment (a table: no link passes round its edge to behind it),
+//!   except the object's own faces given a priori
+//!   ([`crate::Follower::mark_object_faces`]).
 //!
 //! A motion is checked along the straight joint path at sub-steps short
 //! enough that no point of a link moves more than [`SUB_STEP_M`] between
