@@ -150,7 +150,7 @@ pub struct FollowConfig {
     /// the polygon, in its plane, metres (0: the polygons as they are);
     /// default λ/2 for Pudney's λ = 0.05 (see [`crate::guard`]).
     pub guard_edge_extension_m: Real,
-    /// The guard takes every edge of an initial segment (P§4.3: a table the
+    /// The guard takes every unshared edge of an initial segment (P§4.3: a table the
     /// objects stand on, a face given a priori) to go on this far past it,
     /// in its plane, metres: a brim that keeps the links from passing round
     /// the segment's edge to behind it (0: the segments as they are).

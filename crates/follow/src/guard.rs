@@ -15,8 +15,8 @@
 //! * past the edges of the model's polygons: a strip of
 //!   [`FollowConfig::guard_edge_extension_m`] beyond each unshared edge (the
 //!   true face goes on past the outermost points sensed on it), and a brim
-//!   of [`FollowConfig::guard_initial_extension_m`] beyond every edge of an
-//!   initial segment (a table: no link passes round its edge to behind it),
+//!   of [`FollowConfig::guard_initial_extension_m`] beyond every unshared edge
+//!   of an initial segment (a table: no link passes round its edge to behind it),
 //!   except the object's own faces given a priori
 //!   ([`crate::Follower::mark_object_faces`]).
 //!
@@ -461,27 +461,28 @@ impl Motion<'_> {
     }
 }
 
-/// Lowers `best` (and sets `pair`: on the axis, on the model) to the
-/// distance between `axis` and the model when that is smaller: its point
-/// segments, its polygons, and, with `extend` > 0, a strip `extend` wide
-/// beyond every unshared edge of a polygon that is not an initial segment.
-/// A polygon ends at the outermost points sensed on its face, and the face
-/// may go on past them (at a convex edge whose other face was not modelled
-/// yet, arm4's last link met block1's true face 25 mm beyond its polygon);
-/// but a strip also stands across a convex edge into the free space the
-/// robot follows in, so it is off by default
-/// ([`FollowConfig::guard_edge_extension_m`]).
 /// How far the guard takes polygons past their edges.
 #[derive(Clone, Copy)]
 struct Extensions<'a> {
     /// Unshared edges of the model's polygons.
     model: Real,
-    /// Every edge of an initial segment (the brim) ...
+    /// Unshared edges of initial segments (the brim) ...
     initial: Real,
     /// ... except those of these (sorted): none.
     object_faces: &'a [SegmentId],
 }
 
+/// Lowers `best` (and sets `pair`: on the axis, on the model) to the
+/// distance between `axis` and the model when that is smaller: its point
+/// segments, its polygons, a strip `ext.model` wide beyond every unshared
+/// edge of a polygon that is not an initial segment, and a brim
+/// `ext.initial` wide beyond every unshared edge of an initial segment not
+/// one of `ext.object_faces` (a width of 0: none). A polygon ends at the
+/// outermost points sensed on its face, and the face may go on past them (at
+/// a convex edge whose other face was not modelled yet, arm4's last link met
+/// block1's true face 25 mm beyond its polygon); a strip also stands across
+/// a convex edge into the free space the robot follows in, so it is only
+/// λ/2 wide by default ([`FollowConfig::guard_edge_extension_m`]).
 fn model_nearest(
     model: &SurfaceModel,
     ext: Extensions<'_>,
@@ -642,9 +643,6 @@ mod tests {
         best
     }
 
-    /// point3 (a sphere of radius 0.02) 0.06 above the floor asked to drop
-    /// 0.05: the guard halves the drop until the margin holds (two halvings:
-    /// a quarter leaves 0.0275, half would leave 0.015).
     #[test]
     fn the_brim_keeps_a_link_from_passing_round_a_table_edge() {
         // point3 0.1 outside the edge x = 0.5 of a table at z = 0, asked to
@@ -675,6 +673,9 @@ mod tests {
         assert_eq!((dq[2], action), (-0.15, GuardAction::Taken));
     }
 
+    /// point3 (a sphere of radius 0.02) 0.06 above the floor asked to drop
+    /// 0.05: the guard halves the drop until the margin holds (two halvings:
+    /// a quarter leaves 0.0275, half would leave 0.015).
     #[test]
     fn a_dive_at_the_model_is_scaled_to_the_margin() {
         let robot = robot::builtin("point3").unwrap();

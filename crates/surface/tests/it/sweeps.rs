@@ -492,8 +492,10 @@ fn cube_sweep_noisy() {
 /// The one known failure of the default merger order on the five seeds of
 /// every scene (the thesis order has none there, and two on the ten seeds of
 /// `noisy_sweeps_more_seeds`, which the default passes): cube seed 3's model
-/// has all five faces, each one polygon, but the −x and −y faces never
-/// formed their shared edge (P§2.6). Kept as a test so that a fix shows.
+/// has all five faces, each one polygon, but the −x and −y faces end without
+/// a shared edge (P§2.6): they had one, it was dissolved, and every later
+/// formation was refused (a near-duplicate vertex at the edge's top end).
+/// Kept as a test so that a fix shows.
 #[test]
 fn cube_seed_3_misses_one_shared_edge() {
     let failures = noisy_failures("cube", &[3], MergeOrder::NearestPlane);
