@@ -204,11 +204,15 @@ fn arm4() -> Result<Robot, RobotError> {
         Joint::revolute("joint5", up, z, limits), // roll about link 3
         Joint::revolute("joint6", id, y, limits), // pitch
     ];
-    // Each physical link runs along its local z from 0 to 1.
-    let rod = || {
+    // Each physical link runs along its local z from 0 to 1. The last one
+    // ends at the control point, its tip (SPEC §3.2): the 17 range finders
+    // there sit on the end of the body, so its capsule's axis stops one
+    // radius short of the tip (with the axis to 1 the body's rounded end
+    // stood 5 cm past the sensors, round the control point).
+    let rod = |length: Real| {
         let c = Capsule::new(
             Point3::origin(),
-            Point3::new(0.0, 0.0, 1.0),
+            Point3::new(0.0, 0.0, length),
             ARM4_LINK_RADIUS_M,
         );
         let mut l = Link::new("");
@@ -221,13 +225,13 @@ fn arm4() -> Result<Robot, RobotError> {
         l
     };
     let links = vec![
-        named(rod(), "link1"), // the immobile post (base)
+        named(rod(1.0), "link1"), // the immobile post (base)
         Link::new("shoulder"),
-        named(rod(), "link2"),
+        named(rod(1.0), "link2"),
         Link::new("elbow"),
-        named(rod(), "link3"),
+        named(rod(1.0), "link3"),
         Link::new("wrist"),
-        named(rod(), "link4"),
+        named(rod(1.0 - ARM4_LINK_RADIUS_M), "link4"),
     ];
     let tip = Point3::new(0.0, 0.0, 1.0);
     let mut range_finders = Vec::with_capacity(133);

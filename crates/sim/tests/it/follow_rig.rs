@@ -316,14 +316,15 @@ fn travel_bound_by_hand() {
     let p3 = robot::builtin("point3").unwrap();
     let b = motion_travel_bound(&p3, &[0.0, 0.0, 0.0], &[0.3, -0.4, 0.1]).unwrap();
     assert!((b - 0.8).abs() < 1e-12);
-    // arm4 yaw: the farthest point is link 4's far cap, 3 m along the links
-    // plus the 0.05 m capsule radius from the yaw axis point.
+    // arm4 yaw: the farthest point is link 4's far cap, which ends at the
+    // tip, 3 m along the links from the yaw axis point (its axis stops one
+    // 0.05 m radius short of it).
     let arm4 = robot::builtin("arm4").unwrap();
     let q0 = [0.0; 6];
     let mut q1 = q0;
     q1[0] = 0.5;
     let b = motion_travel_bound(&arm4, &q0, &q1).unwrap();
-    assert!((b - 3.05 * 0.5).abs() < 1e-12, "{b}");
+    assert!((b - 3.0 * 0.5).abs() < 1e-12, "{b}");
     // The arm stretched horizontally (joint 2 at 90°) moves its tip by the
     // chord 2·3·sin(0.25), within the bound.
     let mut a = q0;
