@@ -228,19 +228,20 @@ pub fn reconfiguration(
 const AT_LIMIT: Real = 1e-9;
 
 /// Eq. 3 with the ceilings of P§3.3: `θ̇ = J⁺ẋ + α(I − J⁺J)z`, where `J` is the
-/// 3 × n positional Jacobian of the control point; then the whole vector is
-/// scaled so that its revolute part is at most γ_r and its prismatic part at
-/// most γ_p (one factor for both, so the control point keeps its direction),
-/// and so that no joint leaves its limits.
+/// 3 × n positional Jacobian of the control point, under the ceilings γ_r
+/// (revolute part) and γ_p (prismatic part) and the joint limits. Pudney
+/// scales the whole vector by one factor (the control point keeps its
+/// direction); on a redundant robot we grant the control-point term
+/// `task_share` of the ceilings first and let the reconfiguration fill the
+/// rest (see `share_ceilings`; `task_share = 0` is the thesis' rule).
 ///
 /// `guards` are the rows `n̂ᵀ J_l` of links already closer to the model than
 /// their radius plus the margin (`n̂` the unit vector from the model point to
-/// the link point, `J_l` the link point's positional Jacobian): when the
-/// control-point term `J⁺ẋ` would bring any of them closer, it is dropped for
-/// this step and only the reconfiguration is taken. Pudney's objective alone
-/// does not stop a link that the control point's motion drags onto an edge
-/// (arm4 brushed block1 in 22 of 1800 steps); the stalled control point then
-/// lets the progress check give the goal up (P§3.4.7).
+/// the link point, `J_l` the link point's positional Jacobian): the
+/// control-point term `J⁺ẋ` loses its part that would bring any of them
+/// closer (see `keep_links_off`); the reconfiguration is taken as it is.
+/// Pudney's objective alone does not stop a link that the control point's
+/// motion drags onto an edge (arm4 brushed block1 in 22 of 1800 steps).
 ///
 /// Joint limits (our addition; P§3.3 has none): a joint already at a limit
 /// that eq. 3 would drive further is locked for the step — its column of `J`
@@ -261,10 +262,11 @@ pub fn actuator_change(
 ) -> DVector<Real> {
     let dof = robot.dof();
     let limits = robot.limits();
+    let kinds = robot.joint_kinds();
     let mut locked = vec![false; dof];
     let mut dq = DVector::zeros(dof);
     for _ in 0..=dof {
-        dq = eq3(jacobian, motion, z, guards, &locked, config);
+        dq = eq3(&kinds, jacobian, motion, z, guards, &locked, config);
         if !dq.iter().all(|v| v.is_finite()) {
             return DVector::zeros(dof);
         }
@@ -371,7 +373,15 @@ fn second_order(
         return None;
     }
     let none = DVector::zeros(dq.len());
-    let fix = eq3(&j1, &residual, &none, &[], locked, config);
+    let fix = eq3(
+        &robot.joint_kinds(),
+        &j1,
+        &residual,
+        &none,
+        &[],
+        locked,
+        config,
+    );
     if !fix.iter().all(|v| v.is_finite()) || fix.norm() > 0.5 * dq.norm() {
         return None;
     }
@@ -382,6 +392,7 @@ fn second_order(
 /// entries of `z` zeroed: `J⁺` then has zero rows and `I − J⁺J` zero
 /// off-diagonal entries for them), the guard applied to its control-point term.
 fn eq3(
+    kinds: &[JointKind],
     jacobian: &Matrix6xX<Real>,
     motion: &Vector3,
     z: &DVector<Real>,
@@ -404,13 +415,19 @@ fn eq3(
     };
     let xdot = DVector::from_column_slice(motion.as_slice());
     let mut dq = &j_pinv * xdot;
-    if guards.iter().any(|g| g.dot(&dq) < 0.0) {
-        dq.fill(0.0);
-    }
+    keep_links_off(&mut dq, guards, locked);
     let z = DVector::from_fn(dof, |k, _| if locked[k] { 0.0 } else { z[k] });
     if config.alpha > 0.0 && z.iter().any(|v| *v != 0.0) {
         let null = robot::null_space_projector(&j, &j_pinv);
-        dq += (null * z) * config.alpha;
+        let reconfiguration = (null * z) * config.alpha;
+        // Three free joints or fewer leave no null space for the
+        // control point's three coordinates: (I − J⁺J)z is then damping's
+        // rounding, summed as before.
+        if locked.iter().filter(|l| !**l).count() > 3 {
+            dq = share_ceilings(kinds, &dq, &reconfiguration, config);
+        } else {
+            dq += reconfiguration;
+        }
     }
     for (v, l) in dq.iter_mut().zip(locked) {
         if *l {
@@ -418,6 +435,97 @@ fn eq3(
         }
     }
     dq
+}
+
+/// The link guard on the control-point term: `dq` loses its components
+/// along the rows `g` of `guards` (locked joints' entries zeroed) that it
+/// would bring closer (`g·dq < 0`), by projection onto each violated
+/// half-space in turn, a few rounds; what is left moves the control point
+/// as far as the links allow. When the rounds leave a row violated the term
+/// is dropped, as it was dropped whole before (arm4 then stood with its
+/// control point wedged between the floor and a face, every goal given up
+/// by the progress check in turn, with a third of the cube modelled).
+fn keep_links_off(dq: &mut DVector<Real>, guards: &[DVector<Real>], locked: &[bool]) {
+    if guards.iter().all(|g| g.dot(dq) >= 0.0) {
+        return;
+    }
+    let rows: Vec<DVector<Real>> = guards
+        .iter()
+        .map(|g| DVector::from_fn(g.len(), |k, _| if locked[k] { 0.0 } else { g[k] }))
+        .collect();
+    for _ in 0..GUARD_ROUNDS {
+        let mut moved = false;
+        for g in &rows {
+            let gg = g.norm_squared();
+            let v = g.dot(dq);
+            if v < 0.0 && gg > 1e-18 {
+                dq.axpy(-v / gg, g, 1.0);
+                moved = true;
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+    if rows.iter().any(|g| g.dot(dq) < -1e-12) {
+        dq.fill(0.0);
+    }
+}
+
+/// Projection rounds of [`keep_links_off`].
+const GUARD_ROUNDS: usize = 8;
+
+/// The largest `t` in `[0, 1]` for which `u + t v` keeps the revolute and
+/// the prismatic parts within γ_r and γ_p (0 when `u` alone does not).
+fn room(kinds: &[JointKind], u: &DVector<Real>, v: &DVector<Real>, config: &FollowConfig) -> Real {
+    let mut t: Real = 1.0;
+    for (kind, cap) in [
+        (JointKind::Revolute, config.ceiling_revolute_rad()),
+        (JointKind::Prismatic, config.ceiling_prismatic_m),
+    ] {
+        let (mut uu, mut uv, mut vv) = (0.0, 0.0, 0.0);
+        for (k, _) in kinds.iter().enumerate().filter(|(_, j)| **j == kind) {
+            uu += u[k] * u[k];
+            uv += u[k] * v[k];
+            vv += v[k] * v[k];
+        }
+        let c = uu - cap * cap;
+        if c > 0.0 {
+            return 0.0;
+        }
+        if vv > 0.0 {
+            // vv t² + 2 uv t + c ≤ 0, c ≤ 0: t up to the positive root.
+            t = t.min(((-uv + (uv * uv - vv * c).sqrt()) / vv).max(0.0));
+        }
+    }
+    t
+}
+
+/// Eq. 3's two terms under the ceilings with the control point first (our
+/// departure from P§3.3, which scales the whole `θ̇` by one factor): the
+/// control-point term `a = J⁺ẋ` is granted up to `task_share` of the
+/// ceilings, the reconfiguration `b = α(I − J⁺J)z` fills what is left of
+/// them, and `a` then takes any room `b` did not need. With α = 7000,
+/// `b` is often hundreds of times the ceilings on arm4, and the one factor
+/// left the control point millimetres a step: it idled wedged in corners
+/// until P§3.4.7 gave every goal up, and arm4 ended with 61–65 % of the
+/// faces it can reach modelled. A `task_share` of 0 returns `a + b` for
+/// the one factor to scale.
+fn share_ceilings(
+    kinds: &[JointKind],
+    a: &DVector<Real>,
+    b: &DVector<Real>,
+    config: &FollowConfig,
+) -> DVector<Real> {
+    if config.task_share <= 0.0 {
+        return a + b;
+    }
+    let first = ceiling_factor(kinds, &(a / config.task_share), config);
+    let granted = a * first;
+    let filled = &granted + b * room(kinds, &granted, b, config);
+    let rest = a * (1.0 - first);
+    let more = room(kinds, &filled, &rest, config);
+    filled + rest * more
 }
 
 #[cfg(test)]
@@ -523,11 +631,36 @@ mod tests {
         assert!(capped.norm() <= gamma + 1e-12 && capped.norm() > 0.99 * gamma);
     }
 
-    /// A guarded link that the control-point motion would bring closer stops
-    /// that motion (only the reconfiguration remains); one it would move away
-    /// from does not.
+    /// The link guard's projection by hand: a row met head-on takes the
+    /// whole change, one met at 45° its part along the row, one the change
+    /// moves away from nothing; two rows forming a wedge the change points
+    /// out of take it all; a locked joint's entry of a row does not count.
     #[test]
-    fn guard_drops_the_motion_that_closes_on_a_link() {
+    fn the_link_guard_keeps_what_does_not_close_on_a_link() {
+        let v = |x: Real, y: Real, z: Real| DVector::from_vec(vec![x, y, z]);
+        let free = [false; 3];
+        let guarded = |rows: &[DVector<Real>], locked: &[bool]| {
+            let mut dq = v(1.0, 0.0, 0.0);
+            keep_links_off(&mut dq, rows, locked);
+            dq
+        };
+        assert_eq!(guarded(&[v(-1.0, 0.0, 0.0)], &free), v(0.0, 0.0, 0.0));
+        assert_eq!(guarded(&[v(-1.0, 1.0, 0.0)], &free), v(0.5, 0.5, 0.0));
+        assert_eq!(guarded(&[v(1.0, 1.0, 0.0)], &free), v(1.0, 0.0, 0.0));
+        let wedge = [v(-1.0, 1.0, 0.0), v(-1.0, -1.0, 0.0)];
+        assert_eq!(guarded(&wedge, &free), v(0.0, 0.0, 0.0));
+        // Joint 1 locked: the row's entry for it is zeroed, leaving (0, 1, 0),
+        // which (1, 0, 0) does not close on.
+        assert_eq!(
+            guarded(&[v(-1.0, 1.0, 0.0)], &[true, false, false]),
+            v(1.0, 0.0, 0.0)
+        );
+    }
+
+    /// On arm4: a guard row the control-point motion closes on head-on
+    /// stops it; one it moves away from changes nothing.
+    #[test]
+    fn guard_rows_on_arm4() {
         let robot = robot::builtin("arm4").unwrap();
         let q = [0.3, 0.7, -0.2, 0.9, 0.4, 0.5];
         let cfg = FollowConfig {
@@ -542,28 +675,20 @@ mod tests {
         let motion = Vector3::new(0.01, 0.0, -0.02);
         let free = actuator_change(&robot, &q, &jac, &motion, &DVector::zeros(6), &[], &cfg);
         assert!(free.norm() > 0.0);
-        // Guard row = −(task direction): the motion closes on it.
-        let closing = -free.clone();
+        // The control-point term J⁺ẋ, before the second-order correction.
+        let j = DMatrix::from_fn(3, 6, |r, c| jac[(r, c)]);
+        let task = robot::pseudo_inverse(&j, 1e-12) * DVector::from_column_slice(motion.as_slice());
         let stopped = actuator_change(
             &robot,
             &q,
             &jac,
             &motion,
             &DVector::zeros(6),
-            &[closing],
+            &[-task.clone()],
             &cfg,
         );
-        assert_eq!(stopped.norm(), 0.0);
-        let opening = free.clone();
-        let kept = actuator_change(
-            &robot,
-            &q,
-            &jac,
-            &motion,
-            &DVector::zeros(6),
-            &[opening],
-            &cfg,
-        );
+        assert!(stopped.norm() < 1e-9 * task.norm(), "{stopped}");
+        let kept = actuator_change(&robot, &q, &jac, &motion, &DVector::zeros(6), &[task], &cfg);
         assert!((kept - free).norm() < 1e-12);
     }
 
@@ -604,16 +729,60 @@ mod tests {
             "moved {moved:?} for {motion:?}"
         );
         // The guard judges the motion taken: a guard row that the locked
-        // solution closes on (and the free one does not) stops it.
+        // solution closes on (and the free one does not) changes it, and
+        // the change taken no longer closes on it.
         let locked = dq.clone();
         let f = free(&motion);
         let g = -&locked + &f * (locked.dot(&f) / f.norm_squared());
         assert!(g.dot(&f).abs() < 1e-12 && g.dot(&locked) < 0.0);
-        let stopped = actuator_change(&robot, &q, &jac, &motion, &z, &[g], &cfg);
-        assert_eq!(stopped.norm(), 0.0);
+        let guarded = actuator_change(
+            &robot,
+            &q,
+            &jac,
+            &motion,
+            &z,
+            std::slice::from_ref(&g),
+            &cfg,
+        );
+        // (To first order: the second-order correction, a Newton step of
+        // the order of the step squared, is not projected.)
+        assert!(g.dot(&guarded) >= -1e-2 * g.norm() * guarded.norm());
+        assert!((&guarded - &locked).norm() > 1e-6);
+        assert_eq!(guarded[0], 0.0, "joint 1 stays on its limit");
         // Driven off its limit, the joint is free again.
         let back = actuator_change(&robot, &q, &jac, &-motion, &z, &[], &cfg);
         assert!(back[0] < 0.0);
+    }
+
+    /// The ceilings shared, by hand: all-revolute, `a` twice γ_r and `b`
+    /// ten times γ_r across it. `a` is granted `task_share` (here 0.3) of γ_r,
+    /// `b` the rest of the norm (√(1 − 0.3²) γ_r, the two being
+    /// orthogonal); a small `a` is granted whole; `task_share` 0 leaves
+    /// the sum to the one factor.
+    #[test]
+    fn the_ceilings_are_shared_control_point_first() {
+        let kinds = [JointKind::Revolute; 3];
+        let cfg = FollowConfig {
+            task_share: 0.3,
+            ..FollowConfig::default()
+        };
+        let g = cfg.ceiling_revolute_rad();
+        let a = DVector::from_vec(vec![2.0 * g, 0.0, 0.0]);
+        let b = DVector::from_vec(vec![0.0, 10.0 * g, 0.0]);
+        let dq = share_ceilings(&kinds, &a, &b, &cfg);
+        let expect = DVector::from_vec(vec![0.3 * g, (1.0_f64 - 0.09).sqrt() * g, 0.0]);
+        assert!((&dq - &expect).norm() < 1e-12 * g, "{dq} against {expect}");
+        let small = &a * 0.05;
+        let dq = share_ceilings(&kinds, &small, &b, &cfg);
+        assert!((dq[0] - 0.1 * g).abs() < 1e-15 && (dq.norm() - g).abs() < 1e-12 * g);
+        // b small too: nothing to share, both whole.
+        let dq = share_ceilings(&kinds, &small, &(&b * 0.01), &cfg);
+        assert!((&dq - (&small + &b * 0.01)).norm() < 1e-15);
+        let thesis = FollowConfig {
+            task_share: 0.0,
+            ..cfg
+        };
+        assert_eq!(share_ceilings(&kinds, &a, &b, &thesis), &a + &b);
     }
 
     /// A step of eq. 3 moves the control point by the first-order `J θ̇`

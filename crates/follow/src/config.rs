@@ -132,6 +132,11 @@ pub struct FollowConfig {
     pub target_patience_steps: u32,
     /// Damping of the pseudo-inverse near singularities (0 = plain J⁺).
     pub damping: Real,
+    /// The share of the ceilings γ_r and γ_p the control-point term `J⁺ẋ`
+    /// of eq. 3 is granted before the reconfiguration term (our departure
+    /// from P§3.3, see [`crate::actuator::actuator_change`]); 0 scales the
+    /// whole actuator change by one factor, as Pudney does.
+    pub task_share: Real,
     /// A link closer to the model than its radius plus this margin may not be
     /// brought closer by the control-point motion (our addition to P§3.3,
     /// see [`crate::actuator::actuator_change`]), metres.
@@ -182,6 +187,7 @@ impl Default for FollowConfig {
             objective: Objective::LinkDistance,
             target_patience_steps: 20,
             damping: 1e-3,
+            task_share: 0.15,
             link_margin_m: 0.05,
             guard: true,
             guard_margin_m: 0.02,
@@ -220,6 +226,13 @@ impl FollowConfig {
         positive("influence_m", self.influence_m)?;
         if !(self.alpha.is_finite() && self.alpha >= 0.0) {
             return bad("alpha", "a finite gain ≥ 0", self.alpha.to_string());
+        }
+        if !(self.task_share.is_finite() && (0.0..=1.0).contains(&self.task_share)) {
+            return bad(
+                "task_share",
+                "a share in 0..=1",
+                self.task_share.to_string(),
+            );
         }
         if !(self.link_margin_m.is_finite() && self.link_margin_m >= 0.0) {
             return bad(
