@@ -317,6 +317,8 @@ impl Follower {
         let dof = robot.dof();
         let sensed = (config.gap_targets == GapTargetRule::Sensed)
             .then(|| gap_following::SensedPoints::new(0.5 * model.config().lambda));
+        let mut guard = Guard::new(&config);
+        guard.keep_given(&model);
         Ok(Self {
             robot,
             world_from_base,
@@ -340,7 +342,7 @@ impl Follower {
             finished: None,
             frames: Vec::new(),
             jacobian: Matrix6xX::zeros(dof),
-            guard: Guard::new(&config),
+            guard,
         })
     }
 
