@@ -190,11 +190,69 @@ fn point3_completes_noisy_cube_block1_and_block2() {
     }
 }
 
+/// Issue 24 acceptance 1, where it holds: arm4 (its unreachable faces given
+/// a priori, as `surveyor follow` gives them) completes the cube and block1
+/// noise-free by every criterion, its links at least 20 mm from the true
+/// scene at every pose and along every motion (27 and 23 mm, 2026-11-27).
+#[test]
+#[ignore = "whole runs: release profile, run by .ci/run"]
+fn arm4_completes_the_cube_and_block1_clear() {
+    for (scene, pudney) in [("cube", 779), ("block1", 1120)] {
+        let run = run_noisy(scene, "arm4", None, 1);
+        assert_complete(&run, pudney);
+        let clearance = run.judgement.min_clearance_m.expect("a scene is judged");
+        println!("arm4 / {scene}: min clearance {:.1} mm", 1000.0 * clearance);
+        assert!(clearance >= 0.02, "{scene}: {clearance} m");
+    }
+}
+
+/// Issue 24 acceptance 1's other runs, arm4 on block2 noise-free and on the
+/// three scenes under range noise σ = λ/5 (seeds 1–3): none touches the
+/// scene, which is all that is asserted; the rest of acceptance 1 does not
+/// hold on every run (crate `follow`'s README counts it), so it is printed.
+#[test]
+#[ignore = "whole runs: release profile, run by .ci/run"]
+fn arm4_never_touches_the_blocks() {
+    let mut runs = vec![("block2", None, 1)];
+    for scene in ["cube", "block1", "block2"] {
+        for seed in 1..=3 {
+            runs.push((scene, Some(0.01), seed));
+        }
+    }
+    for (scene, noise, seed) in runs {
+        let run = run_noisy(scene, "arm4", noise, seed);
+        let score = run.score.as_ref().expect("a built-in scene is scored");
+        let lowest = score
+            .faces
+            .iter()
+            .map(|f| f.within_lambda_fraction)
+            .fold(1.0, f64::min);
+        println!(
+            "arm4 / {scene} σ {noise:?} seed {seed}: {} sets, {:?}, min clearance {:?} m, lowest face {:.1} %, shared edges {:.1} %, corners {} of {}",
+            run.episode.rows.len(),
+            run.episode.end,
+            run.judgement.min_clearance_m,
+            100.0 * lowest,
+            100.0 * score.edge_coverage,
+            score.corners_found,
+            score.corners.len()
+        );
+        assert!(
+            run.judgement.collisions.is_empty(),
+            "{scene} seed {seed}: contacts {:?}",
+            run.judgement.collisions
+        );
+        assert!(run.judgement.min_clearance_m.is_some_and(|d| d > 0.0));
+    }
+}
+
 /// Acceptance 6: a URDF arm (the UR5 of `data/`, with the 17-sensor tool ring
 /// declared in `data/scenarios/ur5_cube.toml`) follows the 0.2 m cube to the
 /// follower's own end without touching it, and models the top it starts over.
 /// The other faces are printed: the cube is small for λ = 0.05 and δ = 0.1,
-/// and the −x face is not reached (issue 9 keeps the scenario open).
+/// and the −x face is not reached (issue 24 acceptance 6 keeps it open;
+/// 27.2 % of the faces with the shared ceilings, 56.3 % with P§3.3's one
+/// factor, 2026-11-27).
 #[test]
 #[ignore = "whole run: release profile, run by .ci/run"]
 fn ur5_follows_the_cube_without_contact() {
