@@ -4,7 +4,7 @@
 //! straight joint-space motion ([`motion_contacts`]).
 
 use crate::PlanError;
-use geom::{Isometry3, Real, Triangle};
+use geom::{Aabb, Isometry3, Real, TriMesh, Triangle};
 use robot::{CollisionShape, JointKind, LinkId, PosedShape, Robot};
 use scene::{FaceId, ObjectId, Scene};
 use serde::Serialize;
@@ -49,18 +49,7 @@ pub fn robot_contacts(
                 if link.index() < mounted || found.iter().any(|c| c.link == link) {
                     continue;
                 }
-                let world_from_link = world_from_base * base_from_link;
-                let tris: Vec<Triangle> = mesh
-                    .triangles
-                    .iter()
-                    .map(|t| {
-                        Triangle::new(
-                            world_from_link * mesh.vertices[t[0] as usize],
-                            world_from_link * mesh.vertices[t[1] as usize],
-                            world_from_link * mesh.vertices[t[2] as usize],
-                        )
-                    })
-                    .collect();
+                let tris = world_triangles(&mesh, &(world_from_base * base_from_link));
                 (link, scene.triangles_contact(&tris).map(|(f, _)| f))
             }
         };
@@ -75,8 +64,22 @@ pub fn robot_contacts(
     found
 }
 
-/// Smallest distance between the robot's capsules (the moving links, see
-/// [`Robot::mounted_links`]) and the scene,
+/// A link mesh's triangles in the world frame.
+fn world_triangles(mesh: &TriMesh, world_from_link: &Isometry3) -> Vec<Triangle> {
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            Triangle::new(
+                world_from_link * mesh.vertices[t[0] as usize],
+                world_from_link * mesh.vertices[t[1] as usize],
+                world_from_link * mesh.vertices[t[2] as usize],
+            )
+        })
+        .collect()
+}
+
+/// Smallest distance between the robot's collision shapes (capsules and
+/// meshes of the moving links, see [`Robot::mounted_links`]) and the scene,
 /// looking no farther than `search_m` (returns `search_m` when nothing is closer).
 pub fn min_clearance(
     robot: &Robot,
@@ -88,14 +91,42 @@ pub fn min_clearance(
     let mounted = robot.mounted_links();
     let mut best = search_m;
     for shape in robot.posed_collision_shapes(base_from_link) {
-        if let PosedShape::Capsule { link, capsule } = shape {
-            if link.index() < mounted {
-                continue;
+        match shape {
+            PosedShape::Capsule { link, capsule } => {
+                if link.index() < mounted {
+                    continue;
+                }
+                let c = capsule.transformed(world_from_base);
+                for face in scene.triangles_near(&c.bounding_box().loosened(best)) {
+                    let d = c.distance_to_triangle(&scene.mesh().triangle(face as usize));
+                    best = best.min(d.max(0.0));
+                }
             }
-            let c = capsule.transformed(world_from_base);
-            for face in scene.triangles_near(&c.bounding_box().loosened(best)) {
-                let d = c.distance_to_triangle(&scene.mesh().triangle(face as usize));
-                best = best.min(d.max(0.0));
+            PosedShape::Mesh {
+                link,
+                mesh,
+                base_from_link,
+            } => {
+                if link.index() < mounted {
+                    continue;
+                }
+                let tris = world_triangles(&mesh, &(world_from_base * base_from_link));
+                let boxes: Vec<Aabb> = tris
+                    .iter()
+                    .map(|t| Aabb::from_points([&t.a, &t.b, &t.c]))
+                    .collect();
+                let bounds = boxes.iter().fold(Aabb::empty(), |b, t| b.merged(t));
+                for face in scene.triangles_near(&bounds.loosened(best)) {
+                    let other = scene.mesh().triangle(face as usize);
+                    let near = Aabb::from_points([&other.a, &other.b, &other.c]);
+                    for (t, b) in tris.iter().zip(&boxes) {
+                        // A triangle whose box is farther than `best` from
+                        // the scene triangle's cannot come closer.
+                        if b.loosened(best).intersects(&near) {
+                            best = best.min(t.distance_to_triangle(&other).max(0.0));
+                        }
+                    }
+                }
             }
         }
     }
@@ -328,4 +359,38 @@ pub fn motion_contacts(
         travel_bound_m: travel,
         step_bound_m: travel / steps as Real,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use geom::Point3;
+    use geom::primitives::cuboid;
+    use scene::{MaterialId, default_materials};
+    use std::sync::Arc;
+
+    /// point3 with its body swapped for a 0.1 m cube mesh centred on the
+    /// control point, over a slab whose top is z = 0 (hand geometry): at
+    /// z = 0.3 the gap between the cube's bottom and the slab, 0.25 m; moved
+    /// 0.2 m past the slab's edge, edge to edge, √(0.15² + 0.25²). Counting
+    /// capsules only, the clearance was the search distance (1 m).
+    #[test]
+    fn mesh_links_count_in_the_clearance() {
+        let mut robot = robot::builtin("point3").unwrap();
+        let tool = robot.tool.0;
+        let half = Point3::new(0.05, 0.05, 0.05);
+        robot.links[tool.0].collision = vec![CollisionShape::Mesh(Arc::new(cuboid(
+            Point3::origin() - half.coords,
+            half,
+        )))];
+        let slab = cuboid(Point3::new(-1.0, -1.0, -0.1), Point3::new(1.0, 1.0, 0.0));
+        let scene = Scene::from_mesh("slab", slab, default_materials(), MaterialId(0)).unwrap();
+        let clearance = |q: [Real; 3]| {
+            let frames = robot.forward_kinematics(&q).unwrap();
+            min_clearance(&robot, &frames, &Isometry3::identity(), &scene, 1.0)
+        };
+        assert!((clearance([0.0, 0.0, 0.3]) - 0.25).abs() < 1e-12);
+        let edge = (0.15_f64.powi(2) + 0.25_f64.powi(2)).sqrt();
+        assert!((clearance([1.2, 0.0, 0.3]) - edge).abs() < 1e-12);
+    }
 }
