@@ -137,6 +137,11 @@ pub struct FollowConfig {
     /// from P§3.3, see [`crate::actuator::actuator_change`]); 0 scales the
     /// whole actuator change by one factor, as Pudney does.
     pub task_share: Real,
+    /// Gain of the joint-limit term added to the reconfiguration vector
+    /// `z` of a redundant robot (our addition to eq. 5, see
+    /// [`crate::actuator::joint_limit_gradient`]); 0 (the default) turns it
+    /// off.
+    pub joint_limit_gain: Real,
     /// A link closer to the model than its radius plus this margin may not be
     /// brought closer by the control-point motion (our addition to P§3.3,
     /// see [`crate::actuator::actuator_change`]), metres.
@@ -188,6 +193,7 @@ impl Default for FollowConfig {
             target_patience_steps: 20,
             damping: 1e-3,
             task_share: 0.15,
+            joint_limit_gain: 0.0,
             link_margin_m: 0.05,
             guard: true,
             guard_margin_m: 0.02,
@@ -232,6 +238,13 @@ impl FollowConfig {
                 "task_share",
                 "a share in 0..=1",
                 self.task_share.to_string(),
+            );
+        }
+        if !(self.joint_limit_gain.is_finite() && self.joint_limit_gain >= 0.0) {
+            return bad(
+                "joint_limit_gain",
+                "a finite gain ≥ 0",
+                self.joint_limit_gain.to_string(),
             );
         }
         if !(self.link_margin_m.is_finite() && self.link_margin_m >= 0.0) {

@@ -7,8 +7,8 @@
 
 use crate::FollowError;
 use crate::actuator::{
-    LinkBody, LinkProximity, SwitchContact, actuator_change, link_bodies, link_proximities,
-    reconfiguration,
+    LinkBody, LinkProximity, SwitchContact, actuator_change, joint_limit_gradient, link_bodies,
+    link_proximities, reconfiguration,
 };
 use crate::config::{FollowConfig, GapTargetRule, Objective};
 use crate::guard::{Guard, GuardAction, GuardCounts};
@@ -629,7 +629,7 @@ impl Follower {
         }
         self.robot
             .jacobian_into(frames, tool_link, tool_in_link, &mut self.jacobian);
-        let z = reconfiguration(
+        let mut z = reconfiguration(
             &self.robot,
             frames,
             self.config.objective,
@@ -637,6 +637,11 @@ impl Follower {
             switches,
             &self.config,
         );
+        // The joint-limit term, for robots with joints to spare (point3's
+        // three joints have no null space to take it in).
+        if self.robot.dof() > 3 {
+            z += joint_limit_gradient(&self.robot, q, &self.config);
+        }
         actuator_change(
             &self.robot,
             q,
