@@ -371,8 +371,9 @@ mod tests {
 
     /// point3 with its body swapped for a 0.1 m cube mesh centred on the
     /// control point, over a slab whose top is z = 0 (hand geometry): at
-    /// z = 0.3 the gap between the cube's bottom and the slab, 0.25 m; moved
-    /// 0.2 m past the slab's edge, edge to edge, √(0.15² + 0.25²). Counting
+    /// z = 0.3 the gap between the cube's bottom and the slab, 0.25 m; with
+    /// its centre 0.2 m past the slab's edge (its near face 0.15 m past), edge
+    /// to edge, √(0.15² + 0.25²). Counting
     /// capsules only, the clearance was the search distance (1 m).
     #[test]
     fn mesh_links_count_in_the_clearance() {
