@@ -250,9 +250,9 @@ fn arm4_never_touches_the_blocks() {
 /// declared in `data/scenarios/ur5_cube.toml`) follows the 0.2 m cube to the
 /// follower's own end without touching it, and models the top it starts over.
 /// The other faces are printed: the cube is small for λ = 0.05 and δ = 0.1,
-/// and the −x face is not reached (issue 24 acceptance 6 keeps it open;
-/// 27.2 % of the faces with the shared ceilings, 56.3 % with P§3.3's one
-/// factor, 2026-11-27).
+/// and the far faces are given up (issue 24 acceptance 6 keeps it open:
+/// 37.8 % of the faces with the shared ceilings, 60.0 % with P§3.3's one
+/// factor, since the guard measures the link meshes, 2026-11-27).
 #[test]
 #[ignore = "whole run: release profile, run by .ci/run"]
 fn ur5_follows_the_cube_without_contact() {

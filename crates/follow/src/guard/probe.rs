@@ -1,0 +1,529 @@
+//! The link shapes the guard checks, placed at one pose, and their closest
+//! points to what the robot knows of the surface: a capsule (its axis and
+//! radius) or a link's collision mesh, triangle by triangle.
+//!
+//! A URDF arm's links are meshes. Any capsule around one stands off it
+//! somewhere: the bounding ellipsoid's long axis put the UR5's upper arm 37 mm
+//! into the table it stands on (the mesh is 30 mm above it), and a link the
+//! guard sees within the margin may not come closer, so the arm held still in
+//! 509 of 629 steps. The guard therefore measures meshes exactly: two planar
+//! regions (a triangle, a polygon) that do not meet are closest at a vertex of
+//! one over the other's face or between two edges, so the distance is the
+//! least of each triangle vertex to the region's face, each region edge to
+//! the triangle, and zero where a triangle edge crosses the region.
+
+use crate::query::closest_segment_polygon;
+use geom::line::closest_segment_segment;
+use geom::{Aabb, Isometry3, Plane, Point3, Real, Segment3, TriMesh, Triangle, Vector3, polygon2};
+use robot::{CollisionShape, LinkId, Robot};
+use std::sync::Arc;
+use surface::Polygon;
+
+/// What the guard checks of one link: a capsule, or a collision mesh.
+#[derive(Clone, Debug)]
+pub(crate) enum Shape {
+    /// A capsule: its axis in the link frame and its radius.
+    Capsule { axis: Segment3, radius: Real },
+    /// A collision mesh in the link frame.
+    Mesh(Arc<TriMesh>),
+}
+
+/// One shape of one moving link.
+#[derive(Clone, Debug)]
+pub(crate) struct GuardBody {
+    /// The link.
+    pub(crate) link: LinkId,
+    /// Its shape.
+    pub(crate) shape: Shape,
+}
+
+/// The shapes of every moving link (the links after
+/// [`Robot::mounted_links`]; at least link 0 is left out): each capsule and
+/// each collision mesh as it is.
+pub(crate) fn guard_bodies(robot: &Robot) -> Vec<GuardBody> {
+    let mut out = Vec::new();
+    for (i, link) in robot
+        .links
+        .iter()
+        .enumerate()
+        .skip(robot.mounted_links().max(1))
+    {
+        for shape in &link.collision {
+            let shape = match shape {
+                CollisionShape::Capsule(c) => Shape::Capsule {
+                    axis: c.segment,
+                    radius: c.radius,
+                },
+                CollisionShape::Mesh(m) => Shape::Mesh(Arc::clone(m)),
+            };
+            out.push(GuardBody {
+                link: LinkId(i),
+                shape,
+            });
+        }
+    }
+    out
+}
+
+/// A link shape at one pose, world frame.
+#[derive(Clone, Debug)]
+pub(crate) enum Placed {
+    /// A capsule's axis and radius.
+    Capsule { axis: Segment3, radius: Real },
+    /// A mesh's triangles, each with its box, and the box of them all.
+    Mesh {
+        tris: Vec<Triangle>,
+        boxes: Vec<Aabb>,
+        bounds: Aabb,
+    },
+}
+
+/// Distance between two boxes (0 when they overlap).
+fn box_distance(a: &Aabb, b: &Aabb) -> Real {
+    let gap = (a.min - b.max).sup(&(b.min - a.max)).sup(&Vector3::zeros());
+    gap.norm()
+}
+
+/// Closest points between triangle `t` and segment `s`: `(distance, point
+/// on t, point on s)`.
+fn closest_triangle_segment(t: &Triangle, s: &Segment3) -> (Real, Point3, Point3) {
+    if let Some(u) = t.segment_hit(s) {
+        let x = s.point_at(u);
+        return (0.0, x, x);
+    }
+    let mut best = (Real::INFINITY, t.a, s.a);
+    for e in [s.a, s.b] {
+        let c = t.closest_point(&e);
+        let d = (c - e).norm();
+        if d < best.0 {
+            best = (d, c, e);
+        }
+    }
+    for edge in t.edges() {
+        let (ts, te, d) = closest_segment_segment(s, &edge);
+        if d < best.0 {
+            best = (d, edge.point_at(te), s.point_at(ts));
+        }
+    }
+    best
+}
+
+/// A planar region of known surface: a polygon, or a quadrilateral strip.
+struct Region<'a> {
+    plane: Plane,
+    inside: &'a dyn Fn(&Point3) -> bool,
+    edges: Vec<(Segment3, Aabb)>,
+    bounds: Aabb,
+}
+
+impl Region<'_> {
+    fn new<'a>(
+        plane: Plane,
+        inside: &'a dyn Fn(&Point3) -> bool,
+        vertices: &[Point3],
+    ) -> Region<'a> {
+        let n = vertices.len();
+        let edges = (0..n)
+            .map(|i| {
+                let (a, b) = (vertices[i], vertices[(i + 1) % n]);
+                (Segment3::new(a, b), Aabb::new(a, b))
+            })
+            .collect();
+        // Points projected into the region can stand off the vertices' box
+        // by how far the vertices stand off the plane: well under this.
+        let bounds = Aabb::from_points(vertices).loosened(1e-3);
+        Region {
+            plane,
+            inside,
+            edges,
+            bounds,
+        }
+    }
+}
+
+/// Closest points between the triangles and `region`, looking no farther
+/// than `limit`: `(distance, on a triangle, on the region)`, or `limit`
+/// (with meaningless points) when nothing is closer.
+fn triangles_to_region(
+    tris: &[Triangle],
+    boxes: &[Aabb],
+    region: &Region<'_>,
+    limit: Real,
+) -> (Real, Point3, Point3) {
+    let origin = Point3::origin();
+    let mut best = (limit, origin, origin);
+    for (t, b) in tris.iter().zip(boxes) {
+        if box_distance(b, &region.bounds) >= best.0 {
+            continue;
+        }
+        let p = [t.a, t.b, t.c];
+        let h = p.map(|v| region.plane.signed_distance(&v));
+        for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+            if h[i] * h[j] <= 0.0 && (h[i] - h[j]).abs() > 0.0 {
+                let x = p[i] + (p[j] - p[i]) * (h[i] / (h[i] - h[j]));
+                if (region.inside)(&x) {
+                    return (0.0, x, x);
+                }
+            }
+        }
+        for i in 0..3 {
+            if h[i].abs() < best.0 {
+                let q = region.plane.project(&p[i]);
+                if (region.inside)(&q) {
+                    best = (h[i].abs(), p[i], q);
+                }
+            }
+        }
+        for (e, eb) in &region.edges {
+            if box_distance(b, eb) >= best.0 {
+                continue;
+            }
+            let (d, on_t, on_e) = closest_triangle_segment(t, e);
+            if d < best.0 {
+                best = (d, on_t, on_e);
+            }
+        }
+    }
+    best
+}
+
+impl Placed {
+    /// `shape` in the world frame of a link at `world_from_link`.
+    pub(crate) fn new(shape: &Shape, world_from_link: &Isometry3) -> Self {
+        match shape {
+            Shape::Capsule { axis, radius } => Self::Capsule {
+                axis: Segment3::new(world_from_link * axis.a, world_from_link * axis.b),
+                radius: *radius,
+            },
+            Shape::Mesh(mesh) => {
+                let world: Vec<Point3> =
+                    mesh.vertices.iter().map(|v| world_from_link * v).collect();
+                let tris: Vec<Triangle> = mesh
+                    .triangles
+                    .iter()
+                    .map(|t| {
+                        Triangle::new(
+                            world[t[0] as usize],
+                            world[t[1] as usize],
+                            world[t[2] as usize],
+                        )
+                    })
+                    .collect();
+                let boxes: Vec<Aabb> = tris
+                    .iter()
+                    .map(|t| Aabb::from_points([&t.a, &t.b, &t.c]))
+                    .collect();
+                let bounds = boxes.iter().fold(Aabb::empty(), |a, b| a.merged(b));
+                Self::Mesh {
+                    tris,
+                    boxes,
+                    bounds,
+                }
+            }
+        }
+    }
+
+    /// The radius distances are measured beyond (0 for a mesh).
+    pub(crate) fn radius(&self) -> Real {
+        match self {
+            Self::Capsule { radius, .. } => *radius,
+            Self::Mesh { .. } => 0.0,
+        }
+    }
+
+    /// A centre and a half size: every point of the shape (less its radius)
+    /// lies within the half size of the centre.
+    pub(crate) fn centre_reach(&self) -> (Point3, Real) {
+        match self {
+            Self::Capsule { axis, .. } => (
+                Point3::from((axis.a.coords + axis.b.coords) * 0.5),
+                axis.length() * 0.5,
+            ),
+            Self::Mesh { bounds, .. } => (bounds.center(), bounds.extents().norm() * 0.5),
+        }
+    }
+
+    /// The most any point of the shape moved from `self` to `other` (the
+    /// same shape at another pose): a rigid motion moves the points of a
+    /// convex set at most as far as its farthest-moving vertex.
+    pub(crate) fn travel_to(&self, other: &Self) -> Real {
+        match (self, other) {
+            (Self::Capsule { axis: a, .. }, Self::Capsule { axis: b, .. }) => {
+                (b.a - a.a).norm().max((b.b - a.b).norm())
+            }
+            (Self::Mesh { tris: a, .. }, Self::Mesh { tris: b, .. }) => a
+                .iter()
+                .zip(b)
+                .map(|(s, t)| {
+                    (t.a - s.a)
+                        .norm_squared()
+                        .max((t.b - s.b).norm_squared())
+                        .max((t.c - s.c).norm_squared())
+                })
+                .fold(0.0, Real::max)
+                .sqrt(),
+            _ => Real::INFINITY,
+        }
+    }
+
+    /// A lower bound of the distance from the shape (less its radius) to `p`.
+    pub(crate) fn lower_bound_to_point(&self, p: &Point3) -> Real {
+        match self {
+            Self::Capsule { axis, .. } => axis.distance_to_point(p),
+            Self::Mesh { bounds, .. } => bounds.distance_squared_to_point(p).sqrt(),
+        }
+    }
+
+    /// Distance from the shape (less its radius) to `p` and the closest
+    /// point on it; `limit` (and `p`) when nothing is closer than `limit`
+    /// (a capsule is measured whatever the limit).
+    pub(crate) fn to_point(&self, p: &Point3, limit: Real) -> (Real, Point3) {
+        match self {
+            Self::Capsule { axis, .. } => {
+                let c = axis.closest_point(p);
+                ((c - p).norm(), c)
+            }
+            Self::Mesh { tris, boxes, .. } => {
+                let mut best = (limit, *p);
+                for (t, b) in tris.iter().zip(boxes) {
+                    if b.distance_squared_to_point(p) >= best.0 * best.0 {
+                        continue;
+                    }
+                    let c = t.closest_point(p);
+                    let d = (c - p).norm();
+                    if d < best.0 {
+                        best = (d, c);
+                    }
+                }
+                best
+            }
+        }
+    }
+
+    /// Closest points between the shape (less its radius) and polygon `g`:
+    /// `(distance, on the shape, on g)`, as [`Self::to_point`] for `limit`.
+    pub(crate) fn to_polygon(&self, g: &Polygon, limit: Real) -> (Real, Point3, Point3) {
+        match self {
+            Self::Capsule { axis, .. } => closest_segment_polygon(axis, g),
+            Self::Mesh {
+                tris,
+                boxes,
+                bounds,
+            } => {
+                let vertices: Vec<Point3> = g.vertices().collect();
+                if box_distance(bounds, &Aabb::from_points(&vertices).loosened(1e-3)) >= limit {
+                    return (limit, Point3::origin(), Point3::origin());
+                }
+                let frame = g.frame();
+                let pts = g.points_2d(&frame);
+                let inside = |p: &Point3| polygon2::contains_point(&pts, &frame.to_2d(p), 0.0);
+                let region = Region::new(g.plane(), &inside, &vertices);
+                triangles_to_region(tris, boxes, &region, limit)
+            }
+        }
+    }
+
+    /// Distance between the shape (less its radius) and segment `s`, as
+    /// [`Self::to_point`] for `limit`.
+    pub(crate) fn to_segment(&self, s: &Segment3, limit: Real) -> Real {
+        match self {
+            Self::Capsule { axis, .. } => closest_segment_segment(axis, s).2,
+            Self::Mesh { tris, boxes, .. } => {
+                let sb = Aabb::new(s.a, s.b);
+                let mut best = limit;
+                for (t, b) in tris.iter().zip(boxes) {
+                    if box_distance(b, &sb) < best {
+                        best = best.min(t.distance_to_segment(s));
+                    }
+                }
+                best
+            }
+        }
+    }
+
+    /// Closest points between the shape (less its radius) and the planar
+    /// convex quadrilateral `q` (normal `n`), as [`Self::to_polygon`].
+    pub(crate) fn to_quad(
+        &self,
+        q: &[Point3; 4],
+        n: &Vector3,
+        limit: Real,
+    ) -> (Real, Point3, Point3) {
+        match self {
+            Self::Capsule { axis, .. } => closest_segment_quad(axis, q, n),
+            Self::Mesh { tris, boxes, .. } => {
+                let inside = |p: &Point3| inside_quad(q, n, p);
+                let Some(unit) = geom::unit(*n) else {
+                    return (limit, Point3::origin(), Point3::origin());
+                };
+                let region = Region::new(Plane::from_point_normal(&q[0], unit), &inside, q);
+                triangles_to_region(tris, boxes, &region, limit)
+            }
+        }
+    }
+}
+
+/// Whether `p` (on the plane of `q`) lies in the planar convex
+/// quadrilateral `q` with normal `n`.
+fn inside_quad(q: &[Point3; 4], n: &Vector3, p: &Point3) -> bool {
+    let side = |i: usize| (q[(i + 1) % 4] - q[i]).cross(&(p - q[i])).dot(n);
+    let sides = [side(0), side(1), side(2), side(3)];
+    sides.iter().all(|v| *v >= -1e-12) || sides.iter().all(|v| *v <= 1e-12)
+}
+
+/// Closest points between segment `s` and the planar convex quadrilateral
+/// `q` (normal `n`): `(distance, point on s, point on q)`.
+pub(crate) fn closest_segment_quad(
+    s: &Segment3,
+    q: &[Point3; 4],
+    n: &Vector3,
+) -> (Real, Point3, Point3) {
+    let inside = |p: &Point3| inside_quad(q, n, p);
+    let h = |p: &Point3| (p - q[0]).dot(n);
+    let (ha, hb) = (h(&s.a), h(&s.b));
+    if ha * hb <= 0.0 && (ha - hb).abs() > 0.0 {
+        let x = s.point_at(ha / (ha - hb));
+        if inside(&x) {
+            return (0.0, x, x);
+        }
+    }
+    let mut best = (Real::INFINITY, s.a, s.a);
+    for (e, he) in [(s.a, ha), (s.b, hb)] {
+        let p = e - n * he;
+        if inside(&p) && he.abs() < best.0 {
+            best = (he.abs(), e, p);
+        }
+    }
+    for i in 0..4 {
+        let edge = Segment3::new(q[i], q[(i + 1) % 4]);
+        let (ts, te, d) = closest_segment_segment(s, &edge);
+        if d < best.0 {
+            best = (d, s.point_at(ts), edge.point_at(te));
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A unit cube mesh `[0, 1]³` (12 triangles).
+    fn unit_cube() -> Arc<TriMesh> {
+        let v: Vec<Point3> = (0..8)
+            .map(|i| {
+                Point3::new(
+                    Real::from(i & 1),
+                    Real::from((i >> 1) & 1),
+                    Real::from((i >> 2) & 1),
+                )
+            })
+            .collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let mut t = Vec::new();
+        for q in quads {
+            t.push([q[0], q[1], q[2]]);
+            t.push([q[0], q[2], q[3]]);
+        }
+        Arc::new(TriMesh::new(v, t, "unit cube").unwrap())
+    }
+
+    /// The distance between the unit cube `[0, 1]³` and a point, by hand.
+    fn cube_distance(p: &Point3) -> Real {
+        let gap = |x: Real| (-x).max(x - 1.0).max(0.0);
+        Vector3::new(gap(p.x), gap(p.y), gap(p.z)).norm()
+    }
+
+    fn square(c: Point3, half: Real, n: Vector3) -> [Point3; 4] {
+        let u = if n.x.abs() < 0.9 {
+            geom::unit(Vector3::x().cross(&n)).unwrap().into_inner()
+        } else {
+            geom::unit(Vector3::y().cross(&n)).unwrap().into_inner()
+        };
+        let v = n.cross(&u);
+        [
+            c - u * half - v * half,
+            c + u * half - v * half,
+            c + u * half + v * half,
+            c - u * half + v * half,
+        ]
+    }
+
+    #[test]
+    fn a_mesh_is_measured_to_its_faces_edges_and_corners() {
+        let placed = Placed::new(&Shape::Mesh(unit_cube()), &Isometry3::identity());
+        // A square 0.3 above the top face, centred: a vertex-face case
+        // from the square's side, face-face in fact.
+        let n = Vector3::z();
+        let q = square(Point3::new(0.5, 0.5, 1.3), 0.2, n);
+        let (d, on_mesh, on_q) = placed.to_quad(&q, &n, 10.0);
+        assert!((d - 0.3).abs() < 1e-12, "{d}");
+        assert!((on_mesh.z - 1.0).abs() < 1e-12 && (on_q.z - 1.3).abs() < 1e-12);
+        // A square beside the +x face tilted 45° about y whose corner
+        // points at the face: its edge, not a mesh vertex, is closest
+        // (the square's nearest edge runs 0.2 from the face).
+        let n45 = geom::unit(Vector3::new(1.0, 0.0, 1.0))
+            .unwrap()
+            .into_inner();
+        let half = 0.1;
+        let c = Point3::new(1.2 + half * n45.z, 0.5, 0.5 - half * n45.x);
+        let q = square(c, half, n45);
+        let lowest = q.iter().map(|p| p.x).fold(Real::INFINITY, Real::min);
+        let (d, ..) = placed.to_quad(&q, &n45, 10.0);
+        assert!((d - (lowest - 1.0)).abs() < 1e-9, "{d} {lowest}");
+        // A point off a corner.
+        let p = Point3::new(1.3, 1.4, -0.2);
+        let (d, c) = placed.to_point(&p, 10.0);
+        assert!((d - cube_distance(&p)).abs() < 1e-12);
+        assert!((c - Point3::new(1.0, 1.0, 0.0)).norm() < 1e-12);
+        // Nothing within the limit: the limit.
+        assert_eq!(placed.to_point(&p, 0.1).0, 0.1);
+        // A segment through the cube: 0.
+        let s = Segment3::new(Point3::new(-1.0, 0.5, 0.5), Point3::new(2.0, 0.5, 0.5));
+        assert_eq!(placed.to_segment(&s, 10.0), 0.0);
+    }
+
+    proptest! {
+        /// A square's distance from the cube mesh, against the least of a
+        /// fine sampling of the square (an upper bound within the sampling
+        /// step) and a lower bound from that less the step.
+        #[test]
+        fn a_mesh_to_a_square_agrees_with_sampling(
+            cx in -1.0..2.0f64, cy in -1.0..2.0f64, cz in -1.0..2.0f64,
+            nx in -1.0..1.0f64, ny in -1.0..1.0f64, nz in -1.0..1.0f64,
+            half in 0.05..0.6f64,
+        ) {
+            let n = Vector3::new(nx, ny, nz);
+            prop_assume!(n.norm() > 0.2);
+            let n = geom::unit(n).unwrap().into_inner();
+            let c = Point3::new(cx, cy, cz);
+            let q = square(c, half, n);
+            let placed = Placed::new(&Shape::Mesh(unit_cube()), &Isometry3::identity());
+            let (d, on_mesh, on_q) = placed.to_quad(&q, &n, 100.0);
+            let k = 60;
+            let mut sampled = Real::INFINITY;
+            for i in 0..=k {
+                for j in 0..=k {
+                    let (s, t) = (Real::from(i) / Real::from(k), Real::from(j) / Real::from(k));
+                    let p = q[0] + (q[1] - q[0]) * s + (q[3] - q[0]) * t;
+                    sampled = sampled.min(cube_distance(&p));
+                }
+            }
+            let step = 2.0 * half / Real::from(k) * std::f64::consts::SQRT_2;
+            // Inside the cube the mesh distance is to its surface, the
+            // sampled one 0: only compare squares that stay outside.
+            prop_assume!(sampled > 0.0 || d == 0.0);
+            prop_assert!(d <= sampled + 1e-9, "{d} > sampled {sampled}");
+            prop_assert!(d >= sampled - step - 1e-9, "{d} < sampled {sampled} - {step}");
+            prop_assert!(((on_mesh - on_q).norm() - d).abs() < 1e-9);
+        }
+    }
+}
