@@ -2,68 +2,16 @@
 //! with `z = −∇H` keeping the links away from the surface model, and ceilings
 //! γ_p / γ_r on the change.
 
+use crate::body::Placed;
 use crate::config::{FollowConfig, Objective};
+use crate::guard::{Extensions, model_nearest};
 use crate::query::closest_segment_model;
 use geom::{Isometry3, Point3, Real, Segment3, Vector3};
 use nalgebra::{DMatrix, DVector, Matrix6xX};
-use robot::{CollisionShape, JointKind, LinkId, Robot};
+use robot::{JointKind, LinkId, Robot};
 use surface::SurfaceModel;
 
-/// A link's description for eq. 4: a line segment in the link frame (the axis
-/// of its capsule; for mesh links the long axis of the bounding ellipsoid).
-/// Distances are measured from this axis.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LinkBody {
-    /// The link.
-    pub link: LinkId,
-    /// The axis, link frame.
-    pub axis: Segment3,
-    /// The link's radius about the axis (capsule radius; the second-largest
-    /// semi-axis of a bounding ellipsoid).
-    pub radius: Real,
-}
-
-/// The links' descriptions: every capsule of links 1.. (several per link
-/// are treated as one link, its closest point winning), or the long axis of
-/// the bounding ellipsoid where a link has only meshes.
-pub fn link_bodies(robot: &Robot) -> Vec<LinkBody> {
-    let mut out = Vec::new();
-    for (i, link) in robot.links.iter().enumerate().skip(1) {
-        let mut any = false;
-        for shape in &link.collision {
-            if let CollisionShape::Capsule(c) = shape {
-                out.push(LinkBody {
-                    link: LinkId(i),
-                    axis: c.segment,
-                    radius: c.radius,
-                });
-                any = true;
-            }
-        }
-        if !any
-            && !link.collision.is_empty()
-            && let Some(e) = link.ellipsoid
-        {
-            let r = e.radii;
-            let (k, len) = [r.x, r.y, r.z]
-                .into_iter()
-                .enumerate()
-                .fold((0, 0.0), |b, (k, v)| if v > b.1 { (k, v) } else { b });
-            let mut axis = Vector3::zeros();
-            axis[k] = len;
-            let a = e.pose * Point3::from(-axis);
-            let b = e.pose * Point3::from(axis);
-            let mut others = [r.x, r.y, r.z];
-            others[k] = 0.0;
-            out.push(LinkBody {
-                link: LinkId(i),
-                axis: Segment3::new(a, b),
-                radius: others.into_iter().fold(0.0, Real::max),
-            });
-        }
-    }
-    out
-}
+pub use crate::body::{LinkBody, LinkShape, link_bodies};
 
 /// The part of segment `s` farther than `radius` from `c`: up to two pieces.
 pub fn outside_ball(s: &Segment3, c: &Point3, radius: Real) -> Vec<Segment3> {
@@ -108,7 +56,8 @@ pub struct LinkProximity {
     pub on_model: Point3,
     /// `‖lᵢ − sᵢ‖`.
     pub distance: Real,
-    /// The link's radius about its axis (see [`LinkBody::radius`]).
+    /// The link's radius about its axis (a capsule's radius; 0 for a mesh,
+    /// measured from its surface).
     pub radius: Real,
 }
 
@@ -125,36 +74,61 @@ pub fn link_proximities(
     influence: Real,
 ) -> Vec<LinkProximity> {
     let mut out: Vec<LinkProximity> = Vec::new();
+    let mut offer = |link: LinkId, d: Real, l: Point3, s: Point3, radius: Real| match out
+        .iter_mut()
+        .find(|p| p.link == link)
+    {
+        Some(p) if p.distance <= d => {}
+        Some(p) => {
+            *p = LinkProximity {
+                link,
+                on_link: l,
+                on_model: s,
+                distance: d,
+                radius,
+            };
+        }
+        None => out.push(LinkProximity {
+            link,
+            on_link: l,
+            on_model: s,
+            distance: d,
+            radius,
+        }),
+    };
     for body in bodies {
         let Some(frame) = frames.get(body.link.0) else {
             continue;
         };
-        let axis = Segment3::new(frame * body.axis.a, frame * body.axis.b);
-        let pieces = if body.link == tool_link {
-            outside_ball(&axis, control_point, exclusion)
-        } else {
-            vec![axis]
-        };
-        for piece in pieces {
-            if let Some((d, l, s, _)) = closest_segment_model(model, &piece, influence) {
-                match out.iter_mut().find(|p| p.link == body.link) {
-                    Some(p) if p.distance <= d => {}
-                    Some(p) => {
-                        *p = LinkProximity {
-                            link: body.link,
-                            on_link: l,
-                            on_model: s,
-                            distance: d,
-                            radius: body.radius,
-                        };
+        match &body.shape {
+            LinkShape::Capsule { axis, radius } => {
+                let axis = Segment3::new(frame * axis.a, frame * axis.b);
+                let pieces = if body.link == tool_link {
+                    outside_ball(&axis, control_point, exclusion)
+                } else {
+                    vec![axis]
+                };
+                for piece in pieces {
+                    if let Some((d, l, s, _)) = closest_segment_model(model, &piece, influence) {
+                        offer(body.link, d, l, s, *radius);
                     }
-                    None => out.push(LinkProximity {
-                        link: body.link,
-                        on_link: l,
-                        on_model: s,
-                        distance: d,
-                        radius: body.radius,
-                    }),
+                }
+            }
+            LinkShape::Mesh(_) => {
+                let mut placed = Placed::new(&body.shape, frame);
+                if body.link == tool_link {
+                    placed.drop_triangles_within(control_point, exclusion);
+                }
+                let mut best = influence;
+                let mut pair = None;
+                let none = Extensions {
+                    model: 0.0,
+                    initial: 0.0,
+                    object_faces: &[],
+                };
+                model_nearest(model, none, &placed, &mut best, &mut pair);
+                if let Some((l, s)) = pair {
+                    offer(body.link, best, l, s, 0.0);
                 }
             }
         }

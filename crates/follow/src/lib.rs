@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 pub mod actuator;
+mod body;
 pub mod config;
 pub mod episode;
 pub mod error;

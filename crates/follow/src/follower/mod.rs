@@ -11,7 +11,7 @@ use crate::actuator::{
     link_proximities, reconfiguration,
 };
 use crate::config::{FollowConfig, GapTargetRule, Objective};
-use crate::guard::{Guard, GuardAction, GuardBody, GuardCounts, guard_bodies};
+use crate::guard::{Guard, GuardAction, GuardCounts};
 use crate::motion::control_point_motion;
 use crate::path::{EdgePath, surface_edges};
 use crate::query::{EdgeRef, ModelPoint, closest_model_point, closest_on_segment};
@@ -264,8 +264,6 @@ pub struct Follower {
     config: FollowConfig,
     model: SurfaceModel,
     bodies: Vec<LinkBody>,
-    /// The links' shapes as the safety guard checks them (meshes as they are).
-    guard_bodies: Vec<GuardBody>,
     /// Range finders at the control point (gap following's controlled sensors).
     cp_sensors: Vec<usize>,
     sensing_range: Real,
@@ -316,7 +314,6 @@ impl Follower {
             .map(|&i| robot.range_finders[i].max_range_m)
             .fold(0.0, Real::max);
         let bodies = link_bodies(&robot);
-        let guard_bodies = guard_bodies(&robot);
         let dof = robot.dof();
         let sensed = (config.gap_targets == GapTargetRule::Sensed)
             .then(|| gap_following::SensedPoints::new(0.5 * model.config().lambda));
@@ -328,7 +325,6 @@ impl Follower {
             config,
             model,
             bodies,
-            guard_bodies,
             cp_sensors,
             sensing_range,
             state: State::new(),
@@ -565,7 +561,7 @@ impl Follower {
                 (dq, guard) = self.guard.check(
                     &self.robot,
                     &self.world_from_base,
-                    &self.guard_bodies,
+                    &self.bodies,
                     &self.model,
                     &self.config,
                     q,

@@ -1,12 +1,13 @@
-//! The link shapes the guard checks, placed at one pose, and their closest
-//! points to what the robot knows of the surface: a capsule (its axis and
-//! radius) or a link's collision mesh, triangle by triangle.
+//! The links as the follower sees them (eq. 4's link distances and the
+//! safety guard), placed at one pose, and their closest points to known
+//! surface: a capsule (its axis and radius) or a link's collision mesh,
+//! triangle by triangle.
 //!
 //! A URDF arm's links are meshes. Any capsule around one stands off it
 //! somewhere: the bounding ellipsoid's long axis put the UR5's upper arm 37 mm
 //! into the table it stands on (the mesh is 30 mm above it), and a link the
 //! guard sees within the margin may not come closer, so the arm held still in
-//! 509 of 629 steps. The guard therefore measures meshes exactly: two planar
+//! 509 of 629 steps. Meshes are therefore measured exactly: two planar
 //! regions (a triangle, a polygon) that do not meet are closest at a vertex of
 //! one over the other's face or between two edges, so the distance is the
 //! least of each triangle vertex to the region's face, each region edge to
@@ -19,28 +20,35 @@ use robot::{CollisionShape, LinkId, Robot};
 use std::sync::Arc;
 use surface::Polygon;
 
-/// What the guard checks of one link: a capsule, or a collision mesh.
-#[derive(Clone, Debug)]
-pub(crate) enum Shape {
-    /// A capsule: its axis in the link frame and its radius.
-    Capsule { axis: Segment3, radius: Real },
-    /// A collision mesh in the link frame.
+/// One collision shape of a link, in the link frame.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LinkShape {
+    /// A capsule: distances are measured from its axis, less its radius.
+    Capsule {
+        /// The axis.
+        axis: Segment3,
+        /// The radius about it.
+        radius: Real,
+    },
+    /// A collision mesh (a URDF link's): distances are measured from its
+    /// triangles.
     Mesh(Arc<TriMesh>),
 }
 
-/// One shape of one moving link.
-#[derive(Clone, Debug)]
-pub(crate) struct GuardBody {
+/// One collision shape of one moving link (several per link are treated as
+/// one link, its closest point winning).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinkBody {
     /// The link.
-    pub(crate) link: LinkId,
+    pub link: LinkId,
     /// Its shape.
-    pub(crate) shape: Shape,
+    pub shape: LinkShape,
 }
 
 /// The shapes of every moving link (the links after
-/// [`Robot::mounted_links`]; at least link 0 is left out): each capsule and
+/// [`Robot::mounted_links`]; link 0 is always left out): each capsule and
 /// each collision mesh as it is.
-pub(crate) fn guard_bodies(robot: &Robot) -> Vec<GuardBody> {
+pub fn link_bodies(robot: &Robot) -> Vec<LinkBody> {
     let mut out = Vec::new();
     for (i, link) in robot
         .links
@@ -50,13 +58,13 @@ pub(crate) fn guard_bodies(robot: &Robot) -> Vec<GuardBody> {
     {
         for shape in &link.collision {
             let shape = match shape {
-                CollisionShape::Capsule(c) => Shape::Capsule {
+                CollisionShape::Capsule(c) => LinkShape::Capsule {
                     axis: c.segment,
                     radius: c.radius,
                 },
-                CollisionShape::Mesh(m) => Shape::Mesh(Arc::clone(m)),
+                CollisionShape::Mesh(m) => LinkShape::Mesh(Arc::clone(m)),
             };
-            out.push(GuardBody {
+            out.push(LinkBody {
                 link: LinkId(i),
                 shape,
             });
@@ -189,13 +197,13 @@ fn triangles_to_region(
 
 impl Placed {
     /// `shape` in the world frame of a link at `world_from_link`.
-    pub(crate) fn new(shape: &Shape, world_from_link: &Isometry3) -> Self {
+    pub(crate) fn new(shape: &LinkShape, world_from_link: &Isometry3) -> Self {
         match shape {
-            Shape::Capsule { axis, radius } => Self::Capsule {
+            LinkShape::Capsule { axis, radius } => Self::Capsule {
                 axis: Segment3::new(world_from_link * axis.a, world_from_link * axis.b),
                 radius: *radius,
             },
-            Shape::Mesh(mesh) => {
+            LinkShape::Mesh(mesh) => {
                 let world: Vec<Point3> =
                     mesh.vertices.iter().map(|v| world_from_link * v).collect();
                 let tris: Vec<Triangle> = mesh
@@ -220,6 +228,29 @@ impl Placed {
                     bounds,
                 }
             }
+        }
+    }
+
+    /// Leaves out a mesh's triangles that lie wholly within `radius` of `c`
+    /// (the control point's own zone on the tool link, P§3.3); a capsule is
+    /// left as it is.
+    pub(crate) fn drop_triangles_within(&mut self, c: &Point3, radius: Real) {
+        if let Self::Mesh {
+            tris,
+            boxes,
+            bounds,
+        } = self
+        {
+            let outside = |t: &Triangle| [t.a, t.b, t.c].iter().any(|v| (v - c).norm() >= radius);
+            let (kept, kept_boxes): (Vec<Triangle>, Vec<Aabb>) = tris
+                .iter()
+                .zip(boxes.iter())
+                .filter(|(t, _)| outside(t))
+                .map(|(t, b)| (*t, *b))
+                .unzip();
+            *bounds = kept_boxes.iter().fold(Aabb::empty(), |a, b| a.merged(b));
+            *tris = kept;
+            *boxes = kept_boxes;
         }
     }
 
@@ -283,8 +314,15 @@ impl Placed {
                 let c = axis.closest_point(p);
                 ((c - p).norm(), c)
             }
-            Self::Mesh { tris, boxes, .. } => {
+            Self::Mesh {
+                tris,
+                boxes,
+                bounds,
+            } => {
                 let mut best = (limit, *p);
+                if bounds.distance_squared_to_point(p) >= limit * limit {
+                    return best;
+                }
                 for (t, b) in tris.iter().zip(boxes) {
                     if b.distance_squared_to_point(p) >= best.0 * best.0 {
                         continue;
@@ -323,20 +361,22 @@ impl Placed {
         }
     }
 
-    /// Distance between the shape (less its radius) and segment `s`, as
-    /// [`Self::to_point`] for `limit`.
-    pub(crate) fn to_segment(&self, s: &Segment3, limit: Real) -> Real {
+    /// A lower bound of the distance between the shape (less its radius)
+    /// and segment `s`, at most `limit` for a mesh: a capsule's exact
+    /// distance, a mesh's nearest triangle box (a test whether to look
+    /// closer, so it is cheap).
+    pub(crate) fn lower_bound_to_segment(&self, s: &Segment3, limit: Real) -> Real {
         match self {
             Self::Capsule { axis, .. } => closest_segment_segment(axis, s).2,
-            Self::Mesh { tris, boxes, .. } => {
+            Self::Mesh { boxes, bounds, .. } => {
                 let sb = Aabb::new(s.a, s.b);
-                let mut best = limit;
-                for (t, b) in tris.iter().zip(boxes) {
-                    if box_distance(b, &sb) < best {
-                        best = best.min(t.distance_to_segment(s));
-                    }
+                if box_distance(bounds, &sb) >= limit {
+                    return limit;
                 }
-                best
+                boxes
+                    .iter()
+                    .map(|b| box_distance(b, &sb))
+                    .fold(limit, Real::min)
             }
         }
     }
@@ -459,7 +499,7 @@ mod tests {
 
     #[test]
     fn a_mesh_is_measured_to_its_faces_edges_and_corners() {
-        let placed = Placed::new(&Shape::Mesh(unit_cube()), &Isometry3::identity());
+        let placed = Placed::new(&LinkShape::Mesh(unit_cube()), &Isometry3::identity());
         // A square 0.3 above the top face, centred: a vertex-face case
         // from the square's side, face-face in fact.
         let n = Vector3::z();
@@ -486,9 +526,12 @@ mod tests {
         assert!((c - Point3::new(1.0, 1.0, 0.0)).norm() < 1e-12);
         // Nothing within the limit: the limit.
         assert_eq!(placed.to_point(&p, 0.1).0, 0.1);
-        // A segment through the cube: 0.
+        // A segment through the cube: 0; one 0.5 off its +x face: at most that.
         let s = Segment3::new(Point3::new(-1.0, 0.5, 0.5), Point3::new(2.0, 0.5, 0.5));
-        assert_eq!(placed.to_segment(&s, 10.0), 0.0);
+        assert_eq!(placed.lower_bound_to_segment(&s, 10.0), 0.0);
+        let s = Segment3::new(Point3::new(1.5, -1.0, 0.5), Point3::new(1.5, 2.0, 0.5));
+        assert_eq!(placed.lower_bound_to_segment(&s, 10.0), 0.5);
+        assert_eq!(placed.lower_bound_to_segment(&s, 0.2), 0.2);
     }
 
     proptest! {
@@ -506,7 +549,7 @@ mod tests {
             let n = geom::unit(n).unwrap().into_inner();
             let c = Point3::new(cx, cy, cz);
             let q = square(c, half, n);
-            let placed = Placed::new(&Shape::Mesh(unit_cube()), &Isometry3::identity());
+            let placed = Placed::new(&LinkShape::Mesh(unit_cube()), &Isometry3::identity());
             let (d, on_mesh, on_q) = placed.to_quad(&q, &n, 100.0);
             let k = 60;
             let mut sampled = Real::INFINITY;

@@ -23,7 +23,7 @@
 //!   ([`crate::Follower::mark_object_faces`]).
 //!
 //! Links are checked as the robot describes them: capsules, and collision
-//! meshes triangle by triangle (module `probe`), never a bound around a mesh (a
+//! meshes triangle by triangle, never a bound around a mesh (a
 //! URDF arm's shoulder stands a few centimetres above the table it is
 //! mounted on, closer than any capsule around it).
 //!
@@ -37,14 +37,11 @@
 //! A link far enough from everything known that its whole travel cannot
 //! bring it within the margin is not sampled at all.
 
-mod probe;
-
 use crate::actuator::ceiling_scale;
+use crate::body::{LinkBody, Placed};
 use crate::config::FollowConfig;
 use geom::{Isometry3, Point3, Real, Segment3};
 use nalgebra::{DVector, Matrix3, Matrix6xX};
-use probe::Placed;
-pub(crate) use probe::{GuardBody, guard_bodies};
 pub use record::follow::GuardCounts;
 use robot::Robot;
 use serde::Serialize;
@@ -257,7 +254,7 @@ impl Guard {
         &mut self,
         robot: &Robot,
         world_from_base: &Isometry3,
-        bodies: &[GuardBody],
+        bodies: &[LinkBody],
         model: &SurfaceModel,
         config: &FollowConfig,
         q: &[Real],
@@ -330,7 +327,7 @@ struct Motion<'a> {
     guard: &'a Guard,
     robot: &'a Robot,
     world_from_base: &'a Isometry3,
-    bodies: &'a [GuardBody],
+    bodies: &'a [LinkBody],
     model: &'a SurfaceModel,
     frames: Vec<Isometry3>,
     start: Vec<Placed>,
@@ -351,9 +348,18 @@ const START_CAP_M: Real = 0.1;
 
 impl Motion<'_> {
     fn place(&mut self, q: &[Real]) -> Option<Vec<Placed>> {
+        let all: Vec<usize> = (0..self.bodies.len()).collect();
+        self.place_some(q, &all)
+    }
+
+    /// Bodies `which` (indices into the bodies) placed at joints `q`, in
+    /// that order: a mesh is placed triangle by triangle, so only the
+    /// bodies a check needs are.
+    fn place_some(&mut self, q: &[Real], which: &[usize]) -> Option<Vec<Placed>> {
         self.robot.fk_into(q, &mut self.frames).ok()?;
-        let mut out = Vec::with_capacity(self.bodies.len());
-        for b in self.bodies {
+        let mut out = Vec::with_capacity(which.len());
+        for &i in which {
+            let b = self.bodies.get(i)?;
             let f = self.world_from_base * self.frames.get(b.link.0)?;
             out.push(Placed::new(&b.shape, &f));
         }
@@ -458,10 +464,10 @@ impl Motion<'_> {
             for ((x, a), d) in sub_q.iter_mut().zip(q).zip(dq) {
                 *x = a + d * s;
             }
-            let Some(placed) = self.place(&sub_q) else {
+            let Some(placed) = self.place_some(&sub_q, &watched) else {
                 return false;
             };
-            for &i in &watched {
+            for (&i, placed) in watched.iter().zip(&placed) {
                 let c0 = self.start_clearance[i];
                 let need = if c0 < margin {
                     // Already within the margin: it may not come closer
@@ -489,7 +495,7 @@ impl Motion<'_> {
                 } else {
                     need
                 };
-                let c = self.guard.clearance(self.model, &placed[i], need);
+                let c = self.guard.clearance(self.model, placed, need);
                 if c < need {
                     return false;
                 }
@@ -501,13 +507,13 @@ impl Motion<'_> {
 
 /// How far the guard takes polygons past their edges.
 #[derive(Clone, Copy)]
-struct Extensions<'a> {
+pub(crate) struct Extensions<'a> {
     /// Unshared edges of the model's polygons.
-    model: Real,
+    pub(crate) model: Real,
     /// Unshared edges of initial segments (the brim) ...
-    initial: Real,
+    pub(crate) initial: Real,
     /// ... except those of these (sorted): none.
-    object_faces: &'a [SegmentId],
+    pub(crate) object_faces: &'a [SegmentId],
 }
 
 /// Lowers `best` (and sets `pair`: on the axis, on the model) to the
@@ -521,7 +527,7 @@ struct Extensions<'a> {
 /// block1's true face 25 mm beyond its polygon); a strip also stands across
 /// a convex edge into the free space the robot follows in, so it is only
 /// λ/2 wide by default ([`FollowConfig::guard_edge_extension_m`]).
-fn model_nearest(
+pub(crate) fn model_nearest(
     model: &SurfaceModel,
     ext: Extensions<'_>,
     link: &Placed,
@@ -568,7 +574,7 @@ fn model_nearest(
                     let Some((a, b)) = g.edge_points(i) else {
                         continue;
                     };
-                    let de = link.to_segment(&Segment3::new(a, b), *best + extend);
+                    let de = link.lower_bound_to_segment(&Segment3::new(a, b), *best + extend);
                     if de - extend >= *best {
                         continue;
                     }
@@ -587,7 +593,7 @@ fn model_nearest(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::actuator::link_bodies;
+    use crate::body::{LinkShape, link_bodies};
     use proptest::prelude::*;
     use surface::SurfaceConfig;
 
@@ -612,7 +618,7 @@ mod tests {
         q: &[Real],
         dq: Vec<Real>,
     ) -> (Vec<Real>, GuardAction) {
-        let bodies = guard_bodies(robot);
+        let bodies = link_bodies(robot);
         let config = FollowConfig::default();
         guard.check(
             robot,
@@ -636,9 +642,12 @@ mod tests {
             let qs: Vec<Real> = q.iter().zip(dq).map(|(a, d)| a + d * s).collect();
             let frames = robot.forward_kinematics(&qs).unwrap();
             for b in &bodies {
+                let LinkShape::Capsule { axis, radius } = &b.shape else {
+                    panic!("capsules only");
+                };
                 let f = frames[b.link.0];
-                let low = (f * b.axis.a).z.min((f * b.axis.b).z);
-                best = best.min(low - z - b.radius);
+                let low = (f * axis.a).z.min((f * axis.b).z);
+                best = best.min(low - z - radius);
             }
         }
         best
@@ -805,11 +814,11 @@ mod tests {
         assert!((0.02..0.03).contains(&start), "{start}");
         let frames = ur5.forward_kinematics(&q).unwrap();
         let guard = Guard::new(&FollowConfig::default());
-        let bodies = guard_bodies(&ur5);
+        let bodies = link_bodies(&ur5);
         let mut meshes = 0;
         for b in &bodies {
             // `ee_link`'s 1 cm box is a capsule.
-            let probe::Shape::Mesh(m) = &b.shape else {
+            let LinkShape::Mesh(m) = &b.shape else {
                 continue;
             };
             meshes += 1;
