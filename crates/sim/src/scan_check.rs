@@ -122,8 +122,9 @@ impl ScanIndex {
 /// Smallest distance from the robot's link capsules (links ≥ 1; the base is
 /// mounted on the scene) to the scan, at the given link frames
 /// (`base_from_link`, from forward kinematics); `None` when no such link has a
-/// capsule (mesh-shaped links are not measured, as in
-/// [`plan::contact::min_clearance`]).
+/// capsule (mesh-shaped links are not measured here, unlike in
+/// [`plan::contact::min_clearance`], which measures them against a scene's
+/// triangles).
 pub fn scan_clearance(
     robot: &Robot,
     base_from_link: &[Isometry3],
