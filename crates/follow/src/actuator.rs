@@ -11,7 +11,7 @@ use nalgebra::{DMatrix, DVector, Matrix6xX};
 use robot::{JointKind, LinkId, Robot};
 use surface::SurfaceModel;
 
-pub use crate::body::{LinkBody, LinkShape, link_bodies};
+pub use crate::body::{LinkBody, LinkMesh, LinkShape, link_bodies};
 
 /// The part of segment `s` farther than `radius` from `c`: up to two pieces.
 pub fn outside_ball(s: &Segment3, c: &Point3, radius: Real) -> Vec<Segment3> {

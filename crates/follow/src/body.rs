@@ -32,7 +32,68 @@ pub enum LinkShape {
     },
     /// A collision mesh (a URDF link's): distances are measured from its
     /// triangles.
-    Mesh(Arc<TriMesh>),
+    Mesh(Arc<LinkMesh>),
+}
+
+/// A collision mesh in its link's frame, with each triangle's box: the
+/// distance queries run in the link frame (the query is moved, not the
+/// mesh), so placing a link costs nothing.
+#[derive(Clone, Debug)]
+pub struct LinkMesh {
+    mesh: Arc<TriMesh>,
+    tris: Vec<Triangle>,
+    boxes: Vec<Aabb>,
+    bounds: Aabb,
+    /// The centre of `bounds`, and the farthest vertex from it.
+    centre: Point3,
+    reach: Real,
+}
+
+impl PartialEq for LinkMesh {
+    fn eq(&self, other: &Self) -> bool {
+        self.mesh == other.mesh
+    }
+}
+
+impl LinkMesh {
+    /// The triangles of `mesh` and their boxes.
+    pub fn new(mesh: Arc<TriMesh>) -> Self {
+        let tris: Vec<Triangle> = mesh
+            .triangles
+            .iter()
+            .map(|t| {
+                Triangle::new(
+                    mesh.vertices[t[0] as usize],
+                    mesh.vertices[t[1] as usize],
+                    mesh.vertices[t[2] as usize],
+                )
+            })
+            .collect();
+        let boxes: Vec<Aabb> = tris
+            .iter()
+            .map(|t| Aabb::from_points([&t.a, &t.b, &t.c]))
+            .collect();
+        let bounds = boxes.iter().fold(Aabb::empty(), |a, b| a.merged(b));
+        let centre = bounds.center();
+        let reach = mesh
+            .vertices
+            .iter()
+            .map(|v| (v - centre).norm())
+            .fold(0.0, Real::max);
+        Self {
+            mesh,
+            tris,
+            boxes,
+            bounds,
+            centre,
+            reach,
+        }
+    }
+
+    /// The mesh, link frame.
+    pub fn mesh(&self) -> &TriMesh {
+        &self.mesh
+    }
 }
 
 /// One collision shape of one moving link (several per link are treated as
@@ -62,7 +123,7 @@ pub fn link_bodies(robot: &Robot) -> Vec<LinkBody> {
                     axis: c.segment,
                     radius: c.radius,
                 },
-                CollisionShape::Mesh(m) => LinkShape::Mesh(Arc::clone(m)),
+                CollisionShape::Mesh(m) => LinkShape::Mesh(Arc::new(LinkMesh::new(Arc::clone(m)))),
             };
             out.push(LinkBody {
                 link: LinkId(i),
@@ -78,11 +139,12 @@ pub fn link_bodies(robot: &Robot) -> Vec<LinkBody> {
 pub(crate) enum Placed {
     /// A capsule's axis and radius.
     Capsule { axis: Segment3, radius: Real },
-    /// A mesh's triangles, each with its box, and the box of them all.
+    /// A mesh at `pose` (world from link), with the triangles left out of
+    /// queries (`false`), if any.
     Mesh {
-        tris: Vec<Triangle>,
-        boxes: Vec<Aabb>,
-        bounds: Aabb,
+        mesh: Arc<LinkMesh>,
+        pose: Isometry3,
+        keep: Option<Vec<bool>>,
     },
 }
 
@@ -153,15 +215,35 @@ impl Region<'_> {
 /// than `limit`: `(distance, on a triangle, on the region)`, or `limit`
 /// (with meaningless points) when nothing is closer.
 fn triangles_to_region(
-    tris: &[Triangle],
-    boxes: &[Aabb],
+    mesh: &LinkMesh,
+    keep: Option<&[bool]>,
     region: &Region<'_>,
     limit: Real,
 ) -> (Real, Point3, Point3) {
     let origin = Point3::origin();
     let mut best = (limit, origin, origin);
-    for (t, b) in tris.iter().zip(boxes) {
-        if box_distance(b, &region.bounds) >= best.0 {
+    // A triangle is looked at when its box is within `best` of the
+    // region's and its vertices are not all `best` or more to one side of
+    // the region's plane (the region's box is loose in a link frame turned
+    // against the region).
+    let plane_gap = |t: &Triangle| {
+        let h = [t.a, t.b, t.c].map(|v| region.plane.signed_distance(&v));
+        if h.iter().all(|x| *x > 0.0) {
+            h[0].min(h[1]).min(h[2])
+        } else if h.iter().all(|x| *x < 0.0) {
+            -(h[0].max(h[1]).max(h[2]))
+        } else {
+            0.0
+        }
+    };
+    let near = |k: usize, t: &Triangle, b: &Aabb, best: Real| {
+        keep.is_none_or(|m| m[k]) && box_distance(b, &region.bounds) < best && plane_gap(t) < best
+    };
+    // The cheap cases first (a triangle edge through the region, a vertex
+    // over it), so that the edge-to-triangle tests below run only on the
+    // triangles still within the distance they found.
+    for (k, (t, b)) in mesh.tris.iter().zip(&mesh.boxes).enumerate() {
+        if !near(k, t, b, best.0) {
             continue;
         }
         let p = [t.a, t.b, t.c];
@@ -181,6 +263,11 @@ fn triangles_to_region(
                     best = (h[i].abs(), p[i], q);
                 }
             }
+        }
+    }
+    for (k, (t, b)) in mesh.tris.iter().zip(&mesh.boxes).enumerate() {
+        if !near(k, t, b, best.0) {
+            continue;
         }
         for (e, eb) in &region.edges {
             if box_distance(b, eb) >= best.0 {
@@ -203,31 +290,11 @@ impl Placed {
                 axis: Segment3::new(world_from_link * axis.a, world_from_link * axis.b),
                 radius: *radius,
             },
-            LinkShape::Mesh(mesh) => {
-                let world: Vec<Point3> =
-                    mesh.vertices.iter().map(|v| world_from_link * v).collect();
-                let tris: Vec<Triangle> = mesh
-                    .triangles
-                    .iter()
-                    .map(|t| {
-                        Triangle::new(
-                            world[t[0] as usize],
-                            world[t[1] as usize],
-                            world[t[2] as usize],
-                        )
-                    })
-                    .collect();
-                let boxes: Vec<Aabb> = tris
-                    .iter()
-                    .map(|t| Aabb::from_points([&t.a, &t.b, &t.c]))
-                    .collect();
-                let bounds = boxes.iter().fold(Aabb::empty(), |a, b| a.merged(b));
-                Self::Mesh {
-                    tris,
-                    boxes,
-                    bounds,
-                }
-            }
+            LinkShape::Mesh(mesh) => Self::Mesh {
+                mesh: Arc::clone(mesh),
+                pose: *world_from_link,
+                keep: None,
+            },
         }
     }
 
@@ -235,22 +302,14 @@ impl Placed {
     /// (the control point's own zone on the tool link, P§3.3); a capsule is
     /// left as it is.
     pub(crate) fn drop_triangles_within(&mut self, c: &Point3, radius: Real) {
-        if let Self::Mesh {
-            tris,
-            boxes,
-            bounds,
-        } = self
-        {
-            let outside = |t: &Triangle| [t.a, t.b, t.c].iter().any(|v| (v - c).norm() >= radius);
-            let (kept, kept_boxes): (Vec<Triangle>, Vec<Aabb>) = tris
-                .iter()
-                .zip(boxes.iter())
-                .filter(|(t, _)| outside(t))
-                .map(|(t, b)| (*t, *b))
-                .unzip();
-            *bounds = kept_boxes.iter().fold(Aabb::empty(), |a, b| a.merged(b));
-            *tris = kept;
-            *boxes = kept_boxes;
+        if let Self::Mesh { mesh, pose, keep } = self {
+            let local = pose.inverse_transform_point(c);
+            *keep = Some(
+                mesh.tris
+                    .iter()
+                    .map(|t| [t.a, t.b, t.c].iter().any(|v| (v - local).norm() >= radius))
+                    .collect(),
+            );
         }
     }
 
@@ -270,29 +329,33 @@ impl Placed {
                 Point3::from((axis.a.coords + axis.b.coords) * 0.5),
                 axis.length() * 0.5,
             ),
-            Self::Mesh { bounds, .. } => (bounds.center(), bounds.extents().norm() * 0.5),
+            Self::Mesh { mesh, pose, .. } => (pose * mesh.centre, mesh.reach),
         }
     }
 
     /// The most any point of the shape moved from `self` to `other` (the
-    /// same shape at another pose): a rigid motion moves the points of a
-    /// convex set at most as far as its farthest-moving vertex.
+    /// same shape at another pose), or more: a point's travel under a rigid
+    /// motion is convex in the point, so over a segment it is greatest at an
+    /// end, and over a mesh at most its greatest at a corner of the mesh's
+    /// box (link frame).
     pub(crate) fn travel_to(&self, other: &Self) -> Real {
         match (self, other) {
             (Self::Capsule { axis: a, .. }, Self::Capsule { axis: b, .. }) => {
                 (b.a - a.a).norm().max((b.b - a.b).norm())
             }
-            (Self::Mesh { tris: a, .. }, Self::Mesh { tris: b, .. }) => a
-                .iter()
-                .zip(b)
-                .map(|(s, t)| {
-                    (t.a - s.a)
-                        .norm_squared()
-                        .max((t.b - s.b).norm_squared())
-                        .max((t.c - s.c).norm_squared())
-                })
-                .fold(0.0, Real::max)
-                .sqrt(),
+            (Self::Mesh { mesh, pose: a, .. }, Self::Mesh { pose: b, .. }) => {
+                let (lo, hi) = (mesh.bounds.min, mesh.bounds.max);
+                (0..8)
+                    .map(|k| {
+                        let c = Point3::new(
+                            if k & 1 == 0 { lo.x } else { hi.x },
+                            if k & 2 == 0 { lo.y } else { hi.y },
+                            if k & 4 == 0 { lo.z } else { hi.z },
+                        );
+                        (b * c - a * c).norm()
+                    })
+                    .fold(0.0, Real::max)
+            }
             _ => Real::INFINITY,
         }
     }
@@ -301,7 +364,10 @@ impl Placed {
     pub(crate) fn lower_bound_to_point(&self, p: &Point3) -> Real {
         match self {
             Self::Capsule { axis, .. } => axis.distance_to_point(p),
-            Self::Mesh { bounds, .. } => bounds.distance_squared_to_point(p).sqrt(),
+            Self::Mesh { mesh, pose, .. } => mesh
+                .bounds
+                .distance_squared_to_point(&pose.inverse_transform_point(p))
+                .sqrt(),
         }
     }
 
@@ -314,26 +380,25 @@ impl Placed {
                 let c = axis.closest_point(p);
                 ((c - p).norm(), c)
             }
-            Self::Mesh {
-                tris,
-                boxes,
-                bounds,
-            } => {
-                let mut best = (limit, *p);
-                if bounds.distance_squared_to_point(p) >= limit * limit {
-                    return best;
+            Self::Mesh { mesh, pose, keep } => {
+                let local = pose.inverse_transform_point(p);
+                if mesh.bounds.distance_squared_to_point(&local) >= limit * limit {
+                    return (limit, *p);
                 }
-                for (t, b) in tris.iter().zip(boxes) {
-                    if b.distance_squared_to_point(p) >= best.0 * best.0 {
+                let mut best = (limit, local);
+                for (k, (t, b)) in mesh.tris.iter().zip(&mesh.boxes).enumerate() {
+                    if keep.as_ref().is_some_and(|m| !m[k])
+                        || b.distance_squared_to_point(&local) >= best.0 * best.0
+                    {
                         continue;
                     }
-                    let c = t.closest_point(p);
-                    let d = (c - p).norm();
+                    let c = t.closest_point(&local);
+                    let d = (c - local).norm();
                     if d < best.0 {
                         best = (d, c);
                     }
                 }
-                best
+                (best.0, pose * best.1)
             }
         }
     }
@@ -343,20 +408,28 @@ impl Placed {
     pub(crate) fn to_polygon(&self, g: &Polygon, limit: Real) -> (Real, Point3, Point3) {
         match self {
             Self::Capsule { axis, .. } => closest_segment_polygon(axis, g),
-            Self::Mesh {
-                tris,
-                boxes,
-                bounds,
-            } => {
-                let vertices: Vec<Point3> = g.vertices().collect();
-                if box_distance(bounds, &Aabb::from_points(&vertices).loosened(1e-3)) >= limit {
+            Self::Mesh { mesh, pose, keep } => {
+                let local: Vec<Point3> = g
+                    .vertices()
+                    .map(|v| pose.inverse_transform_point(&v))
+                    .collect();
+                if box_distance(&mesh.bounds, &Aabb::from_points(&local).loosened(1e-3)) >= limit {
                     return (limit, Point3::origin(), Point3::origin());
                 }
                 let frame = g.frame();
                 let pts = g.points_2d(&frame);
-                let inside = |p: &Point3| polygon2::contains_point(&pts, &frame.to_2d(p), 0.0);
-                let region = Region::new(g.plane(), &inside, &vertices);
-                triangles_to_region(tris, boxes, &region, limit)
+                let inside =
+                    |p: &Point3| polygon2::contains_point(&pts, &frame.to_2d(&(pose * p)), 0.0);
+                let plane = g.plane();
+                let Some(n) = geom::unit(pose.inverse_transform_vector(&plane.normal.into_inner()))
+                else {
+                    return (limit, Point3::origin(), Point3::origin());
+                };
+                let plane =
+                    Plane::from_point_normal(&pose.inverse_transform_point(&plane.point()), n);
+                let region = Region::new(plane, &inside, &local);
+                let (d, on_t, on_g) = triangles_to_region(mesh, keep.as_deref(), &region, limit);
+                (d, pose * on_t, pose * on_g)
             }
         }
     }
@@ -368,12 +441,15 @@ impl Placed {
     pub(crate) fn lower_bound_to_segment(&self, s: &Segment3, limit: Real) -> Real {
         match self {
             Self::Capsule { axis, .. } => closest_segment_segment(axis, s).2,
-            Self::Mesh { boxes, bounds, .. } => {
-                let sb = Aabb::new(s.a, s.b);
-                if box_distance(bounds, &sb) >= limit {
+            Self::Mesh { mesh, pose, .. } => {
+                let sb = Aabb::new(
+                    pose.inverse_transform_point(&s.a),
+                    pose.inverse_transform_point(&s.b),
+                );
+                if box_distance(&mesh.bounds, &sb) >= limit {
                     return limit;
                 }
-                boxes
+                mesh.boxes
                     .iter()
                     .map(|b| box_distance(b, &sb))
                     .fold(limit, Real::min)
@@ -391,13 +467,17 @@ impl Placed {
     ) -> (Real, Point3, Point3) {
         match self {
             Self::Capsule { axis, .. } => closest_segment_quad(axis, q, n),
-            Self::Mesh { tris, boxes, .. } => {
-                let inside = |p: &Point3| inside_quad(q, n, p);
-                let Some(unit) = geom::unit(*n) else {
+            Self::Mesh { mesh, pose, keep } => {
+                let local = q.map(|v| pose.inverse_transform_point(&v));
+                let ln = pose.inverse_transform_vector(n);
+                let inside = |p: &Point3| inside_quad(&local, &ln, p);
+                let Some(unit) = geom::unit(ln) else {
                     return (limit, Point3::origin(), Point3::origin());
                 };
-                let region = Region::new(Plane::from_point_normal(&q[0], unit), &inside, q);
-                triangles_to_region(tris, boxes, &region, limit)
+                let region =
+                    Region::new(Plane::from_point_normal(&local[0], unit), &inside, &local);
+                let (d, on_t, on_q) = triangles_to_region(mesh, keep.as_deref(), &region, limit);
+                (d, pose * on_t, pose * on_q)
             }
         }
     }
@@ -499,7 +579,10 @@ mod tests {
 
     #[test]
     fn a_mesh_is_measured_to_its_faces_edges_and_corners() {
-        let placed = Placed::new(&LinkShape::Mesh(unit_cube()), &Isometry3::identity());
+        let placed = Placed::new(
+            &LinkShape::Mesh(Arc::new(LinkMesh::new(unit_cube()))),
+            &Isometry3::identity(),
+        );
         // A square 0.3 above the top face, centred: a vertex-face case
         // from the square's side, face-face in fact.
         let n = Vector3::z();
@@ -543,13 +626,15 @@ mod tests {
             cx in -1.0..2.0f64, cy in -1.0..2.0f64, cz in -1.0..2.0f64,
             nx in -1.0..1.0f64, ny in -1.0..1.0f64, nz in -1.0..1.0f64,
             half in 0.05..0.6f64,
+            rx in -3.0..3.0f64, ry in -3.0..3.0f64, rz in -3.0..3.0f64,
+            tx in -2.0..2.0f64,
         ) {
             let n = Vector3::new(nx, ny, nz);
             prop_assume!(n.norm() > 0.2);
             let n = geom::unit(n).unwrap().into_inner();
             let c = Point3::new(cx, cy, cz);
             let q = square(c, half, n);
-            let placed = Placed::new(&LinkShape::Mesh(unit_cube()), &Isometry3::identity());
+            let placed = Placed::new(&LinkShape::Mesh(Arc::new(LinkMesh::new(unit_cube()))), &Isometry3::identity());
             let (d, on_mesh, on_q) = placed.to_quad(&q, &n, 100.0);
             let k = 60;
             let mut sampled = Real::INFINITY;
@@ -567,6 +652,20 @@ mod tests {
             prop_assert!(d <= sampled + 1e-9, "{d} > sampled {sampled}");
             prop_assert!(d >= sampled - step - 1e-9, "{d} < sampled {sampled} - {step}");
             prop_assert!(((on_mesh - on_q).norm() - d).abs() < 1e-9);
+            // The same with the cube and the square moved together: the
+            // queries run in the link frame and answer in the world's.
+            let pose = Isometry3::new(Vector3::new(tx, -tx, 0.5 * tx), Vector3::new(rx, ry, rz));
+            let moved = Placed::new(&LinkShape::Mesh(Arc::new(LinkMesh::new(unit_cube()))), &pose);
+            let mq = q.map(|v| pose * v);
+            let (dm, on_mesh_m, on_q_m) = moved.to_quad(&mq, &(pose * n), 100.0);
+            prop_assert!((dm - d).abs() < 1e-9, "{dm} against {d}");
+            prop_assert!(((on_mesh_m - on_q_m).norm() - dm).abs() < 1e-9);
+            let p = Point3::new(cz, cx, cy);
+            if cube_distance(&p) > 0.0 {
+                let (dp, on_p) = moved.to_point(&(pose * p), 100.0);
+                prop_assert!((dp - cube_distance(&p)).abs() < 1e-9);
+                prop_assert!(((on_p - pose * p).norm() - dp).abs() < 1e-9);
+            }
         }
     }
 }

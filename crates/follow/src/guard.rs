@@ -824,6 +824,7 @@ mod tests {
             meshes += 1;
             let f = frames[b.link.0];
             let low = m
+                .mesh()
                 .vertices
                 .iter()
                 .map(|v| (f * v).z)

@@ -251,8 +251,8 @@ fn arm4_never_touches_the_blocks() {
 /// follower's own end without touching it, and models every face it can
 /// reach (the top and all four sides: the scenario's comment and
 /// `tests/it/ur5_cube.rs`) to ≥ 95 % within μ and λ. Since eq. 4 and the
-/// guard measure the link meshes as they are (2026-11-27): 2672 sets, every
-/// face 100 %, 19 mm from the cube; before, the guard held the arm still
+/// guard measure the link meshes as they are (2026-11-27): 2459 sets, every
+/// face 100 %, 20 mm from the cube; before, the guard held the arm still
 /// (27.2 %) and then eq. 4's capsule about the upper arm, 6 mm from the
 /// table, held it back (37.8 %).
 #[test]
