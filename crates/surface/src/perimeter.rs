@@ -163,13 +163,23 @@ impl Poly2 {
     }
 
     /// Simple (with coincidence tolerance `eps`) and anticlockwise.
+    ///
+    /// Every perimeter operation ends with this check, so its buffers are
+    /// kept per thread ([`SimpleScratch`]) instead of allocated per call.
     pub fn is_valid(&self, eps: Real) -> bool {
-        let pts = self.points();
-        if pts.len() < 3 {
+        if self.nodes.len() < 3 {
             return false;
         }
-        let area = polygon2::signed_area(&pts);
-        area > 0.0 && simple_with_area(&pts, eps, area)
+        // `area` adds the terms of `polygon2::signed_area` in its order.
+        let area = self.area();
+        area > 0.0
+            && SIMPLE_SCRATCH.with(|cell| {
+                let mut scratch = cell.borrow_mut();
+                let SimpleScratch { pts, boxes, order } = &mut *scratch;
+                pts.clear();
+                pts.extend(self.nodes.iter().map(|n| n.p));
+                simple_with_area(pts, eps, area, boxes, order)
+            })
     }
 
     /// The point at `pp`.
@@ -567,26 +577,54 @@ impl SightGrid {
 /// test of `geom` on the two-edge sub-problem.
 #[cfg(test)]
 pub(crate) fn is_simple_fast(poly: &[Point2], tol: Real) -> bool {
-    poly.len() >= 3 && simple_with_area(poly, tol, polygon2::signed_area(poly))
+    let mut scratch = SimpleScratch::default();
+    poly.len() >= 3
+        && simple_with_area(
+            poly,
+            tol,
+            polygon2::signed_area(poly),
+            &mut scratch.boxes,
+            &mut scratch.order,
+        )
 }
 
-/// [`is_simple_fast`] given the polygon's signed area (`n ≥ 3`).
-fn simple_with_area(poly: &[Point2], tol: Real, area: Real) -> bool {
+/// The buffers of [`Poly2::is_valid`]: the perimeter's points, the edges'
+/// boxes and the sweep order of [`simple_with_area`].
+#[derive(Default)]
+struct SimpleScratch {
+    pts: Vec<Point2>,
+    boxes: Vec<(Real, Real, Real, Real)>,
+    order: Vec<(i64, u32)>,
+}
+
+thread_local! {
+    static SIMPLE_SCRATCH: std::cell::RefCell<SimpleScratch> =
+        std::cell::RefCell::new(SimpleScratch::default());
+}
+
+/// [`is_simple_fast`] given the polygon's signed area (`n ≥ 3`), with
+/// `boxes` and `order` as buffers (any content).
+fn simple_with_area(
+    poly: &[Point2],
+    tol: Real,
+    area: Real,
+    boxes: &mut Vec<(Real, Real, Real, Real)>,
+    order: &mut Vec<(i64, u32)>,
+) -> bool {
     let n = poly.len();
     if n < 3 || area.abs() <= tol * tol {
         return false;
     }
-    let boxes: Vec<(Real, Real, Real, Real)> = (0..n)
-        .map(|i| {
-            let (a, b) = (poly[i], poly[(i + 1) % n]);
-            (
-                a.x.min(b.x) - tol,
-                a.x.max(b.x) + tol,
-                a.y.min(b.y) - tol,
-                a.y.max(b.y) + tol,
-            )
-        })
-        .collect();
+    boxes.clear();
+    boxes.extend((0..n).map(|i| {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        (
+            a.x.min(b.x) - tol,
+            a.x.max(b.x) + tol,
+            a.y.min(b.y) - tol,
+            a.y.max(b.y) + tol,
+        )
+    }));
     if (0..n).any(|i| (poly[(i + 1) % n] - poly[i]).norm() <= tol) {
         return false;
     }
@@ -594,16 +632,14 @@ fn simple_with_area(poly: &[Point2], tol: Real, area: Real) -> bool {
     // meets only the following ones whose boxes start before its box ends.
     // Keys in the order of `f64::total_cmp` (its own bit transform), so the
     // order is the same as sorting by `total_cmp` then index, on plain integers.
-    let mut order: Vec<(i64, u32)> = boxes
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            let mut key = b.0.to_bits() as i64;
-            key ^= (((key >> 63) as u64) >> 1) as i64;
-            (key, i as u32)
-        })
-        .collect();
+    order.clear();
+    order.extend(boxes.iter().enumerate().map(|(i, b)| {
+        let mut key = b.0.to_bits() as i64;
+        key ^= (((key >> 63) as u64) >> 1) as i64;
+        (key, i as u32)
+    }));
     order.sort_unstable();
+    let boxes = &boxes[..];
     for (k, &(_, u)) in order.iter().enumerate() {
         let u = u as usize;
         let bu = boxes[u];
