@@ -417,6 +417,34 @@ impl Collapser {
     }
 }
 
+/// The fissures found at one window, in the order they are tried: at most
+/// one of each type.
+struct Candidates {
+    items: [(FissureType, PerimPoint, PerimPoint); 6],
+    len: usize,
+}
+
+impl Default for Candidates {
+    fn default() -> Self {
+        let none = (FissureType::I, PerimPoint::vertex(0), PerimPoint::vertex(0));
+        Self {
+            items: [none; 6],
+            len: 0,
+        }
+    }
+}
+
+impl Candidates {
+    fn push(&mut self, item: (FissureType, PerimPoint, PerimPoint)) {
+        self.items[self.len] = item;
+        self.len += 1;
+    }
+
+    fn as_slice(&self) -> &[(FissureType, PerimPoint, PerimPoint)] {
+        &self.items[..self.len]
+    }
+}
+
 /// Try the fissure types at the window starting at vertex `i`; the filled
 /// perimeter is left in `next`.
 fn fill_window(
@@ -438,7 +466,9 @@ fn fill_window(
     let d12 = v2 - v1;
     let d23 = v3 - v2;
     let d34 = v4 - v3;
-    let mut candidates: Vec<(FissureType, PerimPoint, PerimPoint)> = Vec::new();
+    // At most one candidate per type, kept on the stack: this runs for every
+    // window of every cascade, the collapse tests of `close_pockets` included.
+    let mut candidates = Candidates::default();
     if n >= 4 && three_free && (v3 - v2).norm() < lambda {
         // IV
         if n >= min_left + 2
@@ -514,7 +544,7 @@ fn fill_window(
         }
     }
     let mut area: Option<Real> = None;
-    for (kind, from, to) in candidates {
+    for &(kind, from, to) in candidates.as_slice() {
         let removes = match kind {
             FissureType::IV => 2,
             FissureType::I | FissureType::V | FissureType::VI => 1,
