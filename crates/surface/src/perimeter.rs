@@ -345,11 +345,11 @@ impl Poly2 {
         if i == j && s < u {
             count = n;
         }
-        let mut k = j;
-        for _ in 0..count {
-            k = (k + 1) % n;
-            out.push(self.nodes[k]);
-        }
+        // Nodes j + 1 ..= j + count (modulo n), copied as at most two runs.
+        let first = (j + 1).min(n);
+        let head = count.min(n - first);
+        out.extend_from_slice(&self.nodes[first..first + head]);
+        out.extend_from_slice(&self.nodes[..count - head]);
         // The vertex at `from`.
         if s == 0.0 {
             // Vertex i is the `from` vertex (it is the last pushed, or `to` itself
