@@ -147,13 +147,16 @@ fn cascade(
     let mut fills = 0usize;
     let mut i = 0usize;
     let mut without_fill = 0usize;
+    // The area of `poly` once computed, kept from window to window (and taken
+    // over from a filled perimeter that had its area computed).
+    let mut area: Option<Real> = None;
     while fills < cap {
         let n = poly.len();
         if n < 3 || without_fill >= n {
             break;
         }
         let at = i % n;
-        if let Some(kind) = fill_window(poly, at, mode, lambda, eps, fresh, next) {
+        if let Some(kind) = fill_window(poly, at, mode, lambda, eps, fresh, next, &mut area) {
             std::mem::swap(poly, next);
             fills += 1;
             on_fill(kind);
@@ -446,7 +449,12 @@ impl Candidates {
 }
 
 /// Try the fissure types at the window starting at vertex `i`; the filled
-/// perimeter is left in `next`.
+/// perimeter is left in `next`. `area` is `poly`'s area when known (it is
+/// filled in when computed here); after a fill it is `next`'s, when known.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the cascade's state, passed down to the one function it calls per window"
+)]
 fn fill_window(
     poly: &Poly2,
     i: usize,
@@ -455,14 +463,29 @@ fn fill_window(
     eps: Real,
     fresh: &mut dyn FnMut() -> EdgeKey,
     next: &mut Poly2,
+    area: &mut Option<Real>,
 ) -> Option<FissureType> {
     let n = poly.len();
+    if n == 0 {
+        return None;
+    }
     let restricted = mode == FissureMode::Restricted;
     let min_left = if restricted { 3 } else { 0 };
-    let (v1, v2, v3, v4) = (poly.pt(i), poly.pt(i + 1), poly.pt(i + 2), poly.pt(i + 3));
+    // The window's node indices (as `pt` and `is_shared` reduce them), with
+    // one division instead of one per access.
+    let following = |k: usize| if k + 1 == n { 0 } else { k + 1 };
+    let i0 = i % n;
+    let (i1, i2, i3) = (
+        following(i0),
+        following(following(i0)),
+        following(following(following(i0))),
+    );
+    let ns = &poly.nodes;
+    let (v1, v2, v3, v4) = (ns[i0].p, ns[i1].p, ns[i2].p, ns[i3].p);
     let plain = |poly_edges_ok: bool| poly_edges_ok || !restricted;
-    let two_free = plain(!poly.is_shared(i) && !poly.is_shared(i + 1));
-    let three_free = two_free && plain(!poly.is_shared(i + 2));
+    let shared = |k: usize| ns[k].edge.share.is_some();
+    let two_free = plain(!shared(i0) && !shared(i1));
+    let three_free = two_free && plain(!shared(i2));
     let d12 = v2 - v1;
     let d23 = v3 - v2;
     let d34 = v4 - v3;
@@ -483,8 +506,8 @@ fn fill_window(
         }
         if n > min_left {
             // V: type II on v1 v3 v4.
-            if distance_point_segment(&v1, &v3, &v4) < lambda
-                && turns_right_sharply(&(v3 - v1), &d34)
+            if turns_right_sharply(&(v3 - v1), &d34)
+                && distance_point_segment(&v1, &v3, &v4) < lambda
             {
                 let t = param_on_segment(&v1, &v3, &v4);
                 candidates.push((
@@ -497,8 +520,8 @@ fn fill_window(
                 ));
             }
             // VI: type III on v1 v2 v4.
-            if distance_point_segment(&v4, &v1, &v2) < lambda
-                && turns_right_sharply(&d12, &(v4 - v2))
+            if turns_right_sharply(&d12, &(v4 - v2))
+                && distance_point_segment(&v4, &v1, &v2) < lambda
             {
                 let t = param_on_segment(&v4, &v1, &v2);
                 candidates.push((
@@ -509,12 +532,11 @@ fn fill_window(
             }
         }
     }
-    // Cheap distance tests before the turn (an atan2), which most windows never need.
-    let near13 = (v3 - v1).norm() < lambda;
-    let near_12 = |p: &Point2| distance_point_segment(p, &v1, &v2) < lambda;
-    let near_23 = |p: &Point2| distance_point_segment(p, &v2, &v3) < lambda;
-    if two_free && ((n > min_left && near13) || near_23(&v1) || near_12(&v3)) {
-        if n > min_left && near13 && turns_right(&d12, &d23) {
+    // Types I–III need a right turn at v₂ (II and III a sharp one, which is a
+    // right turn too), decided by signs in most windows: the turns come
+    // before the distances, which most windows never need.
+    if two_free && turns_right(&d12, &d23) {
+        if n > min_left && (v3 - v1).norm() < lambda {
             candidates.push((
                 FissureType::I,
                 PerimPoint::vertex(i),
@@ -543,7 +565,6 @@ fn fill_window(
             }
         }
     }
-    let mut area: Option<Real> = None;
     for &(kind, from, to) in candidates.as_slice() {
         let removes = match kind {
             FissureType::IV => 2,
@@ -553,12 +574,13 @@ fn fill_window(
         if !restricted && n < 3 + removes {
             // The hole's perimeter collapses.
             next.nodes.clear();
+            *area = None;
             return Some(kind);
         }
         let from = poly.snap(from, eps);
         let to = poly.snap(to, eps);
         let (a, b) = (poly.point_at(from), poly.point_at(to));
-        if (b - a).norm() <= eps && restricted {
+        if restricted && (b - a).norm() <= eps {
             continue;
         }
         if restricted && !poly.sight(&a, &b, eps, |_| false) {
@@ -577,20 +599,29 @@ fn fill_window(
         if next.len() >= n && !matches!(kind, FissureType::II | FissureType::III) {
             continue;
         }
-        if restricted {
+        let next_area = if restricted {
             // Cheapest first: the area before the simplicity check.
-            if next.len() < 3 || next.area() <= *area.get_or_insert_with(|| poly.area()) {
+            if next.len() < 3 {
+                continue;
+            }
+            let next_area = next.area();
+            if next_area <= *area.get_or_insert_with(|| poly.area()) {
                 continue;
             }
             if !next.is_valid(eps) {
                 continue;
             }
-        } else if next.len() >= 3
-            && next.len() >= n
-            && next.area().abs() >= area.get_or_insert_with(|| poly.area()).abs()
-        {
-            continue;
-        }
+            Some(next_area)
+        } else if next.len() >= 3 && next.len() >= n {
+            let next_area = next.area();
+            if next_area.abs() >= area.get_or_insert_with(|| poly.area()).abs() {
+                continue;
+            }
+            Some(next_area)
+        } else {
+            None
+        };
+        *area = next_area;
         return Some(kind);
     }
     None
