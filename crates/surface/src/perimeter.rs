@@ -237,13 +237,13 @@ impl Poly2 {
     }
 
     /// Edges whose index is in the anticlockwise section `from ..= to` of edge
-    /// indices (inclusive, cyclic).
-    pub fn edge_range(&self, from: usize, to: usize) -> Vec<usize> {
+    /// indices (inclusive, cyclic), into `out` (cleared first).
+    fn edge_range_into(&self, from: usize, to: usize, out: &mut Vec<usize>) {
+        out.clear();
         let n = self.len();
         if n == 0 {
-            return Vec::new();
+            return;
         }
-        let mut out = Vec::new();
         let mut i = from % n;
         for _ in 0..n {
             out.push(i);
@@ -252,16 +252,24 @@ impl Poly2 {
             }
             i = self.next(i);
         }
-        out
     }
 
     /// Indices of the edges touched by the open section from `a` to `b`
     /// (anticlockwise): the edges of which a part of positive length lies strictly
     /// between them.
     pub fn section_edges(&self, a: PerimPoint, b: PerimPoint) -> Vec<usize> {
+        let mut out = Vec::new();
+        self.section_edges_into(a, b, &mut out);
+        out
+    }
+
+    /// [`Poly2::section_edges`] into `out` (cleared first), for callers that
+    /// test many sections.
+    pub fn section_edges_into(&self, a: PerimPoint, b: PerimPoint, out: &mut Vec<usize>) {
+        out.clear();
         let n = self.len();
         if n == 0 {
-            return Vec::new();
+            return;
         }
         let last = if b.t == 0.0 {
             self.prev(b.edge)
@@ -269,9 +277,10 @@ impl Poly2 {
             b.edge % n
         };
         if a.edge == b.edge && b.t > a.t {
-            return vec![a.edge % n];
+            out.push(a.edge % n);
+            return;
         }
-        self.edge_range(a.edge, last)
+        self.edge_range_into(a.edge, last, out);
     }
 
     /// `true` when the segment `a b` crosses none of the perimeter's edges,

@@ -203,6 +203,8 @@ fn starts_at(view: &View, t_start: Real, lambda: Real, eps: Real) -> Vec<PerimPo
 /// Sections of `view.poly` starting at `starts` (those of [`starts_at`] for
 /// `t_start`) and ending where `t = t_end`, lying within λ of the line and
 /// projecting into the range.
+/// Written into `out` (cleared first): the search computes them for every
+/// candidate, and reuses two lists.
 fn sections(
     view: &View,
     starts: &[PerimPoint],
@@ -210,7 +212,9 @@ fn sections(
     t_end: Real,
     lambda: Real,
     eps: Real,
-) -> Vec<Section> {
+    out: &mut Vec<Section>,
+) {
+    out.clear();
     let poly = &view.poly;
     let n = poly.len();
     let lo = t_start.min(t_end) - eps;
@@ -218,7 +222,6 @@ fn sections(
     // `t` and `h` of each point are computed once (vertices: from the view's
     // table, which holds the same values).
     let (vt, vh) = view.vertex_th();
-    let mut out = Vec::new();
     for &start in starts {
         let (mut e, mut u0) = (start.edge, start.t);
         for step in 0..=n {
@@ -278,7 +281,6 @@ fn sections(
         }
     }
     out.sort_by(|x, y| y.length.total_cmp(&x.length));
-    out
 }
 
 /// The union of the t-ranges of the parts of `view`'s edges within λ of the
@@ -322,6 +324,16 @@ fn covers(cover: &[(Real, Real)], t0: Real, t1: Real, eps: Real) -> bool {
 struct Anchor {
     t1: Real,
     t2: Real,
+}
+
+/// The buffers of [`SurfaceModel::check_and_build`], kept over one search:
+/// the edges of `P` and `Q` and their membership masks.
+#[derive(Default)]
+struct CheckScratch {
+    edges1: Vec<usize>,
+    edges2: Vec<usize>,
+    on1: Vec<bool>,
+    on2: Vec<bool>,
 }
 
 /// What one formation changes.
@@ -545,24 +557,35 @@ impl SurfaceModel {
         let mut starts1: Vec<Option<Vec<PerimPoint>>> = vec![None; anchors.len()];
         let mut starts2: Vec<Option<Vec<PerimPoint>>> = vec![None; anchors.len()];
         let mut tries = 0;
+        let mut scratch = CheckScratch::default();
+        let (mut secs1, mut secs2) = (Vec::new(), Vec::new());
         for (_, i, j) in candidates {
             let (a, b) = (anchors[i], anchors[j]);
             let from1 = starts1[i].get_or_insert_with(|| starts_at(&v1, a.t1, tol.lambda, tol.eps));
-            let secs1 = sections(&v1, from1, a.t1, b.t1, tol.lambda, tol.eps);
+            sections(&v1, from1, a.t1, b.t1, tol.lambda, tol.eps, &mut secs1);
             if secs1.is_empty() {
                 continue;
             }
             let from2 = starts2[j].get_or_insert_with(|| starts_at(&v2, b.t2, tol.lambda, tol.eps));
-            let secs2 = sections(&v2, from2, b.t2, a.t2, tol.lambda, tol.eps);
+            sections(&v2, from2, b.t2, a.t2, tol.lambda, tol.eps, &mut secs2);
             for sec1 in secs1.iter().take(4) {
                 for sec2 in secs2.iter().take(4) {
                     tries += 1;
                     if tries > MAX_PLAN_TRIES {
                         return None;
                     }
-                    if let Some(plan) =
-                        self.check_and_build(s1, s2, &v1, &v2, line, *sec1, *sec2, a, b)
-                    {
+                    if let Some(plan) = self.check_and_build(
+                        s1,
+                        s2,
+                        &v1,
+                        &v2,
+                        line,
+                        *sec1,
+                        *sec2,
+                        a,
+                        b,
+                        &mut scratch,
+                    ) {
                         return Some(plan);
                     }
                 }
@@ -583,6 +606,7 @@ impl SurfaceModel {
         sec2: Section,
         a: Anchor,
         b: Anchor,
+        scratch: &mut CheckScratch,
     ) -> Option<Plan> {
         let tol = self.tol;
         let (p1, p2) = (sec1.start, sec1.end);
@@ -591,22 +615,45 @@ impl SurfaceModel {
         if !(p1.is_vertex() || q2.is_vertex()) || !(p2.is_vertex() || q1.is_vertex()) {
             return None;
         }
+        // The rules below only reject (without side effects), so their order
+        // does not change the outcome: the progress rule, which needs P's
+        // edges only, comes before the masks and the shared-edge walk. Most
+        // sections fail one of them, so their lists live in `scratch`.
+        let CheckScratch {
+            edges1,
+            edges2,
+            on1,
+            on2,
+        } = scratch;
+        v1.poly.section_edges_into(p1, p2, edges1);
+        // Progress: the new shared edge must be longer than the S₁–S₂ shared edges
+        // it replaces by at least λ/10 (otherwise a formation could rebuild the
+        // same edge with the same connecting edges round after round).
+        let replaced: Real = edges1
+            .iter()
+            .filter(|&&e| v1.poly.is_shared(e))
+            .map(|&e| v1.poly.edge_len(e))
+            .sum();
+        if (b.t1 - a.t1).abs() < replaced + MIN_GAIN_FRACTION * tol.lambda {
+            return None;
+        }
         // Shared edges on P and Q: only with each other, whole, corresponding.
-        let edges1 = v1.poly.section_edges(p1, p2);
-        let edges2 = v2.poly.section_edges(q1, q2);
+        v2.poly.section_edges_into(q1, q2, edges2);
         // Membership of P's and Q's edges, by edge index.
-        let mask = |n: usize, edges: &[usize]| {
-            let mut m = vec![false; n];
+        let mask = |n: usize, edges: &[usize], m: &mut Vec<bool>| {
+            m.clear();
+            m.resize(n, false);
             for &e in edges {
                 m[e % n.max(1)] = true;
             }
-            m
         };
-        let (on1, on2) = (mask(v1.poly.len(), &edges1), mask(v2.poly.len(), &edges2));
+        mask(v1.poly.len(), edges1, on1);
+        mask(v2.poly.len(), edges2, on2);
+        let (edges1, edges2, on1, on2) = (&edges1[..], &edges2[..], &on1[..], &on2[..]);
         let mut plain = false;
         for (view, edges, from, to, other, other_on, other_view) in [
-            (v1, &edges1, p1, p2, s2, &on2, v2),
-            (v2, &edges2, q1, q2, s1, &on1, v1),
+            (v1, edges1, p1, p2, s2, on2, v2),
+            (v2, edges2, q1, q2, s1, on1, v1),
         ] {
             for &e in edges {
                 match view.poly.edge(e).share {
@@ -633,17 +680,6 @@ impl SurfaceModel {
             }
         }
         if !plain {
-            return None;
-        }
-        // Progress: the new shared edge must be longer than the S₁–S₂ shared edges
-        // it replaces by at least λ/10 (otherwise a formation could rebuild the
-        // same edge with the same connecting edges round after round).
-        let replaced: Real = edges1
-            .iter()
-            .filter(|&&e| v1.poly.is_shared(e))
-            .map(|&e| v1.poly.edge_len(e))
-            .sum();
-        if (b.t1 - a.t1).abs() < replaced + MIN_GAIN_FRACTION * tol.lambda {
             return None;
         }
         // Points of L in each view.
@@ -912,7 +948,8 @@ mod tests {
             for &t0 in &ts {
                 for &t1 in &ts {
                     let starts = starts_at(&view, t0, lambda, eps);
-                    let secs = sections(&view, &starts, t0, t1, lambda, eps);
+                    let mut secs = Vec::new();
+                    sections(&view, &starts, t0, t1, lambda, eps, &mut secs);
                     if covers(&cover, t0, t1, eps) {
                         found += usize::from(!secs.is_empty());
                     } else {
