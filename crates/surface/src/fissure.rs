@@ -112,6 +112,23 @@ fn turns_right_sharply(a: &Vector2, b: &Vector2) -> bool {
     turn(a, b) < -FRAC_PI_2
 }
 
+/// `turn(a, b) + turn(b, c) < -MIN_TURN` (type IV's total turn), deciding by
+/// signs where they decide it: two left turns (positive cross products, so
+/// both `atan2` values are at least zero) never sum below zero, and two right
+/// turns (both values at most zero) of which one passes [`turns_right`] sum
+/// to at most that one, which is below `-MIN_TURN` (rounding is monotone).
+/// Only mixed or zero cross products call `atan2` twice.
+fn turns_right_over_two(a: &Vector2, b: &Vector2, c: &Vector2) -> bool {
+    let (c1, c2) = (cross2(a, b), cross2(b, c));
+    if c1 > 0.0 && c2 > 0.0 {
+        return false;
+    }
+    if c1 < 0.0 && c2 < 0.0 && (turns_right(a, b) || turns_right(b, c)) {
+        return true;
+    }
+    turn(a, b) + turn(b, c) < -MIN_TURN
+}
+
 /// Fill fissures in `poly` (see the [module docs](self)); returns the types
 /// filled, in order.
 pub(crate) fn fill_fissures(
@@ -494,9 +511,7 @@ fn fill_window(
     let mut candidates = Candidates::default();
     if n >= 4 && three_free && (v3 - v2).norm() < lambda {
         // IV
-        if n >= min_left + 2
-            && (v4 - v1).norm() < lambda
-            && turn(&d12, &d23) + turn(&d23, &d34) < -MIN_TURN
+        if n >= min_left + 2 && (v4 - v1).norm() < lambda && turns_right_over_two(&d12, &d23, &d34)
         {
             candidates.push((
                 FissureType::IV,
@@ -674,6 +689,49 @@ mod tests {
                 turns_right_sharply(&a, &b),
                 turn(&a, &b) < -FRAC_PI_2,
                 "{a:?} {b:?}"
+            );
+        }
+    }
+
+    /// The sign-decided total turn of type IV gives the `atan2` sum's
+    /// answers: on random directions, on turns a hair either side of zero
+    /// and of `-MIN_TURN` (alone and split over the two vertices), and on
+    /// zero vectors.
+    #[test]
+    fn total_turn_agrees_with_atan2() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let rotate = |v: &Vector2, angle: Real, len: Real| {
+            let (s, c) = angle.sin_cos();
+            Vector2::new(c * v.x - s * v.y, s * v.x + c * v.y) * len
+        };
+        let mut cases: Vec<(Vector2, Vector2, Vector2)> = Vec::new();
+        let zero = Vector2::zeros();
+        let unit = Vector2::new(1.0, 0.0);
+        cases.push((zero, unit, unit));
+        cases.push((unit, zero, unit));
+        cases.push((unit, unit, zero));
+        cases.push((unit, -unit, unit));
+        for _ in 0..200_000 {
+            let a = Vector2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+            let mut angle = || -> Real {
+                match rng.random_range(0..4) {
+                    0 => rng.random_range(-3.2..3.2),
+                    1 => rng.random_range(-1e-8..1e-8) * rng.random_range(0.0..1.0f64).powi(8),
+                    2 => -MIN_TURN * rng.random_range(0.0..2.0),
+                    _ => -0.5 * MIN_TURN * rng.random_range(0.9..1.1),
+                }
+            };
+            let (t1, t2) = (angle(), angle());
+            let b = rotate(&a, t1, rng.random_range(1e-6..10.0));
+            let c = rotate(&b, t2, rng.random_range(1e-6..10.0));
+            cases.push((a, b, c));
+        }
+        for (a, b, c) in cases {
+            assert_eq!(
+                turns_right_over_two(&a, &b, &c),
+                turn(&a, &b) + turn(&b, &c) < -MIN_TURN,
+                "{a:?} {b:?} {c:?}"
             );
         }
     }
