@@ -3,7 +3,7 @@
 //! P§3.4.5) and the closest points between a link and the model (the `lᵢ`, `sᵢ`
 //! of eq. 4).
 
-use geom::line::{Segment3, closest_segment_segment};
+use geom::line::{Segment3, closest_segment_segment, segments_apart};
 use geom::{Point3, Real, polygon2};
 use surface::{EdgeKey, Polygon, SegmentId, SegmentKind, SurfaceModel};
 
@@ -142,6 +142,10 @@ pub fn closest_segment_polygon(s: &Segment3, poly: &Polygon) -> (Real, Point3, P
     for i in 0..poly.len() {
         if let Some((a, b)) = poly.edge_points(i) {
             let edge = Segment3::new(a, b);
+            // An edge whose box is farther off than the best cannot beat it.
+            if segments_apart(s, &edge, best.0) {
+                continue;
+            }
             let (ts, te, d) = closest_segment_segment(s, &edge);
             if d < best.0 {
                 best = (d, s.point_at(ts), edge.point_at(te));

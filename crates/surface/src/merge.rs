@@ -700,6 +700,10 @@ pub(crate) fn polygon_distance(a: &Polygon, b: &Polygon) -> Real {
         let sa = geom::Segment3::new(a.nodes[i].position, a.nodes[(i + 1) % na].position);
         for j in 0..nb {
             let sb = geom::Segment3::new(b.nodes[j].position, b.nodes[(j + 1) % nb].position);
+            // A pair whose boxes are farther apart than the best cannot lower it.
+            if geom::line::segments_apart(&sa, &sb, best) {
+                continue;
+            }
             best = best.min(geom::line::distance_segment_segment(&sa, &sb));
         }
     }
