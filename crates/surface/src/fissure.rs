@@ -112,6 +112,34 @@ fn turns_right_sharply(a: &Vector2, b: &Vector2) -> bool {
     turn(a, b) < -FRAC_PI_2
 }
 
+/// The threshold `t` for which `x.sqrt() < lambda` exactly when `x < t`
+/// (for every `x ≥ 0`, and NaN: a squared length): the smallest float whose rounded root
+/// reaches `lambda`. The rounded square root is monotone, so comparing
+/// squared lengths with it gives the answers of comparing the lengths
+/// (`Vector2::norm` is the root of `norm_squared`) without taking a root.
+fn sqrt_below(lambda: Real) -> Real {
+    // Comparisons with a NaN λ are all false, as with a NaN threshold; no root
+    // is below a non-positive λ; every finite one is below +∞.
+    if lambda.is_nan() {
+        return Real::NAN;
+    }
+    if lambda <= 0.0 {
+        return Real::NEG_INFINITY;
+    }
+    if lambda == Real::INFINITY {
+        return Real::INFINITY;
+    }
+    // λ² rounded is within an ulp or two of the threshold.
+    let mut t = lambda * lambda;
+    while t.sqrt() >= lambda {
+        t = t.next_down();
+    }
+    while t.sqrt() < lambda {
+        t = t.next_up();
+    }
+    t
+}
+
 /// `turn(a, b) + turn(b, c) < -MIN_TURN` (type IV's total turn), deciding by
 /// signs where they decide it: two left turns (positive cross products, so
 /// both `atan2` values are at least zero) never sum below zero, and two right
@@ -167,13 +195,23 @@ fn cascade(
     // The area of `poly` once computed, kept from window to window (and taken
     // over from a filled perimeter that had its area computed).
     let mut area: Option<Real> = None;
+    let below_lambda_sq = sqrt_below(lambda);
     while fills < cap {
         let n = poly.len();
         if n < 3 || without_fill >= n {
             break;
         }
         let at = i % n;
-        if let Some(kind) = fill_window(poly, at, mode, lambda, eps, fresh, next, &mut area) {
+        if let Some(kind) = fill_window(
+            poly,
+            at,
+            mode,
+            (lambda, below_lambda_sq),
+            eps,
+            fresh,
+            next,
+            &mut area,
+        ) {
             std::mem::swap(poly, next);
             fills += 1;
             on_fill(kind);
@@ -321,6 +359,8 @@ pub(crate) fn close_pockets(
     let mut free: Vec<usize> = Vec::new();
     let mut pocket: Vec<Point2> = Vec::new();
     let mut collapser = Collapser::default();
+    // `|v| >= λ` as `|v|² >= below_lambda_sq` (see `sqrt_below`).
+    let below_lambda_sq = sqrt_below(lambda);
     // Each closure removes at least three vertices.
     'outer: loop {
         let n = poly.len();
@@ -358,7 +398,7 @@ pub(crate) fn close_pockets(
             let k_max = free[i].min(n - 3);
             for k in (4..=k_max).rev() {
                 let vj = poly.pt(i + k);
-                if (vj - vi).norm() >= lambda {
+                if (vj - vi).norm_squared() >= below_lambda_sq {
                     continue;
                 }
                 let twice_area = prefix[i + k] - prefix[i] + (vj.x * vi.y - vj.y * vi.x);
@@ -466,7 +506,8 @@ impl Candidates {
 }
 
 /// Try the fissure types at the window starting at vertex `i`; the filled
-/// perimeter is left in `next`. `area` is `poly`'s area when known (it is
+/// perimeter is left in `next`. Lengths are compared with λ (`lambda`) as
+/// squares with `below_lambda_sq = sqrt_below(lambda)`. `area` is `poly`'s area when known (it is
 /// filled in when computed here); after a fill it is `next`'s, when known.
 #[allow(
     clippy::too_many_arguments,
@@ -476,7 +517,7 @@ fn fill_window(
     poly: &Poly2,
     i: usize,
     mode: FissureMode,
-    lambda: Real,
+    (lambda, below_lambda_sq): (Real, Real),
     eps: Real,
     fresh: &mut dyn FnMut() -> EdgeKey,
     next: &mut Poly2,
@@ -509,10 +550,11 @@ fn fill_window(
     // At most one candidate per type, kept on the stack: this runs for every
     // window of every cascade, the collapse tests of `close_pockets` included.
     let mut candidates = Candidates::default();
-    if n >= 4 && three_free && (v3 - v2).norm() < lambda {
+    // `|v| < λ` as `|v|² < below_lambda_sq` (see `sqrt_below`), without a root.
+    let short = |v: Vector2| v.norm_squared() < below_lambda_sq;
+    if n >= 4 && three_free && short(v3 - v2) {
         // IV
-        if n >= min_left + 2 && (v4 - v1).norm() < lambda && turns_right_over_two(&d12, &d23, &d34)
-        {
+        if n >= min_left + 2 && short(v4 - v1) && turns_right_over_two(&d12, &d23, &d34) {
             candidates.push((
                 FissureType::IV,
                 PerimPoint::vertex(i),
@@ -551,7 +593,7 @@ fn fill_window(
     // right turn too), decided by signs in most windows: the turns come
     // before the distances, which most windows never need.
     if two_free && turns_right(&d12, &d23) {
-        if n > min_left && (v3 - v1).norm() < lambda {
+        if n > min_left && short(v3 - v1) {
             candidates.push((
                 FissureType::I,
                 PerimPoint::vertex(i),
@@ -733,6 +775,39 @@ mod tests {
                 turn(&a, &b) + turn(&b, &c) < -MIN_TURN,
                 "{a:?} {b:?} {c:?}"
             );
+        }
+    }
+
+    /// `sqrt_below` splits the floats exactly where the rounded root
+    /// crosses λ: at and around the threshold, and for random squares.
+    #[test]
+    fn sqrt_below_is_the_root_threshold() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut lambdas = vec![0.05, 1.0, 1e-6, 0.3, 7.0, Real::MIN_POSITIVE, 1e300];
+        lambdas.extend((0..200).map(|_| rng.random_range(1e-4..10.0)));
+        for lambda in lambdas {
+            let t = sqrt_below(lambda);
+            let mut xs = vec![t, t.next_down(), t.next_up(), lambda * lambda, 0.0, -0.0];
+            let mut x = t;
+            for _ in 0..8 {
+                x = x.next_down();
+                xs.push(x);
+            }
+            xs.extend((0..200).map(|_| (lambda * rng.random_range(0.0..2.0)).powi(2)));
+            xs.extend([Real::NAN, Real::INFINITY]);
+            // Squared lengths: never below zero.
+            for x in xs.into_iter().filter(|x| x.is_nan() || *x >= 0.0) {
+                assert_eq!(x < t, x.sqrt() < lambda, "λ = {lambda}, x = {x}");
+                assert_eq!(x >= t, x.sqrt() >= lambda, "λ = {lambda}, x = {x}");
+            }
+        }
+        for lambda in [0.0, -1.0, Real::NAN, Real::INFINITY] {
+            let t = sqrt_below(lambda);
+            for x in [0.0, -0.0, 1.0, 1e300, Real::INFINITY, Real::NAN] {
+                assert_eq!(x < t, x.sqrt() < lambda, "λ = {lambda}, x = {x}");
+                assert_eq!(x >= t, x.sqrt() >= lambda, "λ = {lambda}, x = {x}");
+            }
         }
     }
 
