@@ -332,26 +332,28 @@ pub fn can_sight<'a>(
     }
     let near = tol / len; // parameter band around a and b that does not count
     for (c, d) in edges {
-        let same = ((c - a).norm() <= tol && (d - b).norm() <= tol)
-            || ((c - b).norm() <= tol && (d - a).norm() <= tol);
-        if same {
-            continue;
-        }
-        match intersect_segments(a, b, c, d, tol) {
-            SegmentIntersection::None => {}
-            SegmentIntersection::Point { s, .. } => {
-                if s > near && s < 1.0 - near {
-                    return false;
-                }
-            }
-            SegmentIntersection::Overlap { s0, s1 } => {
-                if s1 > near && s0 < 1.0 - near {
-                    return false;
-                }
-            }
+        if blocks_sight(a, b, c, d, tol, near) {
+            return false;
         }
     }
     true
+}
+
+/// One edge's part of [`can_sight`]: `true` when edge `c d` crosses the sight
+/// line `a b` (longer than `tol`) outside the parameter band `near = tol / |ab|`
+/// at its ends. For callers that scan their edges themselves.
+#[inline]
+pub fn blocks_sight(a: &Point2, b: &Point2, c: &Point2, d: &Point2, tol: Real, near: Real) -> bool {
+    let same = ((c - a).norm() <= tol && (d - b).norm() <= tol)
+        || ((c - b).norm() <= tol && (d - a).norm() <= tol);
+    if same {
+        return false;
+    }
+    match intersect_segments(a, b, c, d, tol) {
+        SegmentIntersection::None => false,
+        SegmentIntersection::Point { s, .. } => s > near && s < 1.0 - near,
+        SegmentIntersection::Overlap { s0, s1 } => s1 > near && s0 < 1.0 - near,
+    }
 }
 
 /// Sight test relative to a closed perimeter (all of its edges).

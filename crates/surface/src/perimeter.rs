@@ -286,17 +286,30 @@ impl Poly2 {
     /// `true` when the segment `a b` crosses none of the perimeter's edges,
     /// except those for which `skip` holds (P§2.4.2 sight test).
     pub fn sight(&self, a: &Point2, b: &Point2, eps: Real, skip: impl Fn(usize) -> bool) -> bool {
+        // `polygon2::can_sight` over the edges that pass the box filter below,
+        // written out as one loop (edge by edge, `polygon2::blocks_sight`):
+        // this scan runs in every perimeter operation.
+        let len = (b - a).norm();
+        if len <= eps {
+            return true;
+        }
+        let near = eps / len;
         let n = self.len();
         // Only edges whose boxes meet the sight line's box can cross it.
         let (x0, x1) = (a.x.min(b.x) - eps, a.x.max(b.x) + eps);
         let (y0, y1) = (a.y.min(b.y) - eps, a.y.max(b.y) + eps);
-        let edges = (0..n).filter_map(|i| {
-            let (c, d) = (&self.nodes[i].p, &self.nodes[(i + 1) % n].p);
+        for i in 0..n {
+            let (c, d) = (
+                &self.nodes[i].p,
+                &self.nodes[if i + 1 == n { 0 } else { i + 1 }].p,
+            );
             let apart =
                 c.x.max(d.x) < x0 || c.x.min(d.x) > x1 || c.y.max(d.y) < y0 || c.y.min(d.y) > y1;
-            (!apart && !skip(i)).then_some((c, d))
-        });
-        polygon2::can_sight(a, b, edges, eps)
+            if !apart && !skip(i) && polygon2::blocks_sight(a, b, c, d, eps, near) {
+                return false;
+            }
+        }
+        true
     }
 
     /// Replace the section that runs anticlockwise from `from` to `to` by new
