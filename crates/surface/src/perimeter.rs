@@ -562,33 +562,45 @@ impl SightGrid {
     ) -> bool {
         let n = poly.len();
         debug_assert_eq!(n, self.boxes.len());
+        // `polygon2::can_sight` over the kept edges, written out as loops
+        // (edge by edge, `polygon2::blocks_sight`), as in `Poly2::sight`.
+        let len = (b - a).norm();
+        if len <= eps {
+            return true;
+        }
+        let near = eps / len;
         let (x0, x1) = (a.x.min(b.x) - eps, a.x.max(b.x) + eps);
         let (y0, y1) = (a.y.min(b.y) - eps, a.y.max(b.y) + eps);
         let finite = x0.is_finite() && x1.is_finite() && y0.is_finite() && y1.is_finite();
-        let keep = |i: usize| {
+        let blocks = |i: usize| {
             let bx = &self.boxes[i];
             let apart = bx.1 < x0 || bx.0 > x1 || bx.3 < y0 || bx.2 > y1;
-            (!apart && !skip(i)).then(|| (&poly.nodes[i].p, &poly.nodes[(i + 1) % n].p))
+            !apart && !skip(i) && {
+                let (c, d) = (&poly.nodes[i].p, &poly.nodes[(i + 1) % n].p);
+                polygon2::blocks_sight(a, b, c, d, eps, near)
+            }
         };
         if !self.usable || !finite {
-            return polygon2::can_sight(a, b, (0..n).filter_map(keep), eps);
+            return !(0..n).any(blocks);
+        }
+        if self.big.iter().any(|&e| blocks(e as usize)) {
+            return false;
         }
         let (qx0, qx1, qy0, qy1) = (self.cx(x0), self.cx(x1), self.cy(y0), self.cy(y1));
-        let edges = (qy0..=qy1).flat_map(move |y| {
-            (qx0..=qx1).flat_map(move |x| {
+        for y in qy0..=qy1 {
+            for x in qx0..=qx1 {
                 let c = y * self.gx + x;
-                self.items[self.start[c] as usize..self.start[c + 1] as usize]
-                    .iter()
-                    .filter_map(move |&e| {
-                        let e = e as usize;
-                        // Report an edge only in the first cell it shares with the query.
-                        let (fx, fy) = self.first[e];
-                        (x == qx0.max(fx as usize) && y == qy0.max(fy as usize)).then_some(e)
-                    })
-            })
-        });
-        let big = self.big.iter().map(|&e| e as usize);
-        polygon2::can_sight(a, b, big.chain(edges).filter_map(keep), eps)
+                for &e in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
+                    let e = e as usize;
+                    // Report an edge only in the first cell it shares with the query.
+                    let (fx, fy) = self.first[e];
+                    if x == qx0.max(fx as usize) && y == qy0.max(fy as usize) && blocks(e) {
+                        return false;
+                    }
+                }
+            }
+        }
+        true
     }
 }
 
