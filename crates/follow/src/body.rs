@@ -184,6 +184,9 @@ struct Region<'a> {
     inside: &'a dyn Fn(&Point3) -> bool,
     edges: Vec<(Segment3, Aabb)>,
     bounds: Aabb,
+    /// How far the vertices stand off the plane, at most (a model
+    /// polygon's vertices need not lie exactly on its fitted plane).
+    off_plane: Real,
 }
 
 impl Region<'_> {
@@ -199,14 +202,19 @@ impl Region<'_> {
                 (Segment3::new(a, b), Aabb::new(a, b))
             })
             .collect();
-        // Points projected into the region can stand off the vertices' box
-        // by how far the vertices stand off the plane: well under this.
-        let bounds = Aabb::from_points(vertices).loosened(1e-3);
+        // Points projected into the region stand off the vertices' box by
+        // at most how far the vertices stand off the plane.
+        let off_plane = vertices
+            .iter()
+            .map(|v| plane.signed_distance(v).abs())
+            .fold(0.0, Real::max);
+        let bounds = Aabb::from_points(vertices).loosened(off_plane + 1e-9);
         Region {
             plane,
             inside,
             edges,
             bounds,
+            off_plane,
         }
     }
 }
@@ -223,9 +231,9 @@ fn triangles_to_region(
     let origin = Point3::origin();
     let mut best = (limit, origin, origin);
     // A triangle is looked at when its box is within `best` of the
-    // region's and its vertices are not all `best` or more to one side of
-    // the region's plane (the region's box is loose in a link frame turned
-    // against the region).
+    // region's and its vertices are not all `best` (and the vertices'
+    // standoff) or more to one side of the region's plane (the region's box
+    // is loose in a link frame turned against the region).
     let plane_gap = |t: &Triangle| {
         let h = [t.a, t.b, t.c].map(|v| region.plane.signed_distance(&v));
         if h.iter().all(|x| *x > 0.0) {
@@ -237,7 +245,9 @@ fn triangles_to_region(
         }
     };
     let near = |k: usize, t: &Triangle, b: &Aabb, best: Real| {
-        keep.is_none_or(|m| m[k]) && box_distance(b, &region.bounds) < best && plane_gap(t) < best
+        keep.is_none_or(|m| m[k])
+            && box_distance(b, &region.bounds) < best
+            && plane_gap(t) < best + region.off_plane
     };
     // The cheap cases first (a triangle edge through the region, a vertex
     // over it), so that the edge-to-triangle tests below run only on the
@@ -409,24 +419,32 @@ impl Placed {
         match self {
             Self::Capsule { axis, .. } => closest_segment_polygon(axis, g),
             Self::Mesh { mesh, pose, keep } => {
+                let world_plane = g.plane();
                 let local: Vec<Point3> = g
                     .vertices()
                     .map(|v| pose.inverse_transform_point(&v))
                     .collect();
-                if box_distance(&mesh.bounds, &Aabb::from_points(&local).loosened(1e-3)) >= limit {
+                let off_plane = g
+                    .vertices()
+                    .map(|v| world_plane.signed_distance(&v).abs())
+                    .fold(0.0, Real::max);
+                let near = Aabb::from_points(&local).loosened(off_plane + 1e-9);
+                if box_distance(&mesh.bounds, &near) >= limit {
                     return (limit, Point3::origin(), Point3::origin());
                 }
                 let frame = g.frame();
                 let pts = g.points_2d(&frame);
                 let inside =
                     |p: &Point3| polygon2::contains_point(&pts, &frame.to_2d(&(pose * p)), 0.0);
-                let plane = g.plane();
-                let Some(n) = geom::unit(pose.inverse_transform_vector(&plane.normal.into_inner()))
+                let Some(n) =
+                    geom::unit(pose.inverse_transform_vector(&world_plane.normal.into_inner()))
                 else {
                     return (limit, Point3::origin(), Point3::origin());
                 };
-                let plane =
-                    Plane::from_point_normal(&pose.inverse_transform_point(&plane.point()), n);
+                let plane = Plane::from_point_normal(
+                    &pose.inverse_transform_point(&world_plane.point()),
+                    n,
+                );
                 let region = Region::new(plane, &inside, &local);
                 let (d, on_t, on_g) = triangles_to_region(mesh, keep.as_deref(), &region, limit);
                 (d, pose * on_t, pose * on_g)
