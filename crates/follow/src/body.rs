@@ -123,6 +123,8 @@ pub fn link_bodies(robot: &Robot) -> Vec<LinkBody> {
                     axis: c.segment,
                     radius: c.radius,
                 },
+                // A mesh without triangles has no surface to keep off.
+                CollisionShape::Mesh(m) if m.triangles.is_empty() => continue,
                 CollisionShape::Mesh(m) => LinkShape::Mesh(Arc::new(LinkMesh::new(Arc::clone(m)))),
             };
             out.push(LinkBody {
