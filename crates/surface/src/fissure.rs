@@ -358,6 +358,10 @@ pub(crate) fn close_pockets(
     let mut closed = 0;
     let mut free: Vec<usize> = Vec::new();
     let mut pocket: Vec<Point2> = Vec::new();
+    // The perimeter's points taken twice (and one more), so that sections
+    // index them without reducing indices modulo n: the section scan below
+    // tests O(n²) chords per call.
+    let mut twice: Vec<Point2> = Vec::new();
     let mut collapser = Collapser::default();
     // `|v| >= λ` as `|v|² >= below_lambda_sq` (see `sqrt_below`).
     let below_lambda_sq = sqrt_below(lambda);
@@ -369,10 +373,12 @@ pub(crate) fn close_pockets(
         }
         // Twice the signed area of a pocket from prefix sums of the edges'
         // cross products (over the perimeter taken twice).
+        twice.clear();
+        twice.extend((0..=2 * n).map(|m| poly.pt(m)));
         let mut prefix = Vec::with_capacity(2 * n + 1);
         prefix.push(0.0);
         for m in 0..2 * n {
-            let (a, b) = (poly.pt(m), poly.pt(m + 1));
+            let (a, b) = (twice[m], twice[m + 1]);
             let last = prefix.last().copied().unwrap_or(0.0);
             prefix.push(last + (a.x * b.y - a.y * b.x));
         }
@@ -392,12 +398,17 @@ pub(crate) fn close_pockets(
         }
         // Sections start at each vertex and run over non-shared edges only.
         for i in 0..n {
-            let vi = poly.pt(i);
+            let vi = twice[i];
             // Section v_i … v_{i+k}: k edges, k − 1 removed vertices, and at
             // least three vertices left.
             let k_max = free[i].min(n - 3);
+            if k_max < 4 {
+                continue;
+            }
+            // v_i … v_{i+k_max} (i + k_max < 2n).
+            let section = &twice[i..=i + k_max];
             for k in (4..=k_max).rev() {
-                let vj = poly.pt(i + k);
+                let vj = section[k];
                 if (vj - vi).norm_squared() >= below_lambda_sq {
                     continue;
                 }
@@ -410,7 +421,7 @@ pub(crate) fn close_pockets(
                     continue;
                 }
                 pocket.clear();
-                pocket.extend((0..=k).map(|m| poly.pt(i + m)));
+                pocket.extend_from_slice(&section[..=k]);
                 if !collapser.collapses(&pocket, lambda, eps) {
                     continue;
                 }
