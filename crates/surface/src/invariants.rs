@@ -25,7 +25,7 @@
 
 use crate::error::InvariantViolation;
 use crate::model::{Scope, SurfaceModel};
-use crate::perimeter::Poly2;
+use crate::perimeter::{Poly2, valid_points};
 use crate::segment::{EdgeKey, PairId, SegmentId, SegmentKind};
 use geom::Real;
 use geom::plane::line_of_planes;
@@ -175,8 +175,10 @@ impl SurfaceModel {
                 );
             }
         }
-        let p2 = Poly2::from_polygon(poly, &frame);
-        if !p2.is_valid(tol.eps) {
+        // `Poly2::from_polygon(poly, &frame).is_valid(eps)` without building
+        // the perimeter (built only for the message).
+        if !valid_points(poly.nodes.iter().map(|x| frame.to_2d(&x.position)), tol.eps) {
+            let p2 = Poly2::from_polygon(poly, &frame);
             return fail(
                 "simple-perimeter",
                 format!(

@@ -172,14 +172,7 @@ impl Poly2 {
         }
         // `area` adds the terms of `polygon2::signed_area` in its order.
         let area = self.area();
-        area > 0.0
-            && SIMPLE_SCRATCH.with(|cell| {
-                let mut scratch = cell.borrow_mut();
-                let SimpleScratch { pts, boxes, order } = &mut *scratch;
-                pts.clear();
-                pts.extend(self.nodes.iter().map(|n| n.p));
-                simple_with_area(pts, eps, area, boxes, order)
-            })
+        area > 0.0 && valid_points(self.nodes.iter().map(|n| n.p), eps)
     }
 
     /// The point at `pp`.
@@ -636,6 +629,24 @@ thread_local! {
         std::cell::RefCell::new(SimpleScratch::default());
 }
 
+/// [`Poly2::is_valid`] of the perimeter through `points` (in order), without
+/// building the perimeter: the points go straight into the per-thread buffer
+/// (the invariant check projects every touched polygon's vertices).
+pub(crate) fn valid_points(points: impl IntoIterator<Item = Point2>, eps: Real) -> bool {
+    SIMPLE_SCRATCH.with(|cell| {
+        let mut scratch = cell.borrow_mut();
+        let SimpleScratch { pts, boxes, order } = &mut *scratch;
+        pts.clear();
+        pts.extend(points);
+        if pts.len() < 3 {
+            return false;
+        }
+        // The terms of `Poly2::area`, in its order.
+        let area = polygon2::signed_area(pts);
+        area > 0.0 && simple_with_area(pts, eps, area, boxes, order)
+    })
+}
+
 /// [`is_simple_fast`] given the polygon's signed area (`n ≥ 3`), with
 /// `boxes` and `order` as buffers (any content).
 fn simple_with_area(
@@ -790,6 +801,26 @@ mod tests {
         fn fast_simplicity_matches_geom(c in proptest::collection::vec(-1.0f64..1.0, 6..24)) {
             let pts: Vec<Point2> = c.chunks_exact(2).map(|p| Point2::new(p[0], p[1])).collect();
             proptest::prop_assert_eq!(is_simple_fast(&pts, 1e-6), polygon2::is_simple(&pts, 1e-6));
+        }
+    }
+
+    proptest::proptest! {
+        /// `valid_points` answers as `geom`'s tests (anticlockwise and simple)
+        /// and as `Poly2::is_valid` on random polygons, and on their reversals.
+        #[test]
+        fn valid_points_matches_geom(c in proptest::collection::vec(-1.0f64..1.0, 0..24)) {
+            let mut pts: Vec<Point2> = c.chunks_exact(2).map(|p| Point2::new(p[0], p[1])).collect();
+            for _ in 0..2 {
+                let oracle = pts.len() >= 3
+                    && polygon2::signed_area(&pts) > 0.0
+                    && polygon2::is_simple(&pts, 1e-6);
+                let poly = Poly2 {
+                    nodes: pts.iter().map(|p| Node2::plain(*p, EdgeKey(0))).collect(),
+                };
+                proptest::prop_assert_eq!(valid_points(pts.iter().copied(), 1e-6), oracle);
+                proptest::prop_assert_eq!(poly.is_valid(1e-6), oracle);
+                pts.reverse();
+            }
         }
     }
 
