@@ -9,7 +9,7 @@
 //! | [`RangeSensors`] | single-point range finders on the robot |
 //! | [`HwError`] | what hardware can refuse or fail at |
 //! | [`tilt_sweep`] | nod the scanner with one joint into a [`sensor::Sweep`] |
-//! | [`script`] | [`script::Recorder`] (logs what any hardware did) and [`script::Replay`] (plays a log back, checking every command) |
+//! | [`script`] | [`script::Recorder`] (logs what any hardware did), [`script::Tap`] (hands each event to a sink as it happens) and [`script::Replay`] (plays a log back, checking every command) |
 
 mod error;
 pub mod script;

@@ -1,5 +1,6 @@
 //! Hardware doubles that are not a simulator: [`Recorder`] wraps any
-//! hardware and logs what it did ([`Script`]); [`Replay`] plays such a log
+//! hardware and logs what it did ([`Script`]; a [`Tap`] hands each event
+//! to any other [`Sink`] as it happens); [`Replay`] plays such a log
 //! back as hardware of its own, checking that every command is the one
 //! recorded. A loop driven by a [`Replay`] of a run repeats that run
 //! without the hardware (or simulator) that made it, which is how the
@@ -63,51 +64,80 @@ pub struct Script {
     pub events: Vec<Event>,
 }
 
-/// Any hardware, logged: every successful call is appended to a [`Script`].
-#[derive(Clone, Debug)]
-pub struct Recorder<H> {
-    inner: H,
-    script: Script,
+/// Where a [`Tap`] hands each event: a closure, or a [`Script`] (which
+/// keeps them).
+pub trait Sink {
+    /// One thing the hardware did.
+    fn event(&mut self, event: &Event);
 }
 
-impl<H: Arm> Recorder<H> {
+impl<F: FnMut(&Event)> Sink for F {
+    fn event(&mut self, event: &Event) {
+        self(event);
+    }
+}
+
+impl Sink for Script {
+    fn event(&mut self, event: &Event) {
+        self.events.push(event.clone());
+    }
+}
+
+/// Any hardware, tapped: every successful call is handed to a [`Sink`] as
+/// it happens (a run's bag is written this way, `record::bag`), and the
+/// hardware answers as it would alone.
+#[derive(Clone, Debug)]
+pub struct Tap<H, S> {
+    inner: H,
+    sink: S,
+}
+
+/// Any hardware, logged: every successful call is appended to a [`Script`].
+pub type Recorder<H> = Tap<H, Script>;
+
+impl<H: Arm> Tap<H, Script> {
     /// Start logging `inner` from its current joints. `bearings_rad` are
     /// the scanner's (empty when `inner` has none).
     pub fn new(inner: H, bearings_rad: Vec<Real>) -> Self {
-        let script = Script {
+        let sink = Script {
             start_joints: inner.joints(),
             bearings_rad,
             events: Vec::new(),
         };
-        Self { inner, script }
-    }
-}
-
-impl<H> Recorder<H> {
-    /// The hardware being logged.
-    pub fn inner(&self) -> &H {
-        &self.inner
+        Self { inner, sink }
     }
 
     /// The log so far.
     pub fn script(&self) -> &Script {
-        &self.script
-    }
-
-    /// The hardware and the log.
-    pub fn into_parts(self) -> (H, Script) {
-        (self.inner, self.script)
+        &self.sink
     }
 }
 
-impl<H: Arm> Arm for Recorder<H> {
+impl<H, S: Sink> Tap<H, S> {
+    /// Hand every call of `inner` to `sink`.
+    pub fn with_sink(inner: H, sink: S) -> Self {
+        Self { inner, sink }
+    }
+
+    /// The hardware tapped.
+    pub fn inner(&self) -> &H {
+        &self.inner
+    }
+
+    /// The hardware and the sink (for a [`Recorder`], the log).
+    pub fn into_parts(self) -> (H, S) {
+        (self.inner, self.sink)
+    }
+}
+
+impl<H: Arm, S: Sink> Arm for Tap<H, S> {
     fn joints(&self) -> Vec<Real> {
         self.inner.joints()
     }
 
     fn move_to(&mut self, q: &[Real]) -> Result<(), HwError> {
         self.inner.move_to(q)?;
-        self.script.events.push(Event::Moved {
+        self.sink.event(&Event::Moved {
             goal: q.to_vec(),
             reached: self.inner.joints(),
         });
@@ -115,27 +145,27 @@ impl<H: Arm> Arm for Recorder<H> {
     }
 }
 
-impl<H: LineScanner> LineScanner for Recorder<H> {
+impl<H: LineScanner, S: Sink> LineScanner for Tap<H, S> {
     fn bearings_rad(&self) -> &[Real] {
         self.inner.bearings_rad()
     }
 
     fn scan(&mut self) -> Result<ScanReadings, HwError> {
         let scan = self.inner.scan()?;
-        self.script.events.push(Event::Scanned(scan.clone()));
+        self.sink.event(&Event::Scanned(scan.clone()));
         Ok(scan)
     }
 
     fn seed_noise(&mut self, seed: u64) {
         self.inner.seed_noise(seed);
-        self.script.events.push(Event::Seeded(seed));
+        self.sink.event(&Event::Seeded(seed));
     }
 }
 
-impl<H: RangeSensors> RangeSensors for Recorder<H> {
+impl<H: RangeSensors, S: Sink> RangeSensors for Tap<H, S> {
     fn read_all(&mut self) -> Result<Vec<Option<SensorPoint>>, HwError> {
         let readings = self.inner.read_all()?;
-        self.script.events.push(Event::Read(readings.clone()));
+        self.sink.event(&Event::Read(readings.clone()));
         Ok(readings)
     }
 }

@@ -65,3 +65,35 @@ pub trait RangeSensors {
     /// One reading per mounted sensor at the current pose (`None`: nothing in range).
     fn read_all(&mut self) -> Result<Vec<Option<SensorPoint>>, HwError>;
 }
+
+// A loop that borrows hardware can hand the borrow to a wrapper (a
+// recorder) that owns what it wraps.
+impl<T: Arm + ?Sized> Arm for &mut T {
+    fn joints(&self) -> Vec<Real> {
+        (**self).joints()
+    }
+
+    fn move_to(&mut self, q: &[Real]) -> Result<(), HwError> {
+        (**self).move_to(q)
+    }
+}
+
+impl<T: LineScanner + ?Sized> LineScanner for &mut T {
+    fn bearings_rad(&self) -> &[Real] {
+        (**self).bearings_rad()
+    }
+
+    fn scan(&mut self) -> Result<ScanReadings, HwError> {
+        (**self).scan()
+    }
+
+    fn seed_noise(&mut self, seed: u64) {
+        (**self).seed_noise(seed);
+    }
+}
+
+impl<T: RangeSensors + ?Sized> RangeSensors for &mut T {
+    fn read_all(&mut self) -> Result<Vec<Option<SensorPoint>>, HwError> {
+        (**self).read_all()
+    }
+}
