@@ -50,6 +50,9 @@ pub enum RecordError {
     /// A PLY file could not be read or written.
     #[error(transparent)]
     Scene(#[from] scene::SceneError),
+    /// `run.mcap` could not be written, or a bag read.
+    #[error(transparent)]
+    Bag(#[from] crate::bag::BagError),
     /// A value cannot be written (an extra column of the wrong length, a
     /// name with a comma).
     #[error("{what}: {message}")]

@@ -19,6 +19,8 @@ use std::path::{Path, PathBuf};
 
 /// The scenario as run, written by both commands (not by a `--scene` follow run).
 pub const SCENARIO_TOML: &str = "scenario.toml";
+/// The run's ROS 2 bag (MCAP), which every run writes.
+pub const RUN_MCAP: &str = "run.mcap";
 /// The page `surveyor report` writes.
 pub const REPORT_HTML: &str = "report.html";
 

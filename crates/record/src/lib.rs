@@ -8,6 +8,7 @@
 //! | [`viewpoints`] | `viewpoints.csv`, `candidates.csv`, `path.csv` from [`ViewpointRecord`]s, and back |
 //! | [`explore`] | `run.json` of an exploration ([`ExploreSummary`]), `discs.csv` ([`DiscTable`]), `segments.json`, `cloud.ply`, `mesh.ply` |
 //! | [`checkpoint`] | `checkpoint.json` ([`Checkpoint`]) |
+//! | [`bag`] | `run.mcap` ([`bag::RunBag`]: the run's ROS 2 bag, MCAP of CDR messages) and robots' bags read back ([`bag::sweeps_from_bag`], [`bag::sets_from_bag`]) |
 //! | [`blast`] | `blast_inputs.json` ([`blast::BlastInputsFile`]), `blast_plan.json` and `.csv` ([`blast::BlastPlan`]) |
 //! | [`coverage`] | the coverage reports a judged run records |
 //! | [`follow`] | `steps.csv` ([`StepRow`]), `path.ply`, `run.json` of a surface-following run ([`FollowSummary`]) |
@@ -15,6 +16,7 @@
 //! | [`table`] | reading CSV tables by column name, JSON files, with file, line and field in errors |
 //! | [`output`] | single output files written under temporary names and moved into place ([`output::Staged`]) |
 
+pub mod bag;
 pub mod blast;
 pub mod checkpoint;
 pub mod coverage;

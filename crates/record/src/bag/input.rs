@@ -1,0 +1,468 @@
+//! A robot's bag as input: the laser scans of a bag placed by the robot's
+//! joint states ([`sweeps_from_bag`], for `surveyor map --bag`).
+
+use super::msg::{JointState, LaserScan, PointCloud2, TfMessage, Transform};
+use super::{BagError, BagMessage, read_bag, scanner_from_laser, topics};
+use geom::{Isometry3, Real};
+use robot::Robot;
+use sensor::{Sweep, SweepBuilder};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Which topics and frames [`sweeps_from_bag`] reads.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ScanTopics {
+    /// `sensor_msgs/LaserScan` topic.
+    pub scan: String,
+    /// `sensor_msgs/JointState` topic.
+    pub joints: String,
+    /// The robot link whose frame the scans are in (ROS's laser convention:
+    /// rays in its x–y plane). `None`: the scans' `frame_id`, a link of the
+    /// robot or a frame `/tf_static` places on one.
+    pub scanner_link: Option<String>,
+}
+
+impl Default for ScanTopics {
+    fn default() -> Self {
+        Self {
+            scan: topics::SCAN.to_owned(),
+            joints: topics::JOINT_STATES.to_owned(),
+            scanner_link: None,
+        }
+    }
+}
+
+/// Scans placed in the world, grouped into sweeps.
+#[derive(Clone, Debug)]
+pub struct BagSweeps {
+    /// The sweeps, in time order.
+    pub sweeps: Vec<Sweep>,
+    /// Where the robot's base stands (from `/tf_static`, else identity).
+    pub world_from_base: Isometry3,
+    /// Whether `world_from_base` came from the bag's `/tf_static`.
+    pub base_from_bag: bool,
+    /// The link the scanner is on and the laser frame on it.
+    pub scanner_link: String,
+    /// Scans placed.
+    pub scans: usize,
+    /// Scans outside the joint states' time span (not placed).
+    pub unplaced: usize,
+}
+
+/// Largest number of scans in one sweep when the bag does not mark sweeps.
+pub const MAX_SCANS_PER_SWEEP: usize = 10_000;
+/// A pause between scans longer than this starts a new sweep when the bag
+/// does not mark sweeps, seconds.
+pub const SWEEP_GAP_S: Real = 1.0;
+
+/// The stamp of a message: its header's, or (a zero stamp) when logged.
+fn stamp_of(header: &super::msg::Header, log_time_ns: u64) -> u64 {
+    match header.stamp.to_nanos() {
+        Some(0) | None => log_time_ns,
+        Some(t) => t,
+    }
+}
+
+fn isometry(t: &Transform) -> Isometry3 {
+    let q = nalgebra::Quaternion::new(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z);
+    Isometry3::from_parts(
+        nalgebra::Translation3::new(t.translation.x, t.translation.y, t.translation.z),
+        nalgebra::UnitQuaternion::from_quaternion(q),
+    )
+}
+
+/// The laser scans of the bag at `path`, each placed at the scanner pose of
+/// `robot` at the joints interpolated (linearly, per joint) to the scan's
+/// stamp, grouped into sweeps: at the bag's sweep clouds
+/// ([`topics::SWEEP`], which `surveyor` runs write) when it has them, else
+/// at pauses longer than [`SWEEP_GAP_S`] and every [`MAX_SCANS_PER_SWEEP`]
+/// scans. Ranges outside `[range_min, range_max]` or not finite are no
+/// return. Errors name the bag and what is wrong: a missing topic, a joint
+/// of the robot missing from the joint states, time going backwards, a
+/// scanner frame not on the robot.
+pub fn sweeps_from_bag(
+    path: &Path,
+    robot: &Robot,
+    topics_in: &ScanTopics,
+) -> Result<BagSweeps, BagError> {
+    let bad = |message: String| BagError::Bag {
+        path: path.to_owned(),
+        message,
+    };
+    let wanted = |t: &str| {
+        t == topics_in.scan || t == topics_in.joints || t == topics::TF_STATIC || t == topics::SWEEP
+    };
+    let messages = read_bag(path, &wanted)?;
+    let on = |t: &str| -> Vec<&BagMessage> { messages.iter().filter(|m| m.topic == t).collect() };
+    let mut statics = FrameTree::default();
+    for m in on(topics::TF_STATIC) {
+        statics.apply(m.decode::<TfMessage>()?);
+    }
+    let states = joint_states(&on(&topics_in.joints), robot, &topics_in.joints).map_err(&bad)?;
+    let scans = on(&topics_in.scan);
+    let Some(first) = scans.first() else {
+        return Err(bad(format!(
+            "no `sensor_msgs/msg/LaserScan` on {}",
+            topics_in.scan
+        )));
+    };
+    if states.is_empty() {
+        return Err(bad(format!(
+            "no `sensor_msgs/msg/JointState` on {}",
+            topics_in.joints
+        )));
+    }
+    let frame = first.decode::<LaserScan>()?.header.frame_id;
+    let (link, link_from_laser, link_name) =
+        scanner_on(robot, &statics, &frame, topics_in.scanner_link.as_deref()).map_err(&bad)?;
+    let link_from_scanner = link_from_laser * scanner_from_laser().inverse();
+    // The base in the world: up the static frames from the base link.
+    let base = robot.links.first().map_or("", |l| l.name.as_str());
+    let placed_base = statics.root_from(base);
+    let base_from_bag = placed_base.is_some();
+    let world_from_base = placed_base.unwrap_or_else(Isometry3::identity);
+    // Sweep boundaries.
+    let marks: Vec<u64> = on(topics::SWEEP)
+        .into_iter()
+        .map(|m| {
+            m.decode::<PointCloud2>()
+                .map(|c| stamp_of(&c.header, m.log_time_ns))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut sweeps = Vec::new();
+    let mut builder: Option<(SweepBuilder, Vec<Real>)> = None;
+    let mut last_t: Option<u64> = None;
+    let mut mark = 0;
+    let (mut placed, mut unplaced) = (0, 0);
+    let mut frames = Vec::new();
+    for (k, m) in scans.iter().enumerate() {
+        let scan = m.decode::<LaserScan>()?;
+        let t = stamp_of(&scan.header, m.log_time_ns);
+        if let Some(prev) = last_t
+            && t < prev
+        {
+            return Err(bad(format!(
+                "{} message {k}: time goes backwards ({t} ns after {prev} ns)",
+                topics_in.scan
+            )));
+        }
+        let Some(q) = joints_at(&states, t) else {
+            unplaced += 1;
+            continue;
+        };
+        let n = scan.ranges.len();
+        let bearings: Vec<Real> = (0..n)
+            .map(|i| Real::from(scan.angle_min) + i as Real * Real::from(scan.angle_increment))
+            .collect();
+        // A new sweep at a mark, a pause, a change of bearings or the cap.
+        let past_mark = if marks.is_empty() {
+            last_t.is_some_and(|p| (t - p) as Real * 1e-9 > SWEEP_GAP_S)
+        } else {
+            let mut crossed = false;
+            while mark < marks.len() && t > marks[mark] {
+                mark += 1;
+                crossed = true;
+            }
+            crossed
+        };
+        last_t = Some(t);
+        if let Some((b, old)) = builder.take() {
+            if past_mark || *old != bearings || b.scan_count() >= MAX_SCANS_PER_SWEEP {
+                if b.scan_count() > 0 {
+                    sweeps.push(b.finish()?);
+                }
+            } else {
+                builder = Some((b, old));
+            }
+        }
+        let (b, _) = match &mut builder {
+            Some(x) => x,
+            None => builder.insert((SweepBuilder::new(&bearings)?, bearings)),
+        };
+        robot.fk_into(&q, &mut frames)?;
+        let world_from_link = world_from_base * frames[link.0];
+        let pose = world_from_link * link_from_scanner;
+        let (lo, hi) = (Real::from(scan.range_min), Real::from(scan.range_max));
+        let ranges: Vec<Option<Real>> = scan
+            .ranges
+            .iter()
+            .map(|&r| {
+                let r = Real::from(r);
+                (r.is_finite() && r >= lo && r <= hi).then_some(r)
+            })
+            .collect();
+        let intensities: Vec<Real> = if scan.intensities.len() == n {
+            scan.intensities.iter().map(|&i| Real::from(i)).collect()
+        } else {
+            vec![0.0; n]
+        };
+        b.push_scan(&pose, &ranges, &intensities, None)?;
+        placed += 1;
+    }
+    if let Some((b, _)) = builder
+        && b.scan_count() > 0
+    {
+        sweeps.push(b.finish()?);
+    }
+    Ok(BagSweeps {
+        sweeps,
+        world_from_base,
+        base_from_bag,
+        scanner_link: link_name,
+        scans: placed,
+        unplaced,
+    })
+}
+
+/// The joint states of `messages` (on `topic`) as `(stamp, q)` in the
+/// robot's joint order; an error message for a missing joint, a length
+/// mismatch or time going backwards.
+fn joint_states(
+    messages: &[&BagMessage],
+    robot: &Robot,
+    topic: &str,
+) -> Result<Vec<(u64, Vec<Real>)>, String> {
+    let names = robot.joint_names();
+    let mut states: Vec<(u64, Vec<Real>)> = Vec::with_capacity(messages.len());
+    for (k, m) in messages.iter().enumerate() {
+        let js = m.decode::<JointState>().map_err(|e| e.to_string())?;
+        if js.position.len() != js.name.len() {
+            return Err(format!(
+                "{topic} message {k}: {} names but {} positions",
+                js.name.len(),
+                js.position.len()
+            ));
+        }
+        let mut q = Vec::with_capacity(names.len());
+        for n in &names {
+            let i = js.name.iter().position(|x| x == n).ok_or_else(|| {
+                format!(
+                    "{topic} message {k} has no joint `{n}` of robot {} (it names {:?})",
+                    robot.name, js.name
+                )
+            })?;
+            q.push(js.position[i]);
+        }
+        let t = stamp_of(&js.header, m.log_time_ns);
+        if let Some((last, _)) = states.last()
+            && t < *last
+        {
+            return Err(format!(
+                "{topic} message {k}: time goes backwards ({t} ns after {last} ns)"
+            ));
+        }
+        states.push((t, q));
+    }
+    Ok(states)
+}
+
+/// The link the scans of `frame` are on, the laser frame in that link and
+/// the link's name: `given` (a link), else `frame` itself when it is a
+/// link, else the link `statics` places `frame` on.
+fn scanner_on(
+    robot: &Robot,
+    statics: &FrameTree,
+    frame: &str,
+    given: Option<&str>,
+) -> Result<(robot::LinkId, Isometry3, String), String> {
+    if let Some(l) = given {
+        let id = robot
+            .link_index(l)
+            .ok_or_else(|| format!("--scanner-link {l} is not a link of robot {}", robot.name))?;
+        return Ok((id, Isometry3::identity(), l.to_owned()));
+    }
+    if let Some(id) = robot.link_index(frame) {
+        return Ok((id, Isometry3::identity(), frame.to_owned()));
+    }
+    if let Some((parent, t)) = statics.0.get(frame)
+        && let Some(id) = robot.link_index(parent)
+    {
+        return Ok((id, *t, parent.clone()));
+    }
+    Err(format!(
+        "the scans' frame `{frame}` is neither a link of robot {} nor placed on one by {}; give the scanner's link",
+        robot.name,
+        topics::TF_STATIC
+    ))
+}
+
+/// The joints at `t`, interpolated between the states around it (`None`
+/// outside their span).
+fn joints_at(states: &[(u64, Vec<Real>)], t: u64) -> Option<Vec<Real>> {
+    // The last state at or before t.
+    let i = states.partition_point(|(s, _)| *s <= t).checked_sub(1)?;
+    let (t0, q0) = &states[i];
+    if *t0 == t {
+        return Some(q0.clone());
+    }
+    let (t1, q1) = states.get(i + 1)?;
+    let w = (t - t0) as Real / (t1 - t0) as Real;
+    Some(q0.iter().zip(q1).map(|(a, b)| a + w * (b - a)).collect())
+}
+
+/// Range readings of a bag as Pudney's sensor sets.
+#[derive(Clone, Debug)]
+pub struct RangeSets {
+    /// One set per stamp at which some range finder had a return, in time
+    /// order (readings without a return leave no point; a stamp with none
+    /// gives no set, as a follower does not update its model then).
+    pub sets: Vec<surface::SensorSet>,
+    /// The `sensor_msgs/Range` topics read.
+    pub topics: Vec<String>,
+    /// Readings with a return.
+    pub points: usize,
+    /// Readings without one (`+inf`, or outside `[min_range, max_range]`).
+    pub misses: usize,
+}
+
+/// The frames of `/tf_static` and `/tf` as they stand at some moment:
+/// child → (parent, `parent_from_child`).
+#[derive(Default)]
+struct FrameTree(HashMap<String, (String, Isometry3)>);
+
+impl FrameTree {
+    fn apply(&mut self, tf: TfMessage) {
+        for t in tf.transforms {
+            self.0.insert(
+                t.child_frame_id,
+                (t.header.frame_id, isometry(&t.transform)),
+            );
+        }
+    }
+
+    /// `root_from_frame` up the tree (`None` for an unknown frame or a cycle).
+    fn root_from(&self, frame: &str) -> Option<Isometry3> {
+        let mut pose = Isometry3::identity();
+        let mut at = frame;
+        let mut hops = 0;
+        while let Some((parent, t)) = self.0.get(at) {
+            pose = t * pose;
+            at = parent;
+            hops += 1;
+            if hops > self.0.len() {
+                return None;
+            }
+        }
+        (hops > 0).then_some(pose)
+    }
+}
+
+/// The `sensor_msgs/Range` readings of the bag at `path` (on `topics_in`,
+/// or every topic of that type when empty) as sensor sets: the readings of
+/// one stamp form a set, each point `range` along its frame's x axis
+/// (ROS's convention), placed by `/tf_static` and the `/tf` in force at its
+/// stamp; a set holds at most `max_set_points` points. Errors name the bag
+/// and what is wrong (no Range topic, a frame that no transform places,
+/// time going backwards).
+pub fn sets_from_bag(
+    path: &Path,
+    topics_in: &[String],
+    max_set_points: usize,
+) -> Result<RangeSets, BagError> {
+    let bad = |message: String| BagError::Bag {
+        path: path.to_owned(),
+        message,
+    };
+    let messages = read_bag(path, &|_| true)?;
+    let range_type = <super::msg::Range as super::msg::RosMessage>::TYPE;
+    let is_range = |m: &BagMessage| {
+        if topics_in.is_empty() {
+            m.type_name == range_type
+        } else {
+            topics_in.contains(&m.topic)
+        }
+    };
+    let mut topics: Vec<String> = messages
+        .iter()
+        .filter(|m| is_range(m))
+        .map(|m| m.topic.clone())
+        .collect();
+    topics.sort();
+    topics.dedup();
+    if let Some(missing) = topics_in.iter().find(|t| !topics.contains(t)) {
+        return Err(bad(format!("no messages on {missing}")));
+    }
+    if topics.is_empty() {
+        return Err(bad(format!("no `{range_type}` topic")));
+    }
+    // Transforms and readings in log-time order (stable: a transform logged
+    // with a reading's stamp before it applies to it).
+    let mut order: Vec<&BagMessage> = messages
+        .iter()
+        .filter(|m| is_range(m) || m.topic == topics::TF || m.topic == topics::TF_STATIC)
+        .collect();
+    order.sort_by_key(|m| m.log_time_ns);
+    let mut tree = FrameTree::default();
+    let mut sets = Vec::new();
+    let mut current: Option<(u64, Vec<geom::Point3>, Vec<geom::UnitVector3>)> = None;
+    let (mut points, mut misses) = (0, 0);
+    let flush = |current: &mut Option<(u64, Vec<geom::Point3>, Vec<geom::UnitVector3>)>,
+                 sets: &mut Vec<surface::SensorSet>|
+     -> Result<(), BagError> {
+        if let Some((t, p, a)) = current.take()
+            && !p.is_empty()
+        {
+            let set = surface::SensorSet::new(p, a)
+                .map_err(|e| bad(format!("the readings stamped {t} ns: {e}")))?;
+            sets.push(set);
+        }
+        Ok(())
+    };
+    for m in order {
+        if m.topic == topics::TF || m.topic == topics::TF_STATIC {
+            tree.apply(m.decode::<TfMessage>()?);
+            continue;
+        }
+        let r = m.decode::<super::msg::Range>()?;
+        let t = stamp_of(&r.header, m.log_time_ns);
+        match &current {
+            Some((ct, _, _)) if *ct == t => {}
+            Some((ct, _, _)) if t < *ct => {
+                return Err(bad(format!(
+                    "{}: time goes backwards ({t} ns after {ct} ns)",
+                    m.topic
+                )));
+            }
+            _ => {
+                flush(&mut current, &mut sets)?;
+                current = Some((t, Vec::new(), Vec::new()));
+            }
+        }
+        let range = Real::from(r.range);
+        if !(range.is_finite()
+            && range >= Real::from(r.min_range)
+            && range <= Real::from(r.max_range))
+        {
+            misses += 1;
+            continue;
+        }
+        let pose = tree.root_from(&r.header.frame_id).ok_or_else(|| {
+            bad(format!(
+                "{}: frame `{}` is not placed by {} or {} at {t} ns",
+                m.topic,
+                r.header.frame_id,
+                topics::TF_STATIC,
+                topics::TF
+            ))
+        })?;
+        let axis = pose * geom::Vector3::x_axis();
+        let Some((_, p, a)) = &mut current else {
+            continue;
+        };
+        if p.len() >= max_set_points {
+            return Err(bad(format!(
+                "more than {max_set_points} readings stamped {t} ns (the model's max_set_points)"
+            )));
+        }
+        p.push(pose * geom::Point3::new(range, 0.0, 0.0));
+        a.push(axis);
+        points += 1;
+    }
+    flush(&mut current, &mut sets)?;
+    Ok(RangeSets {
+        sets,
+        topics,
+        points,
+        misses,
+    })
+}
