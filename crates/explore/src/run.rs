@@ -108,6 +108,9 @@ pub struct ExploreRun {
     pub lrc: Option<String>,
     /// Every measured point.
     pub cloud: Vec<SweepPoint>,
+    /// Per point of `cloud`: the index of the viewpoint whose sweep
+    /// measured it (into `viewpoints`).
+    pub cloud_viewpoint: Vec<usize>,
     /// The TSDF mesh.
     pub mesh: TriMesh,
     /// The map products of Stage One (A§5.2–5.3): the mesh's Scale-Like
@@ -245,6 +248,7 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
         tsdf,
         viewpoints,
         cloud,
+        cloud_viewpoint,
         unsafe_configurations,
         judge,
         ..
@@ -264,6 +268,7 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
         cspace: setup.cspace,
         lrc,
         cloud,
+        cloud_viewpoint,
         mesh,
         discs,
         grid: setup.stage.grid().clone(),

@@ -7,14 +7,17 @@
 //! blast plan (Paul App. A), written whole or not at all.
 
 use crate::metrics::{CoverageReport, CoverageTracker};
+use crate::rig::bag_event;
 use crate::{SimError, SimRig};
 use blast::{BlastConfig, BlastInputs, BlastPlan};
 use explore::{ExploreConfig, ExploreRun, Judge, SafetyTally, Setup, SetupInputs};
 use geom::{Isometry3, Point3, Real, Vector3};
+use hw::script::{Event, Tap};
 use map::TsdfConfig;
 use plan::contact::{min_clearance, motion_contacts, robot_contacts, smallest_link_radius};
 use rayon::prelude::*;
 use record::Staging;
+use record::bag::RunBag;
 use record::explore::{CoverageOracle, ExploreCoverage, ExploreSummary, OracleComparison};
 use robot::Robot;
 use scenario::LoadedScenario;
@@ -424,7 +427,7 @@ impl SimExplore {
             loaded,
             setup,
             world,
-            mut rig,
+            rig,
             mut judge,
             run_options,
             oracle,
@@ -437,18 +440,31 @@ impl SimExplore {
             _ => None,
         };
         let loaded_s = t.elapsed().as_secs_f64();
+        let robot = setup.robot.clone();
+        let world_from_base = setup.world_from_base;
+        let mut bag = rig.run_bag()?;
+        // When each viewpoint's record came: its sweep cloud's stamp.
+        let clock = bag.clock();
+        let mut stamps = Vec::new();
+        let mut progress = |v: &record::ViewpointRecord| {
+            stamps.push(clock.now_ns());
+            progress(v);
+        };
+        let mut tapped = Tap::with_sink(rig, |e: &Event| bag_event(&mut bag, e));
         // A computed oracle runs beside the exploration (it depends on the
         // scenario and the setup only): the run waits for it at the end.
-        let run = explore::run(setup, &mut rig, &mut judge, &run_options, progress);
+        let run = explore::run(setup, &mut tapped, &mut judge, &run_options, &mut progress);
         // A failed run does not wait (the oracle's thread is left to end
         // with the process; its cache file is written whole or not at all).
         let mut run = run?;
+        let bag = finish_bag(bag, &run, &robot, &world_from_base, &stamps)?;
         let t = Instant::now();
         let oracle = pending.map(crate::oracle::OracleJob::finish).transpose()?;
         if let Some(t_run) = &mut run.timings {
             t_run.oracle_s = loaded_s + t.elapsed().as_secs_f64();
         }
         Ok(ExploreOutcome {
+            bag,
             coverage: judge.coverage(),
             observable: judge.observable(),
             oracle,
@@ -471,6 +487,73 @@ pub struct ExploreOutcome {
     pub observable: Vec<(usize, usize)>,
     /// The coverage oracle (when asked for, mesh worlds).
     pub oracle: Option<CoverageOracle>,
+    /// `run.mcap`: what the hardware did, the sweeps, viewpoints and discs
+    /// as ROS 2 messages ([`RunBag`]).
+    pub bag: Vec<u8>,
+}
+
+/// Finish the bag of `run`: each viewpoint's points as one sweep cloud at
+/// the time its record came (`stamps`, in viewpoint order), then marker
+/// arrays of the viewpoints' scanner poses and of the discs by material.
+fn finish_bag(
+    mut recorder: RunBag,
+    run: &ExploreRun,
+    robot: &robot::Robot,
+    world_from_base: &geom::Isometry3,
+    stamps: &[u64],
+) -> Result<Vec<u8>, SimError> {
+    let end = recorder.clock().now_ns();
+    let mut per_viewpoint: Vec<Vec<&sensor::SweepPoint>> = vec![Vec::new(); run.viewpoints.len()];
+    for (p, &k) in run.cloud.iter().zip(&run.cloud_viewpoint) {
+        if let Some(points) = per_viewpoint.get_mut(k) {
+            points.push(p);
+        }
+    }
+    for (k, points) in per_viewpoint.into_iter().enumerate() {
+        recorder.sweep(stamps.get(k).copied().unwrap_or(end), points)?;
+    }
+    let mut poses = Vec::with_capacity(run.viewpoints.len());
+    for v in &run.viewpoints {
+        if let Some(pose) = robot.scanner_pose(&v.joints)? {
+            poses.push(world_from_base * pose);
+        }
+    }
+    recorder.write(
+        record::bag::topics::VIEWPOINTS,
+        end,
+        &record::bag::markers::viewpoints(end, &poses),
+    )?;
+    let d = &run.discs;
+    let discs: Vec<record::bag::markers::DiscMark> = d
+        .discs
+        .iter()
+        .enumerate()
+        .map(|(k, disc)| record::bag::markers::DiscMark {
+            centre: disc.centre,
+            normal: disc.normal,
+            radius: disc.radius_m,
+            material: material_of(d, k),
+        })
+        .collect();
+    recorder.write(
+        record::bag::topics::DISCS,
+        end,
+        &record::bag::markers::discs(end, &discs),
+    )?;
+    Ok(recorder.finish()?)
+}
+
+/// The most likely material of disc `k` once an observation updated it.
+fn material_of(d: &explore::DiscMap, k: usize) -> Option<usize> {
+    if d.observations.get(k).copied().unwrap_or(0) == 0 {
+        return None;
+    }
+    d.posterior.get(k).and_then(|p| {
+        p.iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map(|(m, _)| m)
+    })
 }
 
 impl ExploreOutcome {
@@ -561,6 +644,7 @@ fn stage_files(
     staging: &Staging,
 ) -> Result<(), SimError> {
     outcome.run.write(staging, outcome.coverage_summary())?;
+    staging.write(record::folder::RUN_MCAP, &outcome.bag)?;
     staging.write(
         record::folder::SCENARIO_TOML,
         outcome.loaded.standalone().to_toml()?,

@@ -18,6 +18,7 @@
 //! columns are written empty and those times are 0, so every file repeats.
 
 use crate::follow_reach::{AprioriFace, unreachable_faces};
+use crate::rig::bag_event;
 use crate::scan_check::{
     ModelScanConfig, ModelScanScore, ScanIndex, model_to_scan, scan_clearance,
 };
@@ -25,6 +26,7 @@ use crate::surface_score::{SurfaceScore, SurfaceScoreConfig, not_resting_on, sco
 use crate::{SimError, SimRig};
 use follow::{Episode, EpisodeOptions, FollowConfig, FollowError, Follower, RunEnd, Termination};
 use geom::{Aabb, Isometry3, Point3, Real, Vector3};
+use hw::script::{Event, Tap};
 use plan::contact::{min_clearance, motion_contacts, robot_contacts, smallest_link_radius};
 use record::follow::{FollowSummary, StepTimeStats};
 use record::snapshots::ModelSnapshots;
@@ -603,8 +605,10 @@ impl FollowSetup {
             0.5 * follower.config().desired_distance_m,
         )?;
         let mut snapshots = ModelSnapshots::new();
+        let mut bag = self.rig.run_bag()?;
+        let mut tapped = Tap::with_sink(&mut self.rig, |e: &Event| bag_event(&mut bag, e));
         let episode = follow::run_episode(
-            &mut self.rig,
+            &mut tapped,
             &mut follower,
             &mut judge,
             EpisodeOptions {
@@ -618,6 +622,12 @@ impl FollowSetup {
             },
         )?;
         snapshots.finish(episode.rows.len() as u64, follower.model());
+        let end = bag.clock().now_ns();
+        let model_markers =
+            record::bag::markers::surface_model(end, &follower.model().to_model_json());
+        bag.write(record::bag::topics::SURFACE_MODEL, end, &model_markers)
+            .map_err(SimError::from)?;
+        let bag = bag.finish().map_err(SimError::from)?;
         let score = match world.as_scene() {
             Some(scene) => {
                 let surface = follower.model().config();
@@ -664,6 +674,7 @@ impl FollowSetup {
             score,
             scan_score,
             a_priori_faces: self.a_priori_faces,
+            bag,
         })
     }
 }
@@ -952,6 +963,9 @@ pub struct FollowRun {
     pub scan_score: Option<ModelScanScore>,
     /// True faces the robot cannot reach, given a priori and not scored.
     pub a_priori_faces: Vec<AprioriFace>,
+    /// `run.mcap`: the joint states, frames and range readings of every
+    /// step, and the surface model's markers ([`record::bag::RunBag`]).
+    pub bag: Vec<u8>,
 }
 
 /// `run.json` of a simulated surface-following run.
@@ -1064,11 +1078,15 @@ impl FollowRun {
         ])
     }
 
-    /// Stage the run folder's files ([`outputs`](Self::outputs)).
+    /// Stage the run folder's files ([`outputs`](Self::outputs) and
+    /// `run.mcap`).
     pub fn write(&self, staging: &record::Staging) -> Result<(), FollowRunError> {
         for (name, text) in self.outputs()? {
             staging.write(name, text).map_err(SimError::from)?;
         }
+        staging
+            .write(record::folder::RUN_MCAP, &self.bag)
+            .map_err(SimError::from)?;
         Ok(())
     }
 }

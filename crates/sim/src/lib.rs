@@ -97,6 +97,13 @@ impl From<blast::BlastError> for SimError {
     }
 }
 
+// A run's bag is a run-folder file.
+impl From<record::bag::BagError> for SimError {
+    fn from(e: record::bag::BagError) -> Self {
+        Self::Record(e.into())
+    }
+}
+
 impl From<map::MapError> for SimError {
     fn from(e: map::MapError) -> Self {
         Self::Map(Box::new(e))

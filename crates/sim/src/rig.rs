@@ -96,6 +96,11 @@ impl SimRig {
         self.range_noise_sigma_m
     }
 
+    /// The simulated 2-D scanner, if the rig has one.
+    pub fn scanner(&self) -> Option<&Scanner> {
+        self.scanner.as_ref()
+    }
+
     /// The robot model.
     pub fn robot(&self) -> &Robot {
         &self.robot
@@ -199,5 +204,43 @@ impl RangeSensors for SimRig {
                 Ok(rf.measure(world.as_ref(), &world_from_link, rng))
             })
             .collect()
+    }
+}
+
+impl SimRig {
+    /// The bag of a run of this rig from where it stands
+    /// ([`record::bag::RunBag`]): its scanner's bearings and ranges, and
+    /// range finders that report up to their range plus 10σ of the rig's
+    /// range noise (a simulated reading can lie that far past it).
+    pub fn run_bag(&self) -> Result<record::bag::RunBag, SimError> {
+        let defaults = record::bag::BagConfig::default();
+        let config = record::bag::BagConfig {
+            scan_range_m: self.scanner.as_ref().map_or(defaults.scan_range_m, |s| {
+                (s.config().min_range_m, s.config().max_range_m)
+            }),
+            finder_range_slack_m: 10.0 * self.range_noise_sigma_m,
+            ..defaults
+        };
+        Ok(record::bag::RunBag::new(
+            &self.robot,
+            &self.world_from_base,
+            &self.joints(),
+            self.bearings_rad(),
+            config,
+        )?)
+    }
+}
+
+/// Hand one event of tapped hardware (`hw::script::Tap`) to a run's bag.
+pub fn bag_event(bag: &mut record::bag::RunBag, event: &hw::script::Event) {
+    use hw::script::Event;
+    match event {
+        Event::Moved { reached, .. } => bag.moved(reached),
+        Event::Scanned(s) => bag.scanned(&s.ranges_m, &s.intensities),
+        Event::Read(readings) => {
+            let d: Vec<Option<Real>> = readings.iter().map(|r| r.map(|p| p.distance_m)).collect();
+            bag.read(&d);
+        }
+        Event::Seeded(_) => {}
     }
 }

@@ -1,6 +1,7 @@
 //! The sim crate's integration tests, one binary (a module per topic) so a test build links few executables.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may panic
 
+mod bag;
 mod bounds;
 mod bridge_scan;
 mod follow_reach;
