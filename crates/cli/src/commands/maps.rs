@@ -175,8 +175,28 @@ pub fn segment(a: &SegmentArgs) -> Result<()> {
 pub struct MapArgs {
     /// Sweeps written by `surveyor scan` (PLY with per-point ray origins `ox oy oz`
     /// and the `scan ray` grid cell, which the occlusion weights of Paul §4.2.1 use).
-    #[arg(long, num_args = 1.., required_unless_present = "print_config")]
+    #[arg(long, num_args = 1.., required_unless_present_any = ["print_config", "bag"], conflicts_with = "bag")]
     scans: Vec<PathBuf>,
+    /// A robot's ROS 2 bag (MCAP) instead of scan files: its `sensor_msgs/LaserScan`s
+    /// placed by the `sensor_msgs/JointState`s interpolated to each scan's stamp
+    /// (a `surveyor explore` run's `run.mcap`, or one recorded on a robot). Also
+    /// writes the scans' points as `cloud.ply` and the mesh's discs as `discs.csv`.
+    #[arg(long, requires = "robot")]
+    bag: Option<PathBuf>,
+    /// With --bag: the robot, a built-in name or FILE.urdf.
+    #[arg(long)]
+    robot: Option<String>,
+    /// With --bag: the link whose frame the scans are in (ROS's laser convention:
+    /// rays in its x–y plane). Default: the scans' frame_id, a link of the robot
+    /// or a frame the bag's /tf_static places on one.
+    #[arg(long, requires = "bag")]
+    scanner_link: Option<String>,
+    /// With --bag: the LaserScan topic.
+    #[arg(long, default_value = record::bag::topics::SCAN, requires = "bag")]
+    scan_topic: String,
+    /// With --bag: the JointState topic.
+    #[arg(long, default_value = record::bag::topics::JOINT_STATES, requires = "bag")]
+    joints_topic: String,
     /// Scenario (built-in name or file) whose regions of interest A1 ⊂ A2 ⊂ A3
     /// bound the grid (default: the config's, which are the bridge scenarios').
     #[arg(long)]
@@ -216,13 +236,26 @@ pub fn map(a: &MapArgs) -> Result<()> {
         bail!("--out is required");
     };
     let mut mapper = Mapper::new(&config)?;
-    for path in &a.scans {
-        let sweep = Sweep::read_ply(path)?;
+    let from_bag = a.bag.is_some();
+    let inputs: Vec<(String, Sweep)> = match &a.bag {
+        Some(path) => sweeps_of_bag(a, path)?
+            .sweeps
+            .into_iter()
+            .enumerate()
+            .map(|(k, s)| (format!("{} sweep {k}", path.display()), s))
+            .collect(),
+        None => a
+            .scans
+            .iter()
+            .map(|p| Ok((p.display().to_string(), Sweep::read_ply(p)?)))
+            .collect::<Result<_>>()?,
+    };
+    for (path, sweep) in &inputs {
         let t0 = Instant::now();
-        let summary = mapper.integrate_sweep(&sweep);
+        let summary = mapper.integrate_sweep(sweep);
         say!(
             "{}: {} points integrated in {:.1} ms ({} voxels newly known, {} occlusion segments ({}), {} TSDF voxel updates)",
-            path.display(),
+            path,
             sweep.len(),
             1000.0 * t0.elapsed().as_secs_f64(),
             summary.occupancy.newly_known,
@@ -235,13 +268,13 @@ pub fn map(a: &MapArgs) -> Result<()> {
             summary.tsdf.voxel_updates
         )?;
         if sweep.is_empty() {
-            note!("warning: {} holds no points", path.display());
+            note!("warning: {path} holds no points");
         } else if summary.occupancy.rays_outside == sweep.len() {
             let b = mapper.occupancy().geometry().aabb();
             note!(
                 "warning: {}: all {} rays lie outside the occupancy map (A3 = [{:.2}, {:.2}] × [{:.2}, {:.2}] × [{:.2}, {:.2}] m): \
                  nothing was integrated into it (the TSDF mesh is not bounded by A3); check the scan's frame or pass --scenario with its regions",
-                path.display(),
+                path,
                 sweep.len(),
                 b.min.x,
                 b.max.x,
@@ -261,7 +294,33 @@ pub fn map(a: &MapArgs) -> Result<()> {
     let json = staged.file_in(out, "occupancy.json")?;
     std::fs::write(&json, outputs.report.to_json() + "\n")
         .with_context(|| format!("writing {}", out.join("occupancy.json").display()))?;
+    let discs = if from_bag {
+        let points: Vec<sensor::SweepPoint> = inputs
+            .iter()
+            .flat_map(|(_, s)| s.points().iter().copied())
+            .collect();
+        record::explore::write_cloud(&staged.file_in(out, record::explore::CLOUD_PLY)?, &points)?;
+        // Paul §5.2: the discs of the fused mesh.
+        let normals = outputs.mesh.vertex_normals();
+        let sld = generate_discs(
+            &outputs.mesh.vertices,
+            map::Orientation::ReferenceNormals(&normals),
+            &SldConfig::default(),
+            0,
+        )?;
+        save_discs_csv(&staged.file_in(out, "discs.csv")?, &sld.discs, &[])?;
+        Some((points.len(), sld.discs.len()))
+    } else {
+        None
+    };
     staged.commit()?;
+    if let Some((points, discs)) = discs {
+        say!(
+            "{points} points → {}; {discs} discs of the mesh → {}",
+            out.join(record::explore::CLOUD_PLY).display(),
+            out.join("discs.csv").display()
+        )?;
+    }
     let r = &outputs.report;
     say!(
         "mesh: {} vertices, {} triangles (extracted in {:.1} ms) → {}",
@@ -287,4 +346,38 @@ pub fn map(a: &MapArgs) -> Result<()> {
         out.join("occupancy.json").display()
     )?;
     Ok(())
+}
+
+/// The sweeps of `--bag` for `--robot`, after saying what was read.
+fn sweeps_of_bag(a: &MapArgs, path: &std::path::Path) -> Result<record::bag::BagSweeps> {
+    let Some(name) = &a.robot else {
+        bail!("--bag needs --robot");
+    };
+    let robot = scenario::RobotChoice::parse(name, None)?.build()?;
+    let topics = record::bag::ScanTopics {
+        scan: a.scan_topic.clone(),
+        joints: a.joints_topic.clone(),
+        scanner_link: a.scanner_link.clone(),
+    };
+    let t0 = Instant::now();
+    let b = record::bag::sweeps_from_bag(path, &robot, &topics)?;
+    say!(
+        "{}: {} scans placed on link {} of {} in {} sweeps ({} outside the joint states' span){} in {:.1} ms",
+        path.display(),
+        b.scans,
+        b.scanner_link,
+        robot.name,
+        b.sweeps.len(),
+        b.unplaced,
+        if b.base_from_bag {
+            ", base placed by the bag's /tf_static"
+        } else {
+            ", base at the origin (no /tf_static for it)"
+        },
+        1000.0 * t0.elapsed().as_secs_f64()
+    )?;
+    if b.sweeps.is_empty() {
+        bail!("{}: no scan could be placed", path.display());
+    }
+    Ok(b)
 }

@@ -16,8 +16,18 @@ use surface::{
 pub struct ModelArgs {
     /// Sensor sets, one JSON object per line:
     /// `{"points": [[x,y,z], ...], "axes": [[ax,ay,az], ...]}`.
-    #[arg(long, required_unless_present = "print_config")]
+    #[arg(long, required_unless_present_any = ["print_config", "bag"], conflicts_with = "bag")]
     sets: Option<PathBuf>,
+    /// A robot's ROS 2 bag (MCAP) instead of a sets file: its `sensor_msgs/Range`
+    /// readings, one set per stamp, each point `range` along its frame's x axis,
+    /// placed by the bag's /tf_static and /tf (a `surveyor follow` run's `run.mcap`,
+    /// or one recorded on a robot).
+    #[arg(long)]
+    bag: Option<PathBuf>,
+    /// With --bag: the Range topics to read (comma-separated; default: every
+    /// topic of that type).
+    #[arg(long, value_delimiter = ',', requires = "bag")]
+    range_topics: Vec<String>,
     /// The whole model configuration (TOML, fields of `SurfaceConfig`).
     #[arg(long)]
     config: Option<PathBuf>,
@@ -66,16 +76,35 @@ pub fn model(a: &ModelArgs) -> Result<()> {
         put!("{}", config_toml(&config)?)?;
         return Ok(());
     }
-    let (Some(sets_path), Some(out)) = (&a.sets, &a.out) else {
-        bail!("--sets and --out are required");
+    let Some(out) = &a.out else {
+        bail!("--out is required");
     };
     config.validate()?;
-    let file = File::open(sets_path).with_context(|| format!("opening {}", sets_path.display()))?;
-    let sets = read_sets_jsonl_limited(
-        BufReader::new(file),
-        &sets_path.display().to_string(),
-        config.max_set_points,
-    )?;
+    let (sets_path, sets) = match (&a.bag, &a.sets) {
+        (Some(bag), _) => {
+            let read = record::bag::sets_from_bag(bag, &a.range_topics, config.max_set_points)?;
+            say!(
+                "{}: {} sets from {} Range topics ({} readings with a return, {} without)",
+                bag.display(),
+                read.sets.len(),
+                read.topics.len(),
+                read.points,
+                read.misses
+            )?;
+            (bag, read.sets)
+        }
+        (None, Some(sets_path)) => {
+            let file = File::open(sets_path)
+                .with_context(|| format!("opening {}", sets_path.display()))?;
+            let sets = read_sets_jsonl_limited(
+                BufReader::new(file),
+                &sets_path.display().to_string(),
+                config.max_set_points,
+            )?;
+            (sets_path, sets)
+        }
+        (None, None) => bail!("--sets (or --bag) and --out are required"),
+    };
     if sets.is_empty() {
         bail!(
             "{}: no sensor sets (expected one JSON object per line)",

@@ -684,3 +684,100 @@ fn scan_of_a_point_cloud_prints_its_epsilon() {
         "{out}"
     );
 }
+
+/// `map --bag` and `model --bag` on bags they cannot use: a file that is
+/// no bag, a bag cut short, a bag without the topics asked for, a robot
+/// whose joints the bag does not name. Each error names the file and what
+/// is missing, and no output folder is left behind.
+#[test]
+fn bad_bags_are_refused_by_name() {
+    use record::bag::msg::{Header, JointState, Range, TfMessage};
+    use record::bag::{BagWriter, topics};
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_owned();
+    std::fs::write(p("junk.mcap"), b"\x89MCAP0\r\nnot really").unwrap();
+    // Small bags: joint states (of the DENSO's six joints, or of a
+    // shoulder and an elbow), range readings.
+    let small = |names: &[&str]| {
+        let mut w = BagWriter::new(std::io::Cursor::new(Vec::new())).unwrap();
+        w.write(topics::TF_STATIC, 0, &TfMessage::default())
+            .unwrap();
+        for k in 0..50u64 {
+            let t = k * 1_000_000;
+            let js = JointState {
+                header: Header::new(t, ""),
+                name: names.iter().map(|&n| n.to_owned()).collect(),
+                position: vec![0.1; names.len()],
+                ..JointState::default()
+            };
+            w.write(topics::JOINT_STATES, t, &js).unwrap();
+            let r = Range {
+                header: Header::new(t, "nowhere"),
+                max_range: 1.0,
+                range: 0.5,
+                ..Range::default()
+            };
+            w.write("/range/a", t, &r).unwrap();
+        }
+        w.finish().unwrap().into_inner()
+    };
+    let bytes = small(&["joint1", "joint2", "joint3", "joint4", "joint5", "joint6"]);
+    std::fs::write(p("small.mcap"), &bytes).unwrap();
+    std::fs::write(p("cut.mcap"), &bytes[..bytes.len() * 2 / 3]).unwrap();
+    std::fs::write(p("names.mcap"), small(&["shoulder", "elbow"])).unwrap();
+    let map = |bag: &str, out: &str| {
+        fails(&[
+            "map",
+            "--bag",
+            &p(bag),
+            "--robot",
+            "denso-vm6083",
+            "--out",
+            &p(out),
+        ])
+    };
+    for (bag, says) in [
+        ("junk.mcap", "junk.mcap"),
+        ("cut.mcap", "cut.mcap"),
+        ("missing.mcap", "missing.mcap"),
+        ("small.mcap", "no `sensor_msgs/msg/LaserScan` on /scan"),
+        ("names.mcap", "has no joint `joint1` of robot denso-vm6083"),
+    ] {
+        let e = map(bag, "m");
+        assert!(e.contains(says), "{bag}: {e}");
+        clean(&e);
+    }
+    let e = fails(&[
+        "map",
+        "--bag",
+        &p("small.mcap"),
+        "--robot",
+        "denso-vm6083",
+        "--scan-topic",
+        "/range/a",
+        "--out",
+        &p("m"),
+    ]);
+    assert!(e.contains("carries sensor_msgs/msg/Range"), "{e}");
+    let model = |bag: &str, extra: &[&str]| {
+        let (bag, out) = (p(bag), p("md"));
+        let mut args = vec!["model", "--bag", &bag];
+        args.extend_from_slice(extra);
+        args.extend(["--out", &out]);
+        fails(&args)
+    };
+    let e = model("small.mcap", &[]);
+    assert!(e.contains("frame `nowhere` is not placed"), "{e}");
+    let e = model("small.mcap", &["--range-topics", "/range/b"]);
+    assert!(e.contains("no messages on /range/b"), "{e}");
+    let e = model("cut.mcap", &[]);
+    assert!(e.contains("cut.mcap"), "{e}");
+    clean(&e);
+    let e = fails(&["map", "--bag", &p("small.mcap"), "--out", &p("m")]);
+    assert!(e.contains("--robot"), "{e}");
+    let left: Vec<_> = listing(dir.path())
+        .into_iter()
+        .filter(|f| f.extension().is_none_or(|e| e != "mcap"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}
