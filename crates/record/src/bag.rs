@@ -46,8 +46,8 @@ pub use input::{
     sweeps_from_bag,
 };
 pub use run::{
-    BagClock, BagConfig, ROOT_FRAME, RunBag, SCANNER_FRAME, point_cloud, range_frame,
-    scanner_from_laser,
+    BagClock, BagConfig, ROOT_FRAME, RunBag, SCANNER_FRAME, joint_state, laser_scan, link_frames,
+    point_cloud, range, range_frame, scan_rays, scanner_from_laser,
 };
 
 use std::path::PathBuf;

@@ -150,10 +150,7 @@ pub fn sweeps_from_bag(
             unplaced += 1;
             continue;
         };
-        let n = scan.ranges.len();
-        let bearings: Vec<Real> = (0..n)
-            .map(|i| Real::from(scan.angle_min) + i as Real * Real::from(scan.angle_increment))
-            .collect();
+        let (bearings, ranges, intensities) = super::scan_rays(&scan);
         // A new sweep at a mark, a pause, a change of bearings or the cap.
         let past_mark = if marks.is_empty() {
             last_t.is_some_and(|p| (t - p) as Real * 1e-9 > SWEEP_GAP_S)
@@ -182,20 +179,6 @@ pub fn sweeps_from_bag(
         robot.fk_into(&q, &mut frames)?;
         let world_from_link = world_from_base * frames[link.0];
         let pose = world_from_link * link_from_scanner;
-        let (lo, hi) = (Real::from(scan.range_min), Real::from(scan.range_max));
-        let ranges: Vec<Option<Real>> = scan
-            .ranges
-            .iter()
-            .map(|&r| {
-                let r = Real::from(r);
-                (r.is_finite() && r >= lo && r <= hi).then_some(r)
-            })
-            .collect();
-        let intensities: Vec<Real> = if scan.intensities.len() == n {
-            scan.intensities.iter().map(|&i| Real::from(i)).collect()
-        } else {
-            vec![0.0; n]
-        };
         b.push_scan(&pose, &ranges, &intensities, None)?;
         placed += 1;
     }

@@ -370,6 +370,33 @@ impl Marker {
     pub const TRIANGLE_LIST: i32 = 11;
 }
 
+/// `trajectory_msgs/msg/JointTrajectoryPoint`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct JointTrajectoryPoint {
+    /// Joint values, in `joint_names` order.
+    pub positions: Vec<f64>,
+    /// Per joint, or empty.
+    pub velocities: Vec<f64>,
+    /// Per joint, or empty.
+    pub accelerations: Vec<f64>,
+    /// Per joint, or empty.
+    pub effort: Vec<f64>,
+    /// When the point is to be reached, from the trajectory's start.
+    pub time_from_start: Duration,
+}
+
+/// `trajectory_msgs/msg/JointTrajectory`: what a `ros2_control` joint
+/// trajectory controller executes.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct JointTrajectory {
+    /// Stamp (zero: start now).
+    pub header: Header,
+    /// The joints the points give values for.
+    pub joint_names: Vec<String>,
+    /// The points, in time order.
+    pub points: Vec<JointTrajectoryPoint>,
+}
+
 /// `visualization_msgs/msg/MarkerArray`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct MarkerArray {
@@ -481,6 +508,25 @@ impl RosMessage for TfMessage {
                 ("geometry_msgs/Transform", TRANSFORM),
                 D_VECTOR3,
                 D_QUATERNION,
+            ],
+        )
+    }
+}
+
+impl RosMessage for JointTrajectory {
+    const TYPE: &'static str = "trajectory_msgs/msg/JointTrajectory";
+    fn definition() -> String {
+        with_dependencies(
+            "std_msgs/Header header\nstring[] joint_names\ntrajectory_msgs/JointTrajectoryPoint[] points\n",
+            &[
+                D_HEADER,
+                D_TIME,
+                (
+                    "trajectory_msgs/JointTrajectoryPoint",
+                    "float64[] positions\nfloat64[] velocities\nfloat64[] accelerations\n\
+float64[] effort\nbuiltin_interfaces/Duration time_from_start\n",
+                ),
+                D_DURATION,
             ],
         )
     }

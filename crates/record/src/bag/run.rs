@@ -167,31 +167,16 @@ impl RunBag {
     /// A scan was taken: ranges (`None`: no return) and intensities per
     /// bearing. It takes the scan period.
     pub fn scanned(&mut self, ranges_m: &[Option<Real>], intensities: &[Real]) {
-        let n = self.bearings.len();
-        let first = self.bearings.first().copied().unwrap_or(0.0);
-        let last = self.bearings.last().copied().unwrap_or(0.0);
-        let increment = if n > 1 {
-            (last - first) / (n - 1) as Real
-        } else {
-            0.0
-        };
         let period = self.config.scan_period_s;
         let now = self.clock.now_ns();
-        let msg = LaserScan {
-            header: Header::new(now, SCANNER_FRAME),
-            angle_min: first as f32,
-            angle_max: last as f32,
-            angle_increment: increment as f32,
-            time_increment: 0.0,
-            scan_time: period as f32,
-            range_min: self.config.scan_range_m.0 as f32,
-            range_max: self.config.scan_range_m.1 as f32,
-            ranges: ranges_m
-                .iter()
-                .map(|r| r.map_or(f32::INFINITY, |r| r as f32))
-                .collect(),
-            intensities: intensities.iter().map(|&i| i as f32).collect(),
-        };
+        let msg = laser_scan(
+            now,
+            &self.bearings,
+            ranges_m,
+            intensities,
+            self.config.scan_range_m,
+            period,
+        );
         let r = self.bag.write(topics::SCAN, now, &msg);
         self.keep(r);
         self.clock.advance(period);
@@ -202,18 +187,14 @@ impl RunBag {
     pub fn read(&mut self, distances_m: &[Option<Real>]) {
         let now = self.clock.now_ns();
         for (k, reading) in distances_m.iter().enumerate() {
-            let max = self.robot.range_finders.get(k).map_or(0.0, |f| {
-                (f.max_range_m + self.config.finder_range_slack_m) as f32
-            });
-            let msg = Range {
-                header: Header::new(now, &range_frame(k)),
-                radiation_type: Range::INFRARED,
-                field_of_view: 0.0,
-                min_range: 0.0,
-                max_range: max,
-                range: reading.map_or(f32::INFINITY, |d| d as f32),
-            };
-            let r = self.bag.write(&topics::range_finder(k), now, &msg);
+            let max = self
+                .robot
+                .range_finders
+                .get(k)
+                .map_or(0.0, |f| f.max_range_m + self.config.finder_range_slack_m);
+            let r = self
+                .bag
+                .write(&topics::range_finder(k), now, &range(now, k, max, *reading));
             self.keep(r);
         }
         self.clock.advance(self.config.reading_period_s);
@@ -249,35 +230,10 @@ impl RunBag {
         self.bag.write(
             topics::JOINT_STATES,
             now,
-            &JointState {
-                header: Header::new(now, ""),
-                name: self.joint_names.clone(),
-                position: q.to_vec(),
-                velocity: Vec::new(),
-                effort: Vec::new(),
-            },
+            &joint_state(now, &self.joint_names, q),
         )?;
-        let mut values = q.iter();
-        let mut transforms = Vec::with_capacity(self.robot.joints.len());
-        for (k, joint) in self.robot.joints.iter().enumerate() {
-            let value = if joint.is_actuated() {
-                values.next().copied().unwrap_or(0.0)
-            } else {
-                0.0
-            };
-            let (Some(parent), Some(child)) =
-                (self.robot.links.get(k), self.robot.links.get(k + 1))
-            else {
-                continue;
-            };
-            transforms.push(stamped(
-                now,
-                &parent.name,
-                &child.name,
-                &joint.parent_from_child(value),
-            ));
-        }
-        self.bag.write(topics::TF, now, &TfMessage { transforms })
+        self.bag
+            .write(topics::TF, now, &link_frames(now, &self.robot, q))
     }
 
     /// Add a sweep's points as a `sensor_msgs/PointCloud2` on
@@ -329,6 +285,115 @@ pub(super) fn turn_onto(
             std::f64::consts::PI,
         )
     })
+}
+
+/// A `sensor_msgs/JointState` of the joints `names` at `q`.
+pub fn joint_state(stamp_ns: u64, names: &[String], q: &[Real]) -> JointState {
+    JointState {
+        header: Header::new(stamp_ns, ""),
+        name: names.to_vec(),
+        position: q.to_vec(),
+        velocity: Vec::new(),
+        effort: Vec::new(),
+    }
+}
+
+/// `/tf` of `robot` at `q`: each joint's `parent_from_child`, parent link
+/// to child link.
+pub fn link_frames(stamp_ns: u64, robot: &Robot, q: &[Real]) -> TfMessage {
+    let mut values = q.iter();
+    let mut transforms = Vec::with_capacity(robot.joints.len());
+    for (k, joint) in robot.joints.iter().enumerate() {
+        let value = if joint.is_actuated() {
+            values.next().copied().unwrap_or(0.0)
+        } else {
+            0.0
+        };
+        let (Some(parent), Some(child)) = (robot.links.get(k), robot.links.get(k + 1)) else {
+            continue;
+        };
+        transforms.push(stamped(
+            stamp_ns,
+            &parent.name,
+            &child.name,
+            &joint.parent_from_child(value),
+        ));
+    }
+    TfMessage { transforms }
+}
+
+/// A `sensor_msgs/LaserScan` in [`SCANNER_FRAME`]: rays at evenly spaced
+/// `bearings` (radians), `+inf` where there is no return, the scanner's
+/// `(shortest, longest)` range and its period.
+pub fn laser_scan(
+    stamp_ns: u64,
+    bearings: &[Real],
+    ranges_m: &[Option<Real>],
+    intensities: &[Real],
+    range_m: (Real, Real),
+    period_s: Real,
+) -> LaserScan {
+    let n = bearings.len();
+    let first = bearings.first().copied().unwrap_or(0.0);
+    let last = bearings.last().copied().unwrap_or(0.0);
+    let increment = if n > 1 {
+        (last - first) / (n - 1) as Real
+    } else {
+        0.0
+    };
+    LaserScan {
+        header: Header::new(stamp_ns, SCANNER_FRAME),
+        angle_min: first as f32,
+        angle_max: last as f32,
+        angle_increment: increment as f32,
+        time_increment: 0.0,
+        scan_time: period_s as f32,
+        range_min: range_m.0 as f32,
+        range_max: range_m.1 as f32,
+        ranges: ranges_m
+            .iter()
+            .map(|r| r.map_or(f32::INFINITY, |r| r as f32))
+            .collect(),
+        intensities: intensities.iter().map(|&i| i as f32).collect(),
+    }
+}
+
+/// The rays of a `LaserScan`: bearings (radians), ranges (`None` when not
+/// finite or outside `[range_min, range_max]`, REP 117) and intensities
+/// (zeros when the scan has none).
+pub fn scan_rays(scan: &LaserScan) -> (Vec<Real>, Vec<Option<Real>>, Vec<Real>) {
+    let n = scan.ranges.len();
+    let bearings = (0..n)
+        .map(|i| Real::from(scan.angle_min) + i as Real * Real::from(scan.angle_increment))
+        .collect();
+    let (lo, hi) = (Real::from(scan.range_min), Real::from(scan.range_max));
+    let ranges = scan
+        .ranges
+        .iter()
+        .map(|&r| {
+            let r = Real::from(r);
+            (r.is_finite() && r >= lo && r <= hi).then_some(r)
+        })
+        .collect();
+    let intensities = if scan.intensities.len() == n {
+        scan.intensities.iter().map(|&i| Real::from(i)).collect()
+    } else {
+        vec![0.0; n]
+    };
+    (bearings, ranges, intensities)
+}
+
+/// A `sensor_msgs/Range` of range finder `k` (in [`range_frame`]`(k)`):
+/// `distance` or `+inf` for nothing in range, up to `max_range_m`.
+pub fn range(stamp_ns: u64, k: usize, max_range_m: Real, distance: Option<Real>) -> Range {
+    Range {
+        header: Header::new(stamp_ns, &range_frame(k)),
+        radiation_type: Range::INFRARED,
+        field_of_view: 0.0,
+        min_range: 0.0,
+        max_range: max_range_m as f32,
+        range: distance.map_or(f32::INFINITY, |d| d as f32),
+    }
 }
 
 /// The frame of range finder `k` (its x axis is the sensing axis).
