@@ -96,6 +96,26 @@ impl SimRig {
         self.range_noise_sigma_m
     }
 
+    /// The rig of a scenario's robot with every sensor it carries: its range
+    /// finders, with the scenario's range noise ([`SimRig::of_scenario`]),
+    /// and when the robot has a scanner mount, the scenario's scanner (the
+    /// URG-04LX by default). What `surveyor sim-robot` serves.
+    pub fn with_every_sensor(loaded: &LoadedScenario, seed: u64) -> Result<Self, SimError> {
+        let mut rig = Self::of_scenario(loaded, seed)?;
+        if rig.robot.scanner.is_some() {
+            let spec = loaded.scenario.scanner.clone().unwrap_or_default();
+            rig.scanner = Some(Scanner::new(spec.config)?);
+        }
+        Ok(rig)
+    }
+
+    /// The scanner's shortest and longest range, metres (`None` without one).
+    pub fn scan_range_m(&self) -> Option<(Real, Real)> {
+        self.scanner
+            .as_ref()
+            .map(|s| (s.config().min_range_m, s.config().max_range_m))
+    }
+
     /// The simulated 2-D scanner, if the rig has one.
     pub fn scanner(&self) -> Option<&Scanner> {
         self.scanner.as_ref()
@@ -215,9 +235,7 @@ impl SimRig {
     pub fn run_bag(&self) -> Result<record::bag::RunBag, SimError> {
         let defaults = record::bag::BagConfig::default();
         let config = record::bag::BagConfig {
-            scan_range_m: self.scanner.as_ref().map_or(defaults.scan_range_m, |s| {
-                (s.config().min_range_m, s.config().max_range_m)
-            }),
+            scan_range_m: self.scan_range_m().unwrap_or(defaults.scan_range_m),
             finder_range_slack_m: 10.0 * self.range_noise_sigma_m,
             ..defaults
         };

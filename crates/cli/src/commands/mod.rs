@@ -6,6 +6,7 @@ mod follow;
 mod maps;
 mod model;
 mod output;
+mod robot_server;
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Parser, Subcommand};
@@ -68,6 +69,9 @@ enum Command {
     /// Write RUN_DIR/report.html: one self-contained page (works offline)
     /// with a WebGL 3-D view of the run and the plots of its series.
     Report(ReportArgs),
+    /// The simulator as a ROS 2 robot (--ros2): a scenario's robot publishes its
+    /// joint states, scans and range readings and executes joint trajectories.
+    SimRobot(robot_server::SimRobotArgs),
 }
 
 #[derive(Debug, Args)]
@@ -265,6 +269,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Follow(a) => follow::follow(&a),
         Command::Explore(a) => explore::explore(&a),
         Command::PlanBlast(a) => blast::plan_blast(&a),
+        Command::SimRobot(a) => robot_server::sim_robot(&a),
     }
 }
 

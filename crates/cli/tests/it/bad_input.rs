@@ -781,3 +781,58 @@ fn bad_bags_are_refused_by_name() {
         .collect();
     assert!(left.is_empty(), "{left:?}");
 }
+
+/// `sim-robot`: without `--ros2` (the one transport), with a speed or a
+/// duration out of range, with a `ROS_DOMAIN_ID` that is no domain, or an
+/// unknown scenario: a clear error before any DDS traffic.
+#[test]
+fn sim_robot_refuses_what_it_cannot_serve() {
+    support::fails_with(&["sim-robot", "--scenario", "bridge1"], &["--ros2"]);
+    support::fails_with(
+        &[
+            "sim-robot",
+            "--scenario",
+            "bridge1",
+            "--ros2",
+            "--joint-speed",
+            "0",
+        ],
+        &["--joint-speed 0", "at most 10 rad/s"],
+    );
+    support::fails_with(
+        &[
+            "sim-robot",
+            "--scenario",
+            "bridge1",
+            "--ros2",
+            "--for",
+            "-1",
+        ],
+        &["--for -1"],
+    );
+    support::fails_with(
+        &[
+            "sim-robot",
+            "--scenario",
+            "no_such_scene",
+            "--ros2",
+            "--for",
+            "1",
+        ],
+        &["no_such_scene"],
+    );
+    for bad in ["233", "abc", "-1"] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_surveyor"))
+            .args(["sim-robot", "--scenario", "bridge1", "--ros2", "--for", "1"])
+            .env("ROS_DOMAIN_ID", bad)
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "ROS_DOMAIN_ID={bad}");
+        let e = String::from_utf8(out.stderr).unwrap();
+        assert!(
+            e.contains(&format!("ROS_DOMAIN_ID={bad}")) && e.contains("0 to 232"),
+            "{e}"
+        );
+        clean(&e);
+    }
+}

@@ -1,0 +1,256 @@
+//! Any hardware served as a ROS 2 robot (`surveyor sim-robot`): it
+//! publishes its joint states, its scans and its range readings, and
+//! executes the joint trajectories it is sent.
+
+use crate::{Ros2Error, Ros2Node, TRAJECTORY_TOPIC};
+use geom::Real;
+use hw::{Arm, LineScanner, RangeSensors};
+use record::bag::msg::JointTrajectory;
+use record::bag::topics;
+use robot::Robot;
+use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+/// How a served robot behaves.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ServeConfig {
+    /// Speed of the fastest joint of every motion, rad/s (m/s for
+    /// prismatic joints): trajectories run at it, whatever their times.
+    pub joint_speed: Real,
+    /// Between joint-state messages, seconds.
+    pub state_period_s: Real,
+    /// Between scans, seconds (the Hokuyo's 0.1 s).
+    pub scan_period_s: Real,
+    /// Between readings of the range finders, seconds.
+    pub range_period_s: Real,
+    /// The scanner's shortest and longest range, metres.
+    pub scan_range_m: (Real, Real),
+    /// How far past its range a range finder may report (its noise), metres.
+    pub finder_range_slack_m: Real,
+}
+
+impl Default for ServeConfig {
+    fn default() -> Self {
+        Self {
+            joint_speed: 1.0,
+            state_period_s: 0.02,
+            scan_period_s: 0.1,
+            range_period_s: 0.1,
+            scan_range_m: (0.02, 5.6),
+            finder_range_slack_m: 0.0,
+        }
+    }
+}
+
+/// What a served robot did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ServeStats {
+    /// Joint states published.
+    pub states: u64,
+    /// Scans published.
+    pub scans: u64,
+    /// Readings of all range finders published.
+    pub readings: u64,
+    /// Trajectories accepted.
+    pub trajectories: u64,
+    /// Trajectories refused (unknown joints, a pose the arm refused).
+    pub refused: u64,
+}
+
+fn now_ns() -> u64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX))
+}
+
+fn transfer(topic: &str, e: impl std::fmt::Debug) -> Ros2Error {
+    Ros2Error::Transfer {
+        topic: topic.to_owned(),
+        message: format!("{e:?}"),
+    }
+}
+
+/// The trajectory's points as joint vectors in `robot`'s order, or why not.
+fn waypoints(t: &JointTrajectory, robot: &Robot, q: &[Real]) -> Result<Vec<Vec<Real>>, String> {
+    let names = robot.joint_names();
+    let index: Vec<Option<usize>> = names
+        .iter()
+        .map(|n| t.joint_names.iter().position(|x| x == n))
+        .collect();
+    if let Some(unknown) = t.joint_names.iter().find(|n| !names.contains(&n.as_str())) {
+        return Err(format!(
+            "joint `{unknown}` is not a joint of {} ({names:?})",
+            robot.name
+        ));
+    }
+    t.points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            if p.positions.len() != t.joint_names.len() {
+                return Err(format!(
+                    "point {k}: {} positions for {} joints",
+                    p.positions.len(),
+                    t.joint_names.len()
+                ));
+            }
+            // Joints the trajectory leaves out stay where they are.
+            Ok(index
+                .iter()
+                .zip(q)
+                .map(|(i, &now)| i.map_or(now, |i| p.positions[i]))
+                .collect())
+        })
+        .collect()
+}
+
+/// Serve `hw` (the hardware of `robot`) on `node` until `stop` is raised:
+/// publish the joint states every `state_period_s` on `/joint_states`, a
+/// scan every `scan_period_s` on `/scan` (when the hardware has a scanner)
+/// and each range finder's reading every `range_period_s` on
+/// `/range/finder_k` (when it has any), and execute each
+/// `trajectory_msgs/JointTrajectory` sent to [`TRAJECTORY_TOPIC`]: its
+/// points in turn, on a straight joint-space line at `joint_speed`, a new
+/// trajectory replacing the one under way (as a `ros2_control` trajectory
+/// controller does). A point the hardware refuses ends the trajectory
+/// there; `log` hears why.
+pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
+    hw: &mut H,
+    robot: &Robot,
+    node: &mut Ros2Node,
+    config: &ServeConfig,
+    stop: &AtomicBool,
+    log: &mut dyn FnMut(&str),
+) -> Result<ServeStats, Ros2Error> {
+    let states = node.publisher::<record::bag::msg::JointState>(topics::JOINT_STATES)?;
+    let scans = node.publisher::<record::bag::msg::LaserScan>(topics::SCAN)?;
+    let ranges: Vec<_> = (0..robot.range_finders.len())
+        .map(|k| node.publisher::<record::bag::msg::Range>(&topics::range_finder(k)))
+        .collect::<Result<_, _>>()?;
+    let commands = node.subscription::<JointTrajectory>(TRAJECTORY_TOPIC)?;
+    let names: Vec<String> = robot.joint_names().iter().map(|&s| s.to_owned()).collect();
+    let bearings = hw.bearings_rad().to_vec();
+    let mut stats = ServeStats::default();
+    let mut goals: VecDeque<Vec<Real>> = VecDeque::new();
+    let tick = Duration::from_millis(5);
+    let start = Instant::now();
+    let mut last = start;
+    let (mut next_state, mut next_scan, mut next_range) = (0.0, 0.0, 0.0);
+    while !stop.load(Ordering::Relaxed) {
+        while let Some((t, _)) = commands.take().map_err(|e| transfer(TRAJECTORY_TOPIC, e))? {
+            match waypoints(&t, robot, &hw.joints()) {
+                Ok(points) => {
+                    goals = points.into();
+                    stats.trajectories += 1;
+                }
+                Err(why) => {
+                    stats.refused += 1;
+                    log(&format!("trajectory refused: {why}"));
+                }
+            }
+        }
+        let now = Instant::now();
+        let dt = (now - last).as_secs_f64();
+        last = now;
+        if let Some(goal) = goals.front() {
+            let q = hw.joints();
+            let far = q
+                .iter()
+                .zip(goal)
+                .map(|(a, b)| (b - a).abs())
+                .fold(0.0, Real::max);
+            let reach = config.joint_speed * dt;
+            let (next, arrived) = if far <= reach {
+                (goal.clone(), true)
+            } else {
+                let s = reach / far;
+                (
+                    q.iter().zip(goal).map(|(a, b)| a + s * (b - a)).collect(),
+                    false,
+                )
+            };
+            if let Err(e) = hw.move_to(&next) {
+                stats.refused += 1;
+                log(&format!("trajectory stopped: {e}"));
+                goals.clear();
+            } else if arrived {
+                goals.pop_front();
+            }
+        }
+        let t = (now - start).as_secs_f64();
+        if t >= next_state {
+            next_state = t + config.state_period_s;
+            let msg = record::bag::joint_state(now_ns(), &names, &hw.joints());
+            states
+                .publish(msg)
+                .map_err(|e| transfer(topics::JOINT_STATES, e))?;
+            stats.states += 1;
+        }
+        if !bearings.is_empty() && t >= next_scan {
+            next_scan = t + config.scan_period_s;
+            let s = hw.scan()?;
+            let msg = record::bag::laser_scan(
+                now_ns(),
+                &bearings,
+                &s.ranges_m,
+                &s.intensities,
+                config.scan_range_m,
+                config.scan_period_s,
+            );
+            scans.publish(msg).map_err(|e| transfer(topics::SCAN, e))?;
+            stats.scans += 1;
+        }
+        if !ranges.is_empty() && t >= next_range {
+            next_range = t + config.range_period_s;
+            let readings = hw.read_all()?;
+            let stamp = now_ns();
+            for (k, (p, r)) in ranges.iter().zip(&readings).enumerate() {
+                let max = robot.range_finders[k].max_range_m + config.finder_range_slack_m;
+                let msg = record::bag::range(stamp, k, max, r.map(|r| r.distance_m));
+                p.publish(msg)
+                    .map_err(|e| transfer(&topics::range_finder(k), e))?;
+            }
+            stats.readings += 1;
+        }
+        std::thread::sleep(tick);
+    }
+    Ok(stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::waypoints;
+    use record::bag::msg::{JointTrajectory, JointTrajectoryPoint};
+
+    fn trajectory(names: &[&str], points: &[&[f64]]) -> JointTrajectory {
+        JointTrajectory {
+            joint_names: names.iter().map(|&n| n.to_owned()).collect(),
+            points: points
+                .iter()
+                .map(|p| JointTrajectoryPoint {
+                    positions: p.to_vec(),
+                    ..JointTrajectoryPoint::default()
+                })
+                .collect(),
+            ..JointTrajectory::default()
+        }
+    }
+
+    #[test]
+    fn trajectory_points_become_joint_vectors_in_the_robot_s_order() {
+        let robot = robot::builtin("point3").unwrap();
+        let names = robot.joint_names();
+        let q = [0.1, 0.2, 0.3];
+        // Reordered names, one joint left out (it stays where it is).
+        let t = trajectory(&[names[2], names[0]], &[&[3.0, 1.0], &[6.0, 4.0]]);
+        assert_eq!(
+            waypoints(&t, &robot, &q).unwrap(),
+            vec![vec![1.0, 0.2, 3.0], vec![4.0, 0.2, 6.0]]
+        );
+        let e = waypoints(&trajectory(&["elbow"], &[&[1.0]]), &robot, &q).unwrap_err();
+        assert!(e.contains("joint `elbow`"), "{e}");
+        let e = waypoints(&trajectory(&[names[0]], &[&[1.0, 2.0]]), &robot, &q).unwrap_err();
+        assert!(e.contains("point 0: 2 positions for 1 joints"), "{e}");
+    }
+}
