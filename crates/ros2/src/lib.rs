@@ -7,13 +7,16 @@
 //! | [`Ros2Config`] | domain id (`ROS_DOMAIN_ID`) and loopback-only discovery |
 //! | [`Ros2Node`] | a ROS 2 node over RustDDS, publishers and subscriptions of `record::bag::msg` types with ROS 2's default QoS |
 //! | [`serve_robot`], [`ServeConfig`] | any hardware served as a ROS 2 robot: `/joint_states`, `/scan`, `Range`s, and `JointTrajectory` executed at a joint speed |
+//! | [`Ros2Hardware`], [`DriverConfig`] | the `hw` traits over a ROS 2 robot: trajectories out, joint states, scans and ranges in (lockstep with `sim-robot`, or the next ones a real robot publishes) |
 //! | [`Ros2Error`] | what can fail |
 
+mod driver;
 mod node;
 mod serve;
 
+pub use driver::{DriverConfig, Ros2Hardware};
 pub use node::{Ros2Config, Ros2Node, TRAJECTORY_TOPIC};
-pub use serve::{ServeConfig, ServeStats, serve_robot};
+pub use serve::{SENSE_TOPIC, ServeConfig, ServeStats, serve_robot};
 
 /// What can fail talking ROS 2.
 #[derive(Debug, thiserror::Error)]

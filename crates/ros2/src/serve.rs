@@ -28,7 +28,15 @@ pub struct ServeConfig {
     pub scan_range_m: (Real, Real),
     /// How far past its range a range finder may report (its noise), metres.
     pub finder_range_slack_m: Real,
+    /// Sense only when asked on [`SENSE_TOPIC`] (a `std_msgs/String`:
+    /// `scan`, `ranges` or `seed N`), in the order asked, instead of on
+    /// the periods: a simulated robot then draws its noise in the sequence
+    /// an in-process run does (our driver in lockstep, [`crate::Ros2Hardware`]).
+    pub lockstep: bool,
 }
+
+/// The topic a lockstep robot takes its sensing requests on.
+pub const SENSE_TOPIC: &str = "/surveyor/sense";
 
 impl Default for ServeConfig {
     fn default() -> Self {
@@ -39,6 +47,7 @@ impl Default for ServeConfig {
             range_period_s: 0.1,
             scan_range_m: (0.02, 5.6),
             finder_range_slack_m: 0.0,
+            lockstep: false,
         }
     }
 }
@@ -129,6 +138,11 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
         .map(|k| node.publisher::<record::bag::msg::Range>(&topics::range_finder(k)))
         .collect::<Result<_, _>>()?;
     let commands = node.subscription::<JointTrajectory>(TRAJECTORY_TOPIC)?;
+    let requests = if config.lockstep {
+        Some(node.subscription::<record::bag::msg::StdString>(SENSE_TOPIC)?)
+    } else {
+        None
+    };
     let names: Vec<String> = robot.joint_names().iter().map(|&s| s.to_owned()).collect();
     let bearings = hw.bearings_rad().to_vec();
     let mut stats = ServeStats::default();
@@ -187,8 +201,41 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
                 .map_err(|e| transfer(topics::JOINT_STATES, e))?;
             stats.states += 1;
         }
-        if !bearings.is_empty() && t >= next_scan {
+        let mut scan_now = !config.lockstep && !bearings.is_empty() && t >= next_scan;
+        let mut read_now = !config.lockstep && !ranges.is_empty() && t >= next_range;
+        if scan_now {
             next_scan = t + config.scan_period_s;
+        }
+        if read_now {
+            next_range = t + config.range_period_s;
+        }
+        // Requests are served one at a time, in order: a seed before the
+        // scan asked after it.
+        let request = match &requests {
+            Some(r) if !scan_now && !read_now => r
+                .take()
+                .map_err(|e| transfer(SENSE_TOPIC, e))?
+                .map(|(m, _)| m.data),
+            _ => None,
+        };
+        match request
+            .as_deref()
+            .map(str::split_whitespace)
+            .map(Iterator::collect::<Vec<_>>)
+            .as_deref()
+        {
+            None => {}
+            Some(["scan"]) => scan_now = true,
+            Some(["ranges"]) => read_now = true,
+            Some(["seed", n]) => match n.parse::<u64>() {
+                Ok(seed) => hw.seed_noise(seed),
+                Err(_) => log(&format!("sense request `seed {n}`: not a seed")),
+            },
+            Some(other) => log(&format!(
+                "sense request {other:?} not understood (scan, ranges or seed N)"
+            )),
+        }
+        if scan_now {
             let s = hw.scan()?;
             let msg = record::bag::laser_scan(
                 now_ns(),
@@ -201,8 +248,7 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
             scans.publish(msg).map_err(|e| transfer(topics::SCAN, e))?;
             stats.scans += 1;
         }
-        if !ranges.is_empty() && t >= next_range {
-            next_range = t + config.range_period_s;
+        if read_now {
             let readings = hw.read_all()?;
             let stamp = now_ns();
             for (k, (p, r)) in ranges.iter().zip(&readings).enumerate() {
@@ -212,6 +258,10 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
                     .map_err(|e| transfer(&topics::range_finder(k), e))?;
             }
             stats.readings += 1;
+        }
+        if request.is_some() {
+            // Another request may be waiting: no sleep.
+            continue;
         }
         std::thread::sleep(tick);
     }

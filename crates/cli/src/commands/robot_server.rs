@@ -31,6 +31,11 @@ pub struct SimRobotArgs {
     /// Speed of the fastest joint of every motion, rad/s.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     joint_speed: Real,
+    /// Sense only when asked on /surveyor/sense (std_msgs/String `scan`,
+    /// `ranges` or `seed N`), so that the noise follows the sequence of an
+    /// in-process run (surveyor's own driver in lockstep).
+    #[arg(long)]
+    lockstep: bool,
     /// Stop after this many seconds (default: run until Ctrl-C).
     #[arg(long = "for", allow_negative_numbers = true)]
     duration_s: Option<Real>,
@@ -60,6 +65,7 @@ pub fn sim_robot(a: &SimRobotArgs) -> Result<()> {
             .scan_range_m()
             .unwrap_or(ros2::ServeConfig::default().scan_range_m),
         finder_range_slack_m: 10.0 * rig.range_noise_sigma_m(),
+        lockstep: a.lockstep,
         ..ros2::ServeConfig::default()
     };
     let stop = Arc::new(AtomicBool::new(false));

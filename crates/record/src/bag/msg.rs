@@ -370,6 +370,20 @@ impl Marker {
     pub const TRIANGLE_LIST: i32 = 11;
 }
 
+/// `std_msgs/msg/String`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct StdString {
+    /// The text.
+    pub data: String,
+}
+
+impl RosMessage for StdString {
+    const TYPE: &'static str = "std_msgs/msg/String";
+    fn definition() -> String {
+        "string data\n".to_owned()
+    }
+}
+
 /// `trajectory_msgs/msg/JointTrajectoryPoint`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct JointTrajectoryPoint {
