@@ -54,11 +54,13 @@ use std::path::PathBuf;
 
 /// The topics of a run's bag.
 pub mod topics {
-    /// `sensor_msgs/JointState` after every motion.
+    /// `sensor_msgs/JointState` where every motion ends (and where it began,
+    /// when sensing took time since the last state).
     pub const JOINT_STATES: &str = "/joint_states";
-    /// `tf2_msgs/TFMessage`: every link frame after every motion.
+    /// `tf2_msgs/TFMessage`: every link frame with each joint state.
     pub const TF: &str = "/tf";
-    /// `tf2_msgs/TFMessage`: the base in the world, the scanner on its link.
+    /// `tf2_msgs/TFMessage`: the base in the world, the scanner and each
+    /// range finder on its link.
     pub const TF_STATIC: &str = "/tf_static";
     /// `sensor_msgs/LaserScan`: every scan.
     pub const SCAN: &str = "/scan";
@@ -131,6 +133,9 @@ pub enum BagError {
     /// The robot refused joint values.
     #[error(transparent)]
     Robot(#[from] robot::RobotError),
+    /// A bag's configuration is out of range.
+    #[error("bag configuration: {0}")]
+    Config(String),
     /// The file is not a readable MCAP bag of ROS 2 messages.
     #[error("{}: {message}", path.display())]
     Bag {

@@ -322,3 +322,23 @@ fn a_bag_s_scans_are_placed_at_interpolated_joints() {
     };
     refused(&elsewhere, &wrong, "nowhere");
 }
+
+#[test]
+fn a_run_bag_refuses_a_clock_it_cannot_keep() {
+    let robot = robot::builtin("point3").unwrap();
+    for config in [
+        BagConfig {
+            joint_speed: 0.0,
+            ..BagConfig::default()
+        },
+        BagConfig {
+            scan_period_s: f64::NAN,
+            ..BagConfig::default()
+        },
+    ] {
+        let e = RunBag::new(&robot, &geom::Isometry3::identity(), &[0.0; 3], &[], config)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bag configuration"), "{e}");
+    }
+}

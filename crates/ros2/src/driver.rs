@@ -73,6 +73,14 @@ fn device(message: String) -> HwError {
     }
 }
 
+/// `seconds` from now; a setting that is no duration (negative, not
+/// finite, too long) waits a day rather than panicking.
+fn after(seconds: Real) -> Instant {
+    let day = Duration::from_secs(86_400);
+    let wait = Duration::try_from_secs_f64(seconds).unwrap_or(day).min(day);
+    Instant::now() + wait
+}
+
 fn poll<T>(
     deadline: Instant,
     what: &str,
@@ -124,7 +132,7 @@ impl Ros2Hardware {
             sense,
             _node: node,
         };
-        let deadline = Instant::now() + Duration::from_secs_f64(hw.config.timeout_s);
+        let deadline = after(hw.config.timeout_s);
         hw.q = poll(deadline, "joint state", || hw.latest_state())?;
         Ok(hw)
     }
@@ -159,7 +167,7 @@ impl Ros2Hardware {
     }
 
     fn deadline(&self) -> Instant {
-        Instant::now() + Duration::from_secs_f64(self.config.timeout_s)
+        after(self.config.timeout_s)
     }
 }
 
@@ -189,7 +197,7 @@ impl Arm for Ros2Hardware {
         self.trajectories
             .publish(msg)
             .map_err(|e| device(format!("{TRAJECTORY_TOPIC}: {e:?}")))?;
-        let deadline = Instant::now() + Duration::from_secs_f64(secs + self.config.timeout_s);
+        let deadline = after(secs + self.config.timeout_s);
         let tolerance = self.config.tolerance_rad;
         let mut error = far;
         loop {

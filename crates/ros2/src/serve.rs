@@ -225,6 +225,9 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
             .as_deref()
         {
             None => {}
+            Some(["scan"]) if bearings.is_empty() => {
+                log("sense request `scan`: this robot has no scanner");
+            }
             Some(["scan"]) => scan_now = true,
             Some(["ranges"]) => read_now = true,
             Some(["seed", n]) => match n.parse::<u64>() {

@@ -116,11 +116,6 @@ impl SimRig {
             .map(|s| (s.config().min_range_m, s.config().max_range_m))
     }
 
-    /// The simulated 2-D scanner, if the rig has one.
-    pub fn scanner(&self) -> Option<&Scanner> {
-        self.scanner.as_ref()
-    }
-
     /// The robot model.
     pub fn robot(&self) -> &Robot {
         &self.robot

@@ -184,7 +184,7 @@ pub struct MapArgs {
     #[arg(long, requires = "robot")]
     bag: Option<PathBuf>,
     /// With --bag: the robot, a built-in name or FILE.urdf.
-    #[arg(long)]
+    #[arg(long, requires = "bag")]
     robot: Option<String>,
     /// With --bag: the link whose frame the scans are in (ROS's laser convention:
     /// rays in its x–y plane). Default: the scans' frame_id, a link of the robot
@@ -217,6 +217,11 @@ pub struct MapArgs {
 }
 
 pub fn map(a: &MapArgs) -> Result<()> {
+    // clap leaves `requires` unchecked here (`--bag` and `--robot` require
+    // each other and `--bag` conflicts with `--scans`): checked by hand.
+    if a.robot.is_some() && a.bag.is_none() {
+        bail!("--robot applies with --bag (the robot whose joint states place the bag's scans)");
+    }
     let mut config: MapConfig = load_config(a.config.as_deref())?;
     if let Some(v) = a.voxel {
         config = config.with_voxel_m(v);

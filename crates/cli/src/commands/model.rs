@@ -107,8 +107,13 @@ pub fn model(a: &ModelArgs) -> Result<()> {
     };
     if sets.is_empty() {
         bail!(
-            "{}: no sensor sets (expected one JSON object per line)",
-            sets_path.display()
+            "{}: no sensor sets ({})",
+            sets_path.display(),
+            if a.bag.is_some() {
+                "no Range reading with a return"
+            } else {
+                "expected one JSON object per line"
+            }
         );
     }
     let initial = match &a.initial {

@@ -836,3 +836,21 @@ fn sim_robot_refuses_what_it_cannot_serve() {
         clean(&e);
     }
 }
+
+/// `map --robot` belongs to `--bag`; given with `--scans` it would be
+/// ignored, so it is an error.
+#[test]
+fn map_robot_without_a_bag_is_an_error() {
+    support::fails_with(
+        &[
+            "map",
+            "--scans",
+            "a.ply",
+            "--robot",
+            "denso-vm6083",
+            "--out",
+            "m",
+        ],
+        &["--bag"],
+    );
+}

@@ -1,6 +1,6 @@
 //! `visualization_msgs/MarkerArray`s of what a run made: its viewpoints
-//! (an arrow along each scanner's centre ray) and its discs (flat
-//! cylinders, coloured by material).
+//! (an arrow along each scanner's centre ray), its discs (flat cylinders,
+//! coloured by material) and its surface model (polygon outlines, points).
 
 use super::ROOT_FRAME;
 use super::msg::{ColorRgba, Header, Marker, MarkerArray, Pose, Vector3};

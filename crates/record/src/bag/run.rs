@@ -114,6 +114,19 @@ impl RunBag {
         bearings: &[Real],
         config: BagConfig,
     ) -> Result<Self, BagError> {
+        for (name, v) in [
+            ("joint_speed", config.joint_speed),
+            ("scan_period_s", config.scan_period_s),
+            ("reading_period_s", config.reading_period_s),
+            ("finder_range_slack_m", config.finder_range_slack_m),
+        ] {
+            let ok = v.is_finite() && v >= 0.0 && (name != "joint_speed" || v > 0.0);
+            if !ok {
+                return Err(BagError::Config(format!(
+                    "{name} = {v}: expected a finite value, at least 0 (joint_speed more than 0)"
+                )));
+            }
+        }
         let mut bag = Self {
             robot: robot.clone(),
             config,
