@@ -45,6 +45,23 @@ impl ScanReadings {
     }
 }
 
+impl ScanReadings {
+    /// The readings as a ROS 2 scanner driver reports them: ranges and
+    /// intensities in float32 (`sensor_msgs/LaserScan`). A simulated
+    /// scanner reports so, and a run over ROS 2 sees what a run in process
+    /// does.
+    #[must_use]
+    pub fn in_float32(mut self) -> Self {
+        for r in self.ranges_m.iter_mut().flatten() {
+            *r = sensor::float32(*r);
+        }
+        for i in &mut self.intensities {
+            *i = sensor::float32(*i);
+        }
+        self
+    }
+}
+
 /// A 2-D line scanner taking a scan at the robot's current pose.
 pub trait LineScanner {
     /// Bearing of every slot, radians (scanner frame, A eq. 4.7).

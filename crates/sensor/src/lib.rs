@@ -4,7 +4,7 @@
 //!
 //! | module | entry points |
 //! |---|---|
-//! | [`range_finder`] | [`RangeFinder`], [`SensorPoint`] |
+//! | [`range_finder`] | [`RangeFinder`], [`SensorPoint`], [`float32`] (a value as a driver's message carries it) |
 //! | [`scanner`] | [`Scanner`], [`ScannerConfig`], [`Scan`], [`ScanReturn`], [`RangeNoise`] |
 //! | [`reflection`] | [`reflection::ReflectionModel`]: intensity and range bias versus incidence |
 //! | [`sweep`] | [`SweepConfig`] (the tilt angles of a 3-D sweep), [`Sweep`] (its returns on the (scan, ray) grid), [`SweepBuilder`], [`beam_direction`] |
@@ -19,7 +19,7 @@ pub mod scanner;
 pub mod sweep;
 
 pub use classifier::{Classification, ClassifyError, Lrc, LrcConfig, LrcError, Observation};
-pub use range_finder::{RangeFinder, SensorPoint};
+pub use range_finder::{RangeFinder, SensorPoint, float32};
 pub use reflection::ReflectionModel;
 pub use scanner::{MAX_RAYS_PER_SCAN, RangeNoise, Scan, ScanReturn, Scanner, ScannerConfig};
 pub use sweep::{

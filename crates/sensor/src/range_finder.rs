@@ -33,6 +33,30 @@ pub struct SensorPoint {
     pub distance_m: Real,
 }
 
+impl SensorPoint {
+    /// The point a reading `d` along `axis` from `sensor` gives: what a
+    /// driver that reports only the distance (a ROS 2 `sensor_msgs/Range`)
+    /// makes of it. One function for the simulator and the drivers, so
+    /// that both place a reading on the same bits.
+    pub fn along(sensor: Point3, axis: UnitVector3, d: Real) -> Self {
+        Self {
+            point: sensor + axis.into_inner() * d,
+            axis,
+            sensor,
+            distance_m: d,
+        }
+    }
+}
+
+/// `x` as a float32 carries it (ROS 2's `sensor_msgs/LaserScan` and
+/// `sensor_msgs/Range` carry ranges and intensities so): what a sensor's
+/// driver reports.
+pub fn float32(x: Real) -> Real {
+    // The rounding is the point: a driver's message holds no more.
+    #[allow(clippy::cast_possible_truncation)]
+    Real::from(x as f32)
+}
+
 impl RangeFinder {
     /// The sensing ray in the world frame, given the mount's pose.
     pub fn ray(&self, world_from_mount: &Isometry3) -> Ray {

@@ -241,14 +241,16 @@ impl ScannerConfig {
         }
     }
 
-    /// Ray bearings `θ_i`, radians, symmetric about 0 and inside the field:
-    /// `n = ⌊2h/step⌋ + 1` rays.
+    /// Ray bearings `θ_i`, radians, symmetric about 0 (to float32 rounding)
+    /// and inside the field: `n = ⌊2h/step⌋ + 1` rays, `θ_i = θ_0 + i·Δθ` with the first bearing
+    /// and the step in float32, as a ROS 2 `sensor_msgs/LaserScan` carries
+    /// them (`angle_min`, `angle_increment`): a reader of the scan's message
+    /// gets the bearings the scanner used, bit for bit.
     pub fn bearings_rad(&self) -> Vec<Real> {
         let steps = (2.0 * self.half_fov_deg / self.angular_step_deg + 1e-9).floor() as usize;
-        let start = -(steps as Real) * 0.5 * self.angular_step_deg;
-        (0..=steps)
-            .map(|i| (start + i as Real * self.angular_step_deg).to_radians())
-            .collect()
+        let first = crate::float32((-(steps as Real) * 0.5 * self.angular_step_deg).to_radians());
+        let step = crate::float32(self.angular_step_deg.to_radians());
+        (0..=steps).map(|i| first + i as Real * step).collect()
     }
 }
 

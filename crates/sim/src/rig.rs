@@ -14,7 +14,10 @@ use scene::World;
 use sensor::{RangeFinder, Scanner, SensorPoint};
 use std::sync::Arc;
 
-/// A simulated robot with its sensors in a ground-truth world.
+/// A simulated robot with its sensors in a ground-truth world. Its scanner
+/// reports what a ROS 2 `LaserScan` carries (float32 ranges and
+/// intensities, [`ScanReadings::in_float32`]), so a run that drives it over
+/// ROS 2 sees what a run in process does.
 #[derive(Clone, Debug)]
 pub struct SimRig {
     robot: Robot,
@@ -172,7 +175,7 @@ impl LineScanner for SimRig {
         let pose = self.world_from_scanner().ok_or(HwError::NoScanner)?;
         let scanner = self.scanner.as_ref().ok_or(HwError::NoScanner)?;
         let scan = scanner.scan(self.world.as_ref(), &pose, &mut self.rng);
-        Ok(ScanReadings::of_simulated(&scan))
+        Ok(ScanReadings::of_simulated(&scan).in_float32())
     }
 
     fn seed_noise(&mut self, seed: u64) {
