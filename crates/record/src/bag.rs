@@ -47,7 +47,7 @@ pub use input::{
 };
 pub use run::{
     BagClock, BagConfig, ROOT_FRAME, RunBag, SCANNER_FRAME, joint_state, laser_scan, link_frames,
-    point_cloud, range, range_frame, scan_rays, scanner_from_laser,
+    point_cloud, range, range_frame, scan_rays, scanner_from_laser, static_frames,
 };
 
 use std::path::PathBuf;

@@ -1,42 +1,40 @@
 //! The `hw` traits over a ROS 2 robot: joint states in, joint trajectories
 //! out, scans and range readings in.
 
-use crate::serve::SENSE_TOPIC;
-use crate::{Ros2Error, Ros2Node, TRAJECTORY_TOPIC};
+use crate::serve::{EXACT_RANGES_TOPIC, SENSE_TOPIC};
+use crate::{Ros2Error, Ros2Node};
 use geom::{Isometry3, Real};
 use hw::{Arm, HwError, LineScanner, RangeSensors, ScanReadings};
 use record::bag::msg::{
-    Header, JointState, JointTrajectory, JointTrajectoryPoint, LaserScan, Range, StdString, Time,
+    Float64MultiArray, Header, JointState, JointTrajectory, JointTrajectoryPoint, LaserScan, Range,
+    StdString, Time,
 };
-use record::bag::topics;
 use robot::Robot;
 use ros2_client::{Publisher, Subscription};
+use scenario::ros2::Ros2Spec;
 use sensor::SensorPoint;
 use std::time::{Duration, Instant};
 
 /// How the driver talks to its robot.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct DriverConfig {
-    /// A move is done when every joint is this close to its goal, radians.
-    pub tolerance_rad: Real,
-    /// The joint speed a trajectory's time is planned at, rad/s.
-    pub joint_speed: Real,
-    /// How long past a move's planned time (or a sensing request) to wait
-    /// before giving up, seconds.
-    pub timeout_s: Real,
+    /// Topics, joint names, tolerance, timeout and planned joint speed
+    /// (a scenario's `[ros2]` table).
+    pub ros2: Ros2Spec,
     /// Ask for each scan, reading and noise seed on the sense topic (a
     /// lockstep `surveyor sim-robot`), instead of taking the next ones the
-    /// robot publishes.
+    /// robot publishes, and wait for each motion to end exactly on its goal
+    /// (a simulated arm gets there; the tolerance is for real ones).
     pub lockstep: bool,
 }
 
-impl Default for DriverConfig {
-    fn default() -> Self {
-        Self {
-            tolerance_rad: 1e-3,
-            joint_speed: 1.0,
-            timeout_s: 10.0,
-            lockstep: false,
+impl DriverConfig {
+    /// A move is done when every joint is this close to its goal, radians.
+    pub fn tolerance_rad(&self) -> Real {
+        if self.lockstep {
+            0.0
+        } else {
+            self.ros2.tolerance_rad
         }
     }
 }
@@ -54,7 +52,8 @@ pub struct Ros2Hardware {
     ranges: Vec<Subscription<Range>>,
     trajectories: Publisher<JointTrajectory>,
     sense: Option<Publisher<StdString>>,
-    _node: Ros2Node,
+    exact: Option<Subscription<Float64MultiArray>>,
+    node: Ros2Node,
 }
 
 impl std::fmt::Debug for Ros2Hardware {
@@ -107,22 +106,27 @@ impl Ros2Hardware {
         bearings: &[Real],
         config: DriverConfig,
     ) -> Result<Self, Ros2Error> {
-        let states = node.subscription::<JointState>(topics::JOINT_STATES)?;
-        let scans = node.subscription::<LaserScan>(topics::SCAN)?;
+        let spec = &config.ros2;
+        let names = crate::ros_joint_names(spec, robot)?;
+        let states = node.subscription::<JointState>(&spec.joint_states_topic)?;
+        let scans = node.subscription::<LaserScan>(&spec.scan_topic)?;
         let ranges = (0..robot.range_finders.len())
-            .map(|k| node.subscription::<Range>(&topics::range_finder(k)))
+            .map(|k| node.subscription::<Range>(&spec.range_topic(k)))
             .collect::<Result<_, _>>()?;
-        let trajectories = node.publisher::<JointTrajectory>(TRAJECTORY_TOPIC)?;
-        let sense = if config.lockstep {
-            Some(node.publisher::<StdString>(SENSE_TOPIC)?)
+        let trajectories = node.publisher::<JointTrajectory>(&spec.trajectory_topic)?;
+        let (sense, exact) = if config.lockstep {
+            (
+                Some(node.publisher::<StdString>(SENSE_TOPIC)?),
+                Some(node.subscription::<Float64MultiArray>(EXACT_RANGES_TOPIC)?),
+            )
         } else {
-            None
+            (None, None)
         };
         let mut hw = Self {
             robot: robot.clone(),
             world_from_base: *world_from_base,
             bearings: bearings.to_vec(),
-            names: robot.joint_names().iter().map(|&s| s.to_owned()).collect(),
+            names,
             q: Vec::new(),
             config,
             states,
@@ -130,10 +134,12 @@ impl Ros2Hardware {
             ranges,
             trajectories,
             sense,
-            _node: node,
+            exact,
+            node,
         };
-        let deadline = after(hw.config.timeout_s);
+        let deadline = after(hw.config.ros2.timeout_s);
         hw.q = poll(deadline, "joint state", || hw.latest_state())?;
+        hw.wait_for_the_robot(deadline)?;
         Ok(hw)
     }
 
@@ -143,18 +149,63 @@ impl Ros2Hardware {
         while let Some((js, _)) = self
             .states
             .take()
-            .map_err(|e| device(format!("{}: {e:?}", topics::JOINT_STATES)))?
+            .map_err(|e| device(format!("{}: {e:?}", self.config.ros2.joint_states_topic)))?
         {
             let mut q = Vec::with_capacity(self.names.len());
             for n in &self.names {
                 let i = js.name.iter().position(|x| x == n).ok_or_else(|| {
-                    device(format!("{} names no joint `{n}`", topics::JOINT_STATES))
+                    device(format!(
+                        "{} names no joint `{n}`",
+                        self.config.ros2.joint_states_topic
+                    ))
                 })?;
                 q.push(js.position.get(i).copied().unwrap_or(Real::NAN));
             }
             latest = Some(q);
         }
         Ok(latest)
+    }
+
+    /// Wait until the robot's sensors' topics and its command topics match
+    /// ours: a message sent before would be lost (ROS 2's default QoS is
+    /// volatile), and a lockstep robot's noise would go out of step.
+    fn wait_for_the_robot(&self, deadline: Instant) -> Result<(), HwError> {
+        let mut missing: Vec<String>;
+        loop {
+            missing = Vec::new();
+            if !self.bearings.is_empty() && self.node.publishers_of(&self.scans) == 0 {
+                missing.push(self.config.ros2.scan_topic.clone());
+            }
+            for (k, s) in self.ranges.iter().enumerate() {
+                if self.node.publishers_of(s) == 0 {
+                    missing.push(self.config.ros2.range_topic(k));
+                }
+            }
+            if self.node.subscriptions_of(&self.trajectories) == 0 {
+                missing.push(self.config.ros2.trajectory_topic.clone());
+            }
+            if let Some(p) = &self.sense
+                && self.node.subscriptions_of(p) == 0
+            {
+                missing.push(SENSE_TOPIC.to_owned());
+            }
+            if let Some(s) = &self.exact
+                && !self.ranges.is_empty()
+                && self.node.publishers_of(s) == 0
+            {
+                missing.push(EXACT_RANGES_TOPIC.to_owned());
+            }
+            if missing.is_empty() {
+                return Ok(());
+            }
+            if Instant::now() > deadline {
+                return Err(device(format!(
+                    "the robot answers on /joint_states but not on {} (nothing matched before the timeout)",
+                    missing.join(", ")
+                )));
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
     }
 
     /// Ask a lockstep robot for `what`.
@@ -167,7 +218,7 @@ impl Ros2Hardware {
     }
 
     fn deadline(&self) -> Instant {
-        after(self.config.timeout_s)
+        after(self.config.ros2.timeout_s)
     }
 }
 
@@ -184,7 +235,7 @@ impl Arm for Ros2Hardware {
             .zip(q)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, Real::max);
-        let secs = far / self.config.joint_speed;
+        let secs = far / self.config.ros2.joint_speed;
         let msg = JointTrajectory {
             header: Header::default(),
             joint_names: self.names.clone(),
@@ -196,9 +247,9 @@ impl Arm for Ros2Hardware {
         };
         self.trajectories
             .publish(msg)
-            .map_err(|e| device(format!("{TRAJECTORY_TOPIC}: {e:?}")))?;
-        let deadline = after(secs + self.config.timeout_s);
-        let tolerance = self.config.tolerance_rad;
+            .map_err(|e| device(format!("{}: {e:?}", self.config.ros2.trajectory_topic)))?;
+        let deadline = after(secs + self.config.ros2.timeout_s);
+        let tolerance = self.config.tolerance_rad();
         let mut error = far;
         loop {
             if let Some(now) = self.latest_state()? {
@@ -229,7 +280,7 @@ impl LineScanner for Ros2Hardware {
         let take = |s: &Subscription<LaserScan>| {
             s.take()
                 .map(|m| m.map(|(m, _)| m))
-                .map_err(|e| device(format!("{}: {e:?}", topics::SCAN)))
+                .map_err(|e| device(format!("{}: {e:?}", self.config.ros2.scan_topic)))
         };
         // Scans published before the arm stood here are stale.
         while take(&self.scans)?.is_some() {}
@@ -239,7 +290,7 @@ impl LineScanner for Ros2Hardware {
         if bearings.len() != self.bearings.len() {
             return Err(device(format!(
                 "{}: {} rays, the scanner has {}",
-                topics::SCAN,
+                self.config.ros2.scan_topic,
                 bearings.len(),
                 self.bearings.len()
             )));
@@ -260,6 +311,7 @@ impl LineScanner for Ros2Hardware {
 
 impl RangeSensors for Ros2Hardware {
     fn read_all(&mut self) -> Result<Vec<Option<SensorPoint>>, HwError> {
+        // Readings published before the arm stood here are stale.
         for s in &self.ranges {
             while s
                 .take()
@@ -267,38 +319,76 @@ impl RangeSensors for Ros2Hardware {
                 .is_some()
             {}
         }
+        if let Some(s) = &self.exact {
+            while s
+                .take()
+                .map_err(|e| device(format!("{EXACT_RANGES_TOPIC}: {e:?}")))?
+                .is_some()
+            {}
+        }
         self.ask("ranges".to_owned())?;
         let frames = self.robot.forward_kinematics(&self.q)?;
         let deadline = self.deadline();
-        let mut out = Vec::with_capacity(self.ranges.len());
-        for (k, (s, m)) in self
-            .ranges
-            .iter()
-            .zip(&self.robot.range_finders)
-            .enumerate()
-        {
-            let topic = topics::range_finder(k);
-            let r = poll(deadline, &topic, || {
+        let mut messages = Vec::with_capacity(self.ranges.len());
+        for (k, s) in self.ranges.iter().enumerate() {
+            let topic = self.config.ros2.range_topic(k);
+            messages.push(poll(deadline, &topic, || {
                 s.take()
                     .map(|m| m.map(|(m, _)| m))
                     .map_err(|e| device(format!("{topic}: {e:?}")))
-            })?;
-            let d = Real::from(r.range);
-            if !(d.is_finite() && d >= Real::from(r.min_range) && d <= Real::from(r.max_range)) {
-                out.push(None);
-                continue;
+            })?);
+        }
+        // A lockstep robot's readings at full precision, each checked
+        // against its `Range`.
+        let exact = match &self.exact {
+            Some(s) if !messages.is_empty() => {
+                let e = poll(deadline, EXACT_RANGES_TOPIC, || {
+                    s.take()
+                        .map(|m| m.map(|(m, _)| m))
+                        .map_err(|e| device(format!("{EXACT_RANGES_TOPIC}: {e:?}")))
+                })?;
+                if e.data.len() != 4 * messages.len() {
+                    return Err(device(format!(
+                        "{EXACT_RANGES_TOPIC}: {} values for {} range finders (expected 4 each)",
+                        e.data.len(),
+                        messages.len()
+                    )));
+                }
+                Some(e.data)
             }
+            _ => None,
+        };
+        let mut out = Vec::with_capacity(messages.len());
+        for (k, (r, m)) in messages.iter().zip(&self.robot.range_finders).enumerate() {
             let world_from_link = self.world_from_base
                 * frames
                     .get(m.link.0)
                     .ok_or_else(|| device(format!("range finder {k} on no link")))?;
-            let sensor = world_from_link * m.origin;
-            let axis = world_from_link * m.axis;
-            out.push(Some(SensorPoint {
-                point: sensor + axis.into_inner() * d,
+            let (sensor, axis) = (world_from_link * m.origin, world_from_link * m.axis);
+            let d = Real::from(r.range);
+            let in_range =
+                d.is_finite() && d >= Real::from(r.min_range) && d <= Real::from(r.max_range);
+            let Some(exact) = &exact else {
+                out.push(in_range.then(|| SensorPoint::along(sensor, axis, d)));
+                continue;
+            };
+            let [e, x, y, z] = [0, 1, 2, 3].map(|i| exact[4 * k + i]);
+            let agree = if e.is_nan() {
+                !in_range
+            } else {
+                sensor::float32(e) == d
+            };
+            if !agree {
+                return Err(device(format!(
+                    "range finder {k}: its Range says {}, its reading at full precision {e}",
+                    r.range
+                )));
+            }
+            out.push((!e.is_nan()).then(|| SensorPoint {
+                point: geom::Point3::new(x, y, z),
                 axis,
                 sensor,
-                distance_m: d,
+                distance_m: e,
             }));
         }
         Ok(out)

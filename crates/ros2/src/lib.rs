@@ -8,15 +8,18 @@
 //! | [`Ros2Node`] | a ROS 2 node over RustDDS, publishers and subscriptions of `record::bag::msg` types with ROS 2's default QoS |
 //! | [`serve_robot`], [`ServeConfig`] | any hardware served as a ROS 2 robot: `/joint_states`, `/scan`, `Range`s, and `JointTrajectory` executed at a joint speed |
 //! | [`Ros2Hardware`], [`DriverConfig`] | the `hw` traits over a ROS 2 robot: trajectories out, joint states, scans and ranges in (lockstep with `sim-robot`, or the next ones a real robot publishes) |
+//! | [`LiveView`] | what a run builds, published as it goes: `/tf`, sweeps, viewpoint, disc and surface-model markers |
 //! | [`Ros2Error`] | what can fail |
 
 mod driver;
+mod live;
 mod node;
 mod serve;
 
 pub use driver::{DriverConfig, Ros2Hardware};
-pub use node::{Ros2Config, Ros2Node, TRAJECTORY_TOPIC};
-pub use serve::{SENSE_TOPIC, ServeConfig, ServeStats, serve_robot};
+pub use live::{LiveView, wall_clock_ns};
+pub use node::{Ros2Config, Ros2Node};
+pub use serve::{EXACT_RANGES_TOPIC, SENSE_TOPIC, ServeConfig, ServeStats, serve_robot};
 
 /// What can fail talking ROS 2.
 #[derive(Debug, thiserror::Error)]
@@ -43,7 +46,29 @@ pub enum Ros2Error {
         /// Why.
         message: String,
     },
+    /// A setting is out of its range.
+    #[error("{what}: {message}")]
+    Config {
+        /// Which setting.
+        what: String,
+        /// What is wrong.
+        message: String,
+    },
     /// The hardware refused or failed.
     #[error(transparent)]
     Hw(#[from] hw::HwError),
+}
+
+/// The joints of `robot` by their ROS names under `spec` (a scenario's
+/// `[ros2]` table), the table checked first.
+fn ros_joint_names(
+    spec: &scenario::ros2::Ros2Spec,
+    robot: &robot::Robot,
+) -> Result<Vec<String>, Ros2Error> {
+    let bad = |message: String| Ros2Error::Config {
+        what: "[ros2]".into(),
+        message,
+    };
+    spec.validate().map_err(bad)?;
+    spec.ros_joint_names(&robot.joint_names()).map_err(bad)
 }

@@ -11,9 +11,6 @@ use ros2_client::{
 use serde::de::DeserializeOwned;
 use std::net::{IpAddr, Ipv4Addr};
 
-/// The topic a `ros2_control` joint trajectory controller listens on.
-pub const TRAJECTORY_TOPIC: &str = "/joint_trajectory_controller/joint_trajectory";
-
 /// How to reach other ROS 2 nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Ros2Config {
@@ -90,9 +87,19 @@ impl Ros2Node {
             Context::from_domain_participant(participant).map_err(|e| create("context", e))?;
         let node_name =
             NodeName::new("/", name).map_err(|e| create("node name", format!("{e:?}")))?;
-        let node = context
-            .new_node(node_name, NodeOptions::new())
+        let mut node = context
+            .new_node(
+                node_name,
+                NodeOptions::new().start_parameter_services(false),
+            )
             .map_err(|e| create("node", e))?;
+        // The spinner keeps the node's view of the graph (which publishers
+        // and subscriptions match ours); it ends when the node is dropped.
+        let spinner = node.spinner().map_err(|e| create("node spinner", e))?;
+        std::thread::Builder::new()
+            .name(format!("ros2 {name}"))
+            .spawn(move || futures::executor::block_on(spinner.spin()))
+            .map_err(|e| create("node spinner thread", e))?;
         let qos = QosProfile::publisher_default()
             .reliability_reliable(WhenFull::DEFAULT)
             .durability(Durability::Volatile)
@@ -100,19 +107,68 @@ impl Ros2Node {
         Ok(Self { node, qos })
     }
 
-    /// The DDS topic of `M` on `topic`.
-    fn topic<M: RosMessage>(&self, topic: &str) -> Result<rustdds::Topic, Ros2Error> {
+    /// The DDS topic of `M` on `topic` with `qos`.
+    fn topic<M: RosMessage>(
+        &self,
+        topic: &str,
+        qos: &QosProfile,
+    ) -> Result<rustdds::Topic, Ros2Error> {
         self.node
-            .create_topic(&topic_name(topic)?, type_name::<M>(), &self.qos)
+            .create_topic(&topic_name(topic)?, type_name::<M>(), qos)
             .map_err(|e| create(&format!("topic {topic}"), e))
     }
 
     /// A publisher of `M` on `topic`.
     pub fn publisher<M: RosMessage>(&mut self, topic: &str) -> Result<Publisher<M>, Ros2Error> {
-        let t = self.topic::<M>(topic)?;
+        let t = self.topic::<M>(topic, &self.qos)?;
         self.node
             .create_publisher::<M>(&t, Some(self.qos.clone()))
             .map_err(|e| create(&format!("publisher on {topic}"), e))
+    }
+
+    /// How many publishers match `subscription` (one of this node's).
+    pub fn publishers_of<M: 'static>(&self, subscription: &Subscription<M>) -> usize {
+        subscription.get_publisher_count(&self.node)
+    }
+
+    /// How many subscriptions match `publisher` (one of this node's).
+    pub fn subscriptions_of<M: RosMessage>(&self, publisher: &Publisher<M>) -> usize {
+        publisher.get_subscription_count(&self.node)
+    }
+
+    /// A publisher of `M` on `topic` whose last message late subscribers
+    /// get too (transient local, keep last 1: what ROS 2's `/tf_static`
+    /// takes).
+    pub fn latched_publisher<M: RosMessage>(
+        &mut self,
+        topic: &str,
+    ) -> Result<Publisher<M>, Ros2Error> {
+        let qos = self.latched_qos();
+        let t = self.topic::<M>(topic, &qos)?;
+        self.node
+            .create_publisher::<M>(&t, Some(qos))
+            .map_err(|e| create(&format!("publisher on {topic}"), e))
+    }
+
+    /// A subscription to `M` on `topic` that also gets the last message a
+    /// latched publisher sent before it matched ([`Ros2Node::latched_publisher`]).
+    pub fn latched_subscription<M: RosMessage + DeserializeOwned + 'static>(
+        &mut self,
+        topic: &str,
+    ) -> Result<Subscription<M>, Ros2Error> {
+        let qos = self.latched_qos();
+        let t = self.topic::<M>(topic, &qos)?;
+        self.node
+            .create_subscription::<M>(&t, Some(qos))
+            .map_err(|e| create(&format!("subscription to {topic}"), e))
+    }
+
+    /// Transient local, keep last 1.
+    fn latched_qos(&self) -> QosProfile {
+        self.qos
+            .clone()
+            .durability(Durability::TransientLocal)
+            .history(History::KeepLast { depth: 1 })
     }
 
     /// A subscription to `M` on `topic`.
@@ -120,7 +176,7 @@ impl Ros2Node {
         &mut self,
         topic: &str,
     ) -> Result<Subscription<M>, Ros2Error> {
-        let t = self.topic::<M>(topic)?;
+        let t = self.topic::<M>(topic, &self.qos)?;
         self.node
             .create_subscription::<M>(&t, Some(self.qos.clone()))
             .map_err(|e| create(&format!("subscription to {topic}"), e))

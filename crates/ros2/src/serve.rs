@@ -2,12 +2,12 @@
 //! publishes its joint states, its scans and its range readings, and
 //! executes the joint trajectories it is sent.
 
-use crate::{Ros2Error, Ros2Node, TRAJECTORY_TOPIC};
+use crate::{Ros2Error, Ros2Node};
 use geom::Real;
 use hw::{Arm, LineScanner, RangeSensors};
 use record::bag::msg::JointTrajectory;
-use record::bag::topics;
 use robot::Robot;
+use scenario::ros2::Ros2Spec;
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -18,8 +18,11 @@ pub struct ServeConfig {
     /// Speed of the fastest joint of every motion, rad/s (m/s for
     /// prismatic joints): trajectories run at it, whatever their times.
     pub joint_speed: Real,
-    /// Between joint-state messages, seconds.
+    /// Between joint-state messages, seconds (a state is also published
+    /// the moment a trajectory point is reached).
     pub state_period_s: Real,
+    /// Between two turns of the serving loop (motion, requests), seconds.
+    pub tick_s: Real,
     /// Between scans, seconds (the Hokuyo's 0.1 s).
     pub scan_period_s: Real,
     /// Between readings of the range finders, seconds.
@@ -33,21 +36,33 @@ pub struct ServeConfig {
     /// the periods: a simulated robot then draws its noise in the sequence
     /// an in-process run does (our driver in lockstep, [`crate::Ros2Hardware`]).
     pub lockstep: bool,
+    /// Topics and the joints' ROS names (a scenario's `[ros2]` table).
+    pub ros2: Ros2Spec,
 }
 
 /// The topic a lockstep robot takes its sensing requests on.
 pub const SENSE_TOPIC: &str = "/surveyor/sense";
+
+/// Where a lockstep robot also sends each reading of its range finders at
+/// full precision (`std_msgs/Float64MultiArray`: per finder the distance
+/// and the point's x, y, z in the world frame, NaN without a return):
+/// `sensor_msgs/Range` carries float32, and Pudney's follower takes other
+/// turns on differences that small, so a run driving a simulated robot
+/// over ROS 2 could not be the in-process run without it.
+pub const EXACT_RANGES_TOPIC: &str = "/surveyor/ranges";
 
 impl Default for ServeConfig {
     fn default() -> Self {
         Self {
             joint_speed: 1.0,
             state_period_s: 0.02,
+            tick_s: 0.005,
             scan_period_s: 0.1,
             range_period_s: 0.1,
             scan_range_m: (0.02, 5.6),
             finder_range_slack_m: 0.0,
             lockstep: false,
+            ros2: Ros2Spec::default(),
         }
     }
 }
@@ -67,7 +82,7 @@ pub struct ServeStats {
     pub refused: u64,
 }
 
-fn now_ns() -> u64 {
+pub(crate) fn now_ns() -> u64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX))
@@ -80,17 +95,21 @@ fn transfer(topic: &str, e: impl std::fmt::Debug) -> Ros2Error {
     }
 }
 
-/// The trajectory's points as joint vectors in `robot`'s order, or why not.
-fn waypoints(t: &JointTrajectory, robot: &Robot, q: &[Real]) -> Result<Vec<Vec<Real>>, String> {
-    let names = robot.joint_names();
+/// The trajectory's points as joint vectors in the order of `names` (the
+/// joints of `robot`, by their ROS names), or why not.
+fn waypoints(
+    t: &JointTrajectory,
+    names: &[String],
+    robot: &str,
+    q: &[Real],
+) -> Result<Vec<Vec<Real>>, String> {
     let index: Vec<Option<usize>> = names
         .iter()
         .map(|n| t.joint_names.iter().position(|x| x == n))
         .collect();
-    if let Some(unknown) = t.joint_names.iter().find(|n| !names.contains(&n.as_str())) {
+    if let Some(unknown) = t.joint_names.iter().find(|n| !names.contains(n)) {
         return Err(format!(
-            "joint `{unknown}` is not a joint of {} ({names:?})",
-            robot.name
+            "joint `{unknown}` is not a joint of {robot} ({names:?})"
         ));
     }
     t.points
@@ -114,12 +133,71 @@ fn waypoints(t: &JointTrajectory, robot: &Robot, q: &[Real]) -> Result<Vec<Vec<R
         .collect()
 }
 
+/// Range readings at full precision: per finder `[d, x, y, z]`, NaN
+/// without a return ([`EXACT_RANGES_TOPIC`]).
+pub fn exact_readings(
+    readings: &[Option<sensor::SensorPoint>],
+) -> record::bag::msg::Float64MultiArray {
+    let data = readings
+        .iter()
+        .flat_map(|r| match r {
+            Some(p) => [p.distance_m, p.point.x, p.point.y, p.point.z],
+            None => [Real::NAN; 4],
+        })
+        .collect();
+    record::bag::msg::Float64MultiArray {
+        data,
+        ..record::bag::msg::Float64MultiArray::default()
+    }
+}
+
+/// Move `hw` up to `reach` (radians of its fastest joint) toward the first
+/// of `goals`; whether it got there (the goal is then dropped). A pose the
+/// hardware refuses ends the trajectory.
+fn advance<H: Arm>(
+    hw: &mut H,
+    goals: &mut VecDeque<Vec<Real>>,
+    reach: Real,
+    stats: &mut ServeStats,
+    log: &mut dyn FnMut(&str),
+) -> bool {
+    let Some(goal) = goals.front() else {
+        return false;
+    };
+    let q = hw.joints();
+    let far = q
+        .iter()
+        .zip(goal)
+        .map(|(a, b)| (b - a).abs())
+        .fold(0.0, Real::max);
+    let (next, arrived) = if far <= reach {
+        (goal.clone(), true)
+    } else {
+        let s = reach / far;
+        (
+            q.iter().zip(goal).map(|(a, b)| a + s * (b - a)).collect(),
+            false,
+        )
+    };
+    if let Err(e) = hw.move_to(&next) {
+        stats.refused += 1;
+        log(&format!("trajectory stopped: {e}"));
+        goals.clear();
+        false
+    } else {
+        if arrived {
+            goals.pop_front();
+        }
+        arrived
+    }
+}
+
 /// Serve `hw` (the hardware of `robot`) on `node` until `stop` is raised:
 /// publish the joint states every `state_period_s` on `/joint_states`, a
 /// scan every `scan_period_s` on `/scan` (when the hardware has a scanner)
 /// and each range finder's reading every `range_period_s` on
 /// `/range/finder_k` (when it has any), and execute each
-/// `trajectory_msgs/JointTrajectory` sent to [`TRAJECTORY_TOPIC`]: its
+/// `trajectory_msgs/JointTrajectory` sent to the trajectory topic: its
 /// points in turn, on a straight joint-space line at `joint_speed`, a new
 /// trajectory replacing the one under way (as a `ros2_control` trajectory
 /// controller does). A point the hardware refuses ends the trajectory
@@ -132,28 +210,38 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
     stop: &AtomicBool,
     log: &mut dyn FnMut(&str),
 ) -> Result<ServeStats, Ros2Error> {
-    let states = node.publisher::<record::bag::msg::JointState>(topics::JOINT_STATES)?;
-    let scans = node.publisher::<record::bag::msg::LaserScan>(topics::SCAN)?;
+    let spec = &config.ros2;
+    let names = crate::ros_joint_names(spec, robot)?;
+    let states = node.publisher::<record::bag::msg::JointState>(&spec.joint_states_topic)?;
+    let scans = node.publisher::<record::bag::msg::LaserScan>(&spec.scan_topic)?;
     let ranges: Vec<_> = (0..robot.range_finders.len())
-        .map(|k| node.publisher::<record::bag::msg::Range>(&topics::range_finder(k)))
+        .map(|k| node.publisher::<record::bag::msg::Range>(&spec.range_topic(k)))
         .collect::<Result<_, _>>()?;
-    let commands = node.subscription::<JointTrajectory>(TRAJECTORY_TOPIC)?;
-    let requests = if config.lockstep {
-        Some(node.subscription::<record::bag::msg::StdString>(SENSE_TOPIC)?)
+    let commands = node.subscription::<JointTrajectory>(&spec.trajectory_topic)?;
+    let (requests, exact) = if config.lockstep {
+        (
+            Some(node.subscription::<record::bag::msg::StdString>(SENSE_TOPIC)?),
+            Some(node.publisher::<record::bag::msg::Float64MultiArray>(EXACT_RANGES_TOPIC)?),
+        )
     } else {
-        None
+        (None, None)
     };
-    let names: Vec<String> = robot.joint_names().iter().map(|&s| s.to_owned()).collect();
     let bearings = hw.bearings_rad().to_vec();
     let mut stats = ServeStats::default();
     let mut goals: VecDeque<Vec<Real>> = VecDeque::new();
-    let tick = Duration::from_millis(5);
+    let tick = Duration::try_from_secs_f64(config.tick_s)
+        .unwrap_or(Duration::from_millis(5))
+        .min(Duration::from_secs(1));
     let start = Instant::now();
     let mut last = start;
     let (mut next_state, mut next_scan, mut next_range) = (0.0, 0.0, 0.0);
+    let mut ready = false;
     while !stop.load(Ordering::Relaxed) {
-        while let Some((t, _)) = commands.take().map_err(|e| transfer(TRAJECTORY_TOPIC, e))? {
-            match waypoints(&t, robot, &hw.joints()) {
+        while let Some((t, _)) = commands
+            .take()
+            .map_err(|e| transfer(&spec.trajectory_topic, e))?
+        {
+            match waypoints(&t, &names, &robot.name, &hw.joints()) {
                 Ok(points) => {
                     goals = points.into();
                     stats.trajectories += 1;
@@ -167,38 +255,14 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
         let now = Instant::now();
         let dt = (now - last).as_secs_f64();
         last = now;
-        if let Some(goal) = goals.front() {
-            let q = hw.joints();
-            let far = q
-                .iter()
-                .zip(goal)
-                .map(|(a, b)| (b - a).abs())
-                .fold(0.0, Real::max);
-            let reach = config.joint_speed * dt;
-            let (next, arrived) = if far <= reach {
-                (goal.clone(), true)
-            } else {
-                let s = reach / far;
-                (
-                    q.iter().zip(goal).map(|(a, b)| a + s * (b - a)).collect(),
-                    false,
-                )
-            };
-            if let Err(e) = hw.move_to(&next) {
-                stats.refused += 1;
-                log(&format!("trajectory stopped: {e}"));
-                goals.clear();
-            } else if arrived {
-                goals.pop_front();
-            }
-        }
+        let reached = advance(hw, &mut goals, config.joint_speed * dt, &mut stats, log);
         let t = (now - start).as_secs_f64();
-        if t >= next_state {
+        if t >= next_state || reached {
             next_state = t + config.state_period_s;
             let msg = record::bag::joint_state(now_ns(), &names, &hw.joints());
             states
                 .publish(msg)
-                .map_err(|e| transfer(topics::JOINT_STATES, e))?;
+                .map_err(|e| transfer(&spec.joint_states_topic, e))?;
             stats.states += 1;
         }
         let mut scan_now = !config.lockstep && !bearings.is_empty() && t >= next_scan;
@@ -211,8 +275,16 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
         }
         // Requests are served one at a time, in order: a seed before the
         // scan asked after it.
+        // A lockstep robot answers once whoever asks can hear the answer
+        // (an answer sent before its subscription matched is lost).
+        if !ready {
+            ready = (bearings.is_empty() || node.subscriptions_of(&scans) > 0)
+                && ranges.iter().all(|p| node.subscriptions_of(p) > 0)
+                && (ranges.is_empty()
+                    || exact.as_ref().is_none_or(|p| node.subscriptions_of(p) > 0));
+        }
         let request = match &requests {
-            Some(r) if !scan_now && !read_now => r
+            Some(r) if ready && !scan_now && !read_now => r
                 .take()
                 .map_err(|e| transfer(SENSE_TOPIC, e))?
                 .map(|(m, _)| m.data),
@@ -248,7 +320,9 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
                 config.scan_range_m,
                 config.scan_period_s,
             );
-            scans.publish(msg).map_err(|e| transfer(topics::SCAN, e))?;
+            scans
+                .publish(msg)
+                .map_err(|e| transfer(&spec.scan_topic, e))?;
             stats.scans += 1;
         }
         if read_now {
@@ -258,7 +332,11 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
                 let max = robot.range_finders[k].max_range_m + config.finder_range_slack_m;
                 let msg = record::bag::range(stamp, k, max, r.map(|r| r.distance_m));
                 p.publish(msg)
-                    .map_err(|e| transfer(&topics::range_finder(k), e))?;
+                    .map_err(|e| transfer(&spec.range_topic(k), e))?;
+            }
+            if let Some(p) = &exact {
+                p.publish(exact_readings(&readings))
+                    .map_err(|e| transfer(EXACT_RANGES_TOPIC, e))?;
             }
             stats.readings += 1;
         }
@@ -294,16 +372,18 @@ mod tests {
     fn trajectory_points_become_joint_vectors_in_the_robot_s_order() {
         let robot = robot::builtin("point3").unwrap();
         let names = robot.joint_names();
+        let owned: Vec<String> = names.iter().map(|&s| s.to_owned()).collect();
         let q = [0.1, 0.2, 0.3];
+        let at = |t: &JointTrajectory| waypoints(t, &owned, &robot.name, &q);
         // Reordered names, one joint left out (it stays where it is).
         let t = trajectory(&[names[2], names[0]], &[&[3.0, 1.0], &[6.0, 4.0]]);
         assert_eq!(
-            waypoints(&t, &robot, &q).unwrap(),
+            at(&t).unwrap(),
             vec![vec![1.0, 0.2, 3.0], vec![4.0, 0.2, 6.0]]
         );
-        let e = waypoints(&trajectory(&["elbow"], &[&[1.0]]), &robot, &q).unwrap_err();
+        let e = at(&trajectory(&["elbow"], &[&[1.0]])).unwrap_err();
         assert!(e.contains("joint `elbow`"), "{e}");
-        let e = waypoints(&trajectory(&[names[0]], &[&[1.0, 2.0]]), &robot, &q).unwrap_err();
+        let e = at(&trajectory(&[names[0]], &[&[1.0, 2.0]])).unwrap_err();
         assert!(e.contains("point 0: 2 positions for 1 joints"), "{e}");
     }
 }

@@ -1,9 +1,9 @@
 //! The driver against `serve_robot` over DDS on loopback (issue 26): a
 //! lockstep simulated robot served in a thread, driven through the `hw`
-//! traits, gives what the same rig gives in process — the joints exactly,
-//! each scan's ranges and intensities to their 32 bits (what `LaserScan`
-//! carries), each range finder's reading to its 32 bits and its point to
-//! a micrometre — with the noise seeded the same way.
+//! traits, gives exactly what the same rig gives in process — the joints,
+//! each scan's ranges and intensities, each range finder's reading and its
+//! point — with the noise seeded the same way: a simulated sensor reports
+//! the float32 values its ROS 2 message carries.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers may panic
 
 use hw::{Arm, LineScanner, RangeSensors};
@@ -12,10 +12,6 @@ use scenario::Scenario;
 use sim::SimRig;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-
-fn f32_of(x: f64) -> f64 {
-    f64::from(x as f32)
-}
 
 /// Serve `scenario`'s rig (seed 7) in lockstep in a thread on `domain`;
 /// the driver to it and the same rig in process.
@@ -54,9 +50,11 @@ fn pair(scenario: &str, domain: u16) -> (Ros2Hardware, SimRig, Arc<AtomicBool>) 
         &twin.world_from_base(),
         twin.bearings_rad(),
         DriverConfig {
-            tolerance_rad: 0.0,
-            joint_speed: 10.0,
-            timeout_s: 30.0,
+            ros2: scenario::ros2::Ros2Spec {
+                joint_speed: 10.0,
+                timeout_s: 30.0,
+                ..scenario::ros2::Ros2Spec::default()
+            },
             lockstep: true,
         },
     )
@@ -91,12 +89,8 @@ fn a_lockstep_scanner_over_dds_gives_the_in_process_scans() {
             assert_eq!(got.ranges_m.len(), want.ranges_m.len());
             let hits = want.ranges_m.iter().flatten().count();
             assert!(hits > 50, "{hits} returns");
-            for (g, w) in got.ranges_m.iter().zip(&want.ranges_m) {
-                assert_eq!(*g, w.map(f32_of));
-            }
-            for (g, w) in got.intensities.iter().zip(&want.intensities) {
-                assert_eq!(*g, f32_of(*w));
-            }
+            assert_eq!(got.ranges_m, want.ranges_m);
+            assert_eq!(got.intensities, want.intensities);
         }
     }
     stop.store(true, Ordering::Relaxed);
@@ -121,13 +115,93 @@ fn lockstep_range_finders_over_dds_give_the_in_process_points() {
             match (g, w) {
                 (None, None) => {}
                 (Some(g), Some(w)) => {
-                    assert_eq!(g.distance_m, f32_of(w.distance_m));
-                    assert!((g.point - w.point).norm() < 1e-6, "{g:?} vs {w:?}");
-                    assert!((g.axis.into_inner() - w.axis.into_inner()).norm() < 1e-12);
+                    assert_eq!(g, w);
                 }
                 other => panic!("a reading on one side only: {other:?}"),
             }
         }
     }
     stop.store(true, Ordering::Relaxed);
+}
+
+#[test]
+fn the_live_view_reaches_a_subscriber() {
+    use record::bag::msg::{MarkerArray, PointCloud2, TfMessage};
+    use record::bag::topics;
+    let config = Ros2Config {
+        domain_id: domain(25),
+        loopback_only: true,
+    };
+    let loaded = Scenario::load("bridge1").unwrap();
+    let rig = SimRig::with_every_sensor(&loaded, 7).unwrap();
+    let robot = rig.robot().clone();
+    let mut live = ros2::LiveView::new(
+        Ros2Node::new("live", &config).unwrap(),
+        &robot,
+        &rig.world_from_base(),
+    )
+    .unwrap();
+    // A late subscriber: /tf_static is latched, the rest comes after it
+    // matched.
+    let mut node = Ros2Node::new("viewer", &config).unwrap();
+    let tf = node.subscription::<TfMessage>(topics::TF).unwrap();
+    let tf_static = node
+        .latched_subscription::<TfMessage>(topics::TF_STATIC)
+        .unwrap();
+    let sweeps = node.subscription::<PointCloud2>(topics::SWEEP).unwrap();
+    let discs = node.subscription::<MarkerArray>(topics::DISCS).unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    while node.publishers_of(&tf) == 0 || node.publishers_of(&discs) == 0 {
+        assert!(std::time::Instant::now() < deadline, "no match");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    let q = rig.joints();
+    live.frames(&q);
+    let point = sensor::SweepPoint {
+        point: geom::Point3::new(1.0, 2.0, 3.0),
+        origin: geom::Point3::origin(),
+        intensity: 0.5,
+        material: None,
+        cell: None,
+    };
+    live.sweep([&point]);
+    live.markers(topics::DISCS, MarkerArray::default());
+    live.markers("/elsewhere", MarkerArray::default());
+    assert_eq!(live.messages_sent(), 3);
+    assert!(live.first_failure().unwrap().starts_with("/elsewhere"));
+    let take = |what: &str, f: &mut dyn FnMut() -> bool| {
+        while !f() {
+            assert!(std::time::Instant::now() < deadline, "no {what}");
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+    };
+    let mut frames = None;
+    take("/tf", &mut || {
+        frames = tf.take().unwrap().map(|(m, _)| m);
+        frames.is_some()
+    });
+    let want = record::bag::link_frames(0, &robot, &q);
+    let got = frames.unwrap();
+    assert_eq!(got.transforms.len(), want.transforms.len());
+    for (g, w) in got.transforms.iter().zip(&want.transforms) {
+        assert_eq!(g.transform, w.transform);
+        assert_eq!(g.child_frame_id, w.child_frame_id);
+    }
+    let mut statics = None;
+    take("/tf_static", &mut || {
+        statics = tf_static.take().unwrap().map(|(m, _)| m);
+        statics.is_some()
+    });
+    assert_eq!(
+        statics.unwrap().transforms,
+        record::bag::static_frames(&robot, &rig.world_from_base()).transforms
+    );
+    let mut cloud = None;
+    take("/surveyor/sweep", &mut || {
+        cloud = sweeps.take().unwrap().map(|(m, _)| m);
+        cloud.is_some()
+    });
+    assert_eq!(cloud.unwrap().width, 1);
+    take("/surveyor/discs", &mut || discs.take().unwrap().is_some());
 }

@@ -107,6 +107,7 @@ pub fn builtin_scenario(name: &str) -> Option<Scenario> {
         initial_segments: initial,
         metrics,
         explore,
+        ros2: None,
         scene,
     })
 }

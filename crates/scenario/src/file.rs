@@ -46,6 +46,10 @@ pub struct Scenario {
     /// table, with `[explore.plan]` (n_Q, ...) and `[explore.prediction]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub explore: Option<explore::ExploreConfig>,
+    /// How `--ros2` talks to the robot: topics, joint names, tolerances
+    /// (the `[ros2]` table; ROS 2's usual topics when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ros2: Option<crate::ros2::Ros2Spec>,
     /// The ground truth.
     pub scene: SceneSpec,
 }
@@ -176,6 +180,9 @@ impl Scenario {
             }
         }
         self.range_sensors.validate().map_err(fail)?;
+        if let Some(ros2) = &self.ros2 {
+            ros2.validate().map_err(fail)?;
+        }
         if let Some(scanner) = &self.scanner {
             if let Some(mount) = &scanner.mount {
                 pose(mount, "scanner.mount")?;

@@ -8,12 +8,14 @@
 //! | [`builtin`] | [`builtin_scenario`], [`BUILTIN_NAMES`] |
 //! | [`robots`] | [`RobotChoice`]: a built-in robot or a URDF file, the one parser every command uses; [`mount_scanner`] |
 //! | [`range_sensors`] | [`range_sensors::RangeSensorsSpec`]: a scenario's range finders (single and rings) and range noise |
+//! | [`ros2`](mod@ros2) | [`ros2::Ros2Spec`]: the `[ros2]` table (topics, joint names, tolerances of a ROS 2 robot) |
 //! | [`table_fit`] | [`table_fit::fit_table`]: a table plane fitted to scan points, as world frame and initial segment |
 
 pub mod builtin;
 pub mod file;
 pub mod range_sensors;
 pub mod robots;
+pub mod ros2;
 pub mod table_fit;
 
 pub use builtin::{BUILTIN_NAMES, builtin_scenario};

@@ -13,11 +13,13 @@ use blast::{BlastConfig, BlastInputs, BlastPlan};
 use explore::{ExploreConfig, ExploreRun, Judge, SafetyTally, Setup, SetupInputs};
 use geom::{Isometry3, Point3, Real, Vector3};
 use hw::script::{Event, Tap};
+use hw::{Arm, LineScanner};
 use map::TsdfConfig;
 use plan::contact::{min_clearance, motion_contacts, robot_contacts, smallest_link_radius};
 use rayon::prelude::*;
 use record::Staging;
 use record::bag::RunBag;
+use record::bag::msg::MarkerArray;
 use record::explore::{CoverageOracle, ExploreCoverage, ExploreSummary, OracleComparison};
 use robot::Robot;
 use scenario::LoadedScenario;
@@ -376,6 +378,25 @@ pub struct SimExplore {
 }
 
 impl SimExplore {
+    /// How the loop runs `loaded` under `options`.
+    fn run_options(
+        loaded: &LoadedScenario,
+        options: &ExploreOptions,
+    ) -> Result<explore::RunOptions, SimError> {
+        Ok(explore::RunOptions {
+            seed: options.seed,
+            tsdf: options.tsdf,
+            timings: options.timings,
+            checkpoint: options.checkpoint.clone(),
+            resume: options.resume,
+            stage_two: options.stage_two,
+            identity: explore::RunIdentity {
+                scenario: loaded.scenario.name.clone(),
+                scenario_toml: loaded.standalone().to_toml()?,
+            },
+        })
+    }
+
     /// The exploration of `loaded` under `options` (seed, budget,
     /// parameters, cache): [`explore_setup`], the rig at the start pose and
     /// the judge.
@@ -395,18 +416,7 @@ impl SimExplore {
             options.seed,
         )?;
         let judge = ExploreJudge::new(&setup, Arc::clone(&world), &s.metrics)?;
-        let run_options = explore::RunOptions {
-            seed: options.seed,
-            tsdf: options.tsdf,
-            timings: options.timings,
-            checkpoint: options.checkpoint.clone(),
-            resume: options.resume,
-            stage_two: options.stage_two,
-            identity: explore::RunIdentity {
-                scenario: s.name.clone(),
-                scenario_toml: loaded.standalone().to_toml()?,
-            },
-        };
+        let run_options = Self::run_options(loaded, options)?;
         Ok(Self {
             loaded: loaded.clone(),
             setup,
@@ -440,24 +450,12 @@ impl SimExplore {
             _ => None,
         };
         let loaded_s = t.elapsed().as_secs_f64();
-        let robot = setup.robot.clone();
-        let world_from_base = setup.world_from_base;
-        let mut bag = rig.run_bag()?;
-        // When each viewpoint's record came: its sweep cloud's stamp.
-        let clock = bag.clock();
-        let mut stamps = Vec::new();
-        let mut progress = |v: &record::ViewpointRecord| {
-            stamps.push(clock.now_ns());
-            progress(v);
-        };
-        let mut tapped = Tap::with_sink(rig, |e: &Event| bag_event(&mut bag, e));
+        let bag = rig.run_bag()?;
         // A computed oracle runs beside the exploration (it depends on the
         // scenario and the setup only): the run waits for it at the end.
-        let run = explore::run(setup, &mut tapped, &mut judge, &run_options, &mut progress);
         // A failed run does not wait (the oracle's thread is left to end
         // with the process; its cache file is written whole or not at all).
-        let mut run = run?;
-        let bag = finish_bag(bag, &run, &robot, &world_from_base, &stamps)?;
+        let (mut run, bag) = run_loop(setup, rig, &mut judge, bag, &run_options, progress)?;
         let t = Instant::now();
         let oracle = pending.map(crate::oracle::OracleJob::finish).transpose()?;
         if let Some(t_run) = &mut run.timings {
@@ -468,6 +466,132 @@ impl SimExplore {
             coverage: judge.coverage(),
             observable: judge.observable(),
             oracle,
+            run,
+            loaded,
+        })
+    }
+}
+
+/// The loop of `setup` on `hw` (tapped into `bag`) under `judge`: the run
+/// and its finished bag.
+fn run_loop<H: Arm + LineScanner>(
+    setup: Setup,
+    hw: H,
+    judge: &mut dyn Judge,
+    mut bag: RunBag,
+    run_options: &explore::RunOptions,
+    progress: &mut dyn FnMut(&record::ViewpointRecord),
+) -> Result<(ExploreRun, Vec<u8>), SimError> {
+    let robot = setup.robot.clone();
+    let world_from_base = setup.world_from_base;
+    // When each viewpoint's record came: its sweep cloud's stamp.
+    let clock = bag.clock();
+    let mut stamps = Vec::new();
+    let mut progress = |v: &record::ViewpointRecord| {
+        stamps.push(clock.now_ns());
+        progress(v);
+    };
+    let mut tapped = Tap::with_sink(hw, |e: &Event| bag_event(&mut bag, e));
+    let run = explore::run(setup, &mut tapped, judge, run_options, &mut progress)?;
+    let bag = finish_bag(bag, &run, &robot, &world_from_base, &stamps)?;
+    Ok((run, bag))
+}
+
+/// A scenario's exploration on hardware the simulator does not own (a
+/// ROS 2 robot): the setup from the scenario, the hardware at its start
+/// pose, and no ground truth (no coverage, no contact or clearance tally,
+/// no true materials; everything else as in the simulator).
+pub struct HardwareExplore<H> {
+    loaded: LoadedScenario,
+    setup: Setup,
+    hw: H,
+    run_options: explore::RunOptions,
+    judge: Box<dyn Judge>,
+}
+
+impl<H: std::fmt::Debug> std::fmt::Debug for HardwareExplore<H> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("HardwareExplore")
+            .field("setup", &self.setup)
+            .field("hw", &self.hw)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<H: Arm + LineScanner> HardwareExplore<H> {
+    /// The exploration of `loaded` under `options` (seed, budget,
+    /// parameters, cache; no oracle) on `hw`, which must stand at the
+    /// scenario's start joints (within `start_tolerance` radians) and scan
+    /// with the scenario's scanner's bearings.
+    pub fn new(
+        loaded: &LoadedScenario,
+        options: &ExploreOptions,
+        hw: H,
+        start_tolerance: Real,
+    ) -> Result<Self, SimError> {
+        let (setup, _) = explore_setup(loaded, options)?;
+        let hardware = |message: String| SimError::InvalidArgument {
+            what: "the robot".into(),
+            message,
+        };
+        crate::rig::check_stands_at(&hw.joints(), &setup.start, start_tolerance)
+            .map_err(hardware)?;
+        let bearings = Scanner::new(setup.scanner)?.bearings_rad().to_vec();
+        if hw.bearings_rad() != bearings.as_slice() {
+            return Err(hardware(format!(
+                "its scanner has {} bearings, not the scenario scanner's {}",
+                hw.bearings_rad().len(),
+                bearings.len()
+            )));
+        }
+        let run_options = SimExplore::run_options(loaded, options)?;
+        Ok(Self {
+            loaded: loaded.clone(),
+            setup,
+            hw,
+            run_options,
+            judge: Box::new(explore::NoJudge),
+        })
+    }
+
+    /// Let `judge` see every motion and sweep as the loop makes them: a
+    /// live view, or whatever knows the truth about the robot's world (by
+    /// default nothing does: [`explore::NoJudge`]).
+    #[must_use]
+    pub fn judged_by(mut self, judge: Box<dyn Judge>) -> Self {
+        self.judge = judge;
+        self
+    }
+
+    /// Run it; `progress` sees each viewpoint's record as it completes.
+    pub fn run(
+        self,
+        progress: &mut dyn FnMut(&record::ViewpointRecord),
+    ) -> Result<ExploreOutcome, SimError> {
+        let Self {
+            loaded,
+            setup,
+            hw,
+            run_options,
+            mut judge,
+        } = self;
+        let defaults = record::bag::BagConfig::default();
+        let bag = RunBag::new(
+            &setup.robot,
+            &setup.world_from_base,
+            &hw.joints(),
+            hw.bearings_rad(),
+            record::bag::BagConfig {
+                scan_range_m: (setup.scanner.min_range_m, setup.scanner.max_range_m),
+                ..defaults
+            },
+        )?;
+        let (run, bag) = run_loop(setup, hw, judge.as_mut(), bag, &run_options, progress)?;
+        Ok(ExploreOutcome {
+            bag,
+            coverage: None,
+            observable: Vec::new(),
+            oracle: None,
             run,
             loaded,
         })
@@ -512,17 +636,27 @@ fn finish_bag(
     for (k, points) in per_viewpoint.into_iter().enumerate() {
         recorder.sweep(stamps.get(k).copied().unwrap_or(end), points)?;
     }
+    let (viewpoints, discs) = explore_markers(end, run, robot, world_from_base)?;
+    recorder.write(record::bag::topics::VIEWPOINTS, end, &viewpoints)?;
+    recorder.write(record::bag::topics::DISCS, end, &discs)?;
+    Ok(recorder.finish()?)
+}
+
+/// The markers of a run stamped `stamp_ns`: its viewpoints' scanner poses
+/// (`/surveyor/viewpoints`) and its discs by most probable material
+/// (`/surveyor/discs`).
+pub fn explore_markers(
+    stamp_ns: u64,
+    run: &ExploreRun,
+    robot: &robot::Robot,
+    world_from_base: &geom::Isometry3,
+) -> Result<(MarkerArray, MarkerArray), SimError> {
     let mut poses = Vec::with_capacity(run.viewpoints.len());
     for v in &run.viewpoints {
         if let Some(pose) = robot.scanner_pose(&v.joints)? {
             poses.push(world_from_base * pose);
         }
     }
-    recorder.write(
-        record::bag::topics::VIEWPOINTS,
-        end,
-        &record::bag::markers::viewpoints(end, &poses),
-    )?;
     let d = &run.discs;
     let discs: Vec<record::bag::markers::DiscMark> = d
         .discs
@@ -535,12 +669,10 @@ fn finish_bag(
             material: material_of(d, k),
         })
         .collect();
-    recorder.write(
-        record::bag::topics::DISCS,
-        end,
-        &record::bag::markers::discs(end, &discs),
-    )?;
-    Ok(recorder.finish()?)
+    Ok((
+        record::bag::markers::viewpoints(stamp_ns, &poses),
+        record::bag::markers::discs(stamp_ns, &discs),
+    ))
 }
 
 /// The most likely material of disc `k` once an observation updated it.
@@ -678,6 +810,53 @@ pub fn explore(
     progress: &mut dyn FnMut(&record::ViewpointRecord),
     finish: &mut dyn FnMut(&Staging) -> Result<(), String>,
 ) -> Result<(ExploreOutcome, Option<BlastPlan>), SimError> {
+    explore_with(
+        options,
+        out,
+        |options| SimExplore::new(loaded, options),
+        progress,
+        finish,
+    )
+}
+
+/// An exploration ready to run, in the simulator ([`SimExplore`]) or on
+/// other hardware ([`HardwareExplore`]).
+pub trait ExploreJob {
+    /// Run it; `progress` sees each viewpoint's record as it completes.
+    fn run_job(
+        self,
+        progress: &mut dyn FnMut(&record::ViewpointRecord),
+    ) -> Result<ExploreOutcome, SimError>;
+}
+
+impl ExploreJob for SimExplore {
+    fn run_job(
+        self,
+        progress: &mut dyn FnMut(&record::ViewpointRecord),
+    ) -> Result<ExploreOutcome, SimError> {
+        self.run(progress)
+    }
+}
+
+impl<H: Arm + LineScanner> ExploreJob for HardwareExplore<H> {
+    fn run_job(
+        self,
+        progress: &mut dyn FnMut(&record::ViewpointRecord),
+    ) -> Result<ExploreOutcome, SimError> {
+        self.run(progress)
+    }
+}
+
+/// [`explore()`] with the exploration `make` gives for the options (a
+/// [`HardwareExplore`] on a ROS 2 robot, say): the same checks of `out`,
+/// checkpoint, run folder and report.
+pub fn explore_with<J: ExploreJob>(
+    options: &ExploreOptions,
+    out: &Path,
+    make: impl FnOnce(&ExploreOptions) -> Result<J, SimError>,
+    progress: &mut dyn FnMut(&record::ViewpointRecord),
+    finish: &mut dyn FnMut(&Staging) -> Result<(), String>,
+) -> Result<(ExploreOutcome, Option<BlastPlan>), SimError> {
     let bad_out = |message: String| SimError::InvalidArgument {
         what: out.display().to_string(),
         message,
@@ -708,10 +887,10 @@ pub fn explore(
         clock = Instant::now();
         s
     };
-    let sim = SimExplore::new(loaded, &options)?;
+    let job = make(&options)?;
     record::output::create_out_dir(out)?;
     let setup_s = lap();
-    let mut outcome = sim.run(progress)?;
+    let mut outcome = job.run_job(progress)?;
     lap();
     let plan = outcome.blast_plan(&BlastConfig::default())?;
     let blast_planning_s = lap();

@@ -27,6 +27,7 @@ use crate::{SimError, SimRig};
 use follow::{Episode, EpisodeOptions, FollowConfig, FollowError, Follower, RunEnd, Termination};
 use geom::{Aabb, Isometry3, Point3, Real, Vector3};
 use hw::script::{Event, Tap};
+use hw::{Arm, RangeSensors};
 use plan::contact::{min_clearance, motion_contacts, robot_contacts, smallest_link_radius};
 use record::follow::{FollowSummary, StepTimeStats};
 use record::snapshots::ModelSnapshots;
@@ -592,25 +593,58 @@ impl FollowSetup {
     /// surface model's λ). `progress` is called after every step; raising
     /// `stop` ends the run after the current step.
     pub fn run(
-        mut self,
+        self,
+        stop: &AtomicBool,
+        progress: &mut dyn FnMut(&StepRow, &Follower),
+    ) -> Result<FollowRun, FollowRunError> {
+        let world = self.rig.world_arc();
+        let judge = FollowJudge::new(
+            self.rig.robot().clone(),
+            Arc::clone(&world),
+            self.rig.world_from_base(),
+            0.5 * self.options.config.follow.desired_distance_m,
+        )?;
+        let rig = self.rig.clone();
+        self.run_episode_on(rig, Some((judge, world)), stop, progress)
+    }
+
+    /// Run the episode on `hw` (a ROS 2 robot, say) instead of the rig,
+    /// with no ground truth: no contact or clearance checks, no score.
+    /// `hw` must stand at the start joints (within `start_tolerance`
+    /// radians) and carry the rig's range finders.
+    pub fn run_on<H: Arm + RangeSensors>(
+        self,
+        hw: H,
+        start_tolerance: Real,
+        stop: &AtomicBool,
+        progress: &mut dyn FnMut(&StepRow, &Follower),
+    ) -> Result<FollowRun, FollowRunError> {
+        crate::rig::check_stands_at(&hw.joints(), &self.start_joints, start_tolerance)
+            .map_err(|message| bad("the robot", message))?;
+        self.run_episode_on(hw, None, stop, progress)
+    }
+
+    /// The episode on `hw`, judged and scored against `truth` when given.
+    fn run_episode_on<H: Arm + RangeSensors>(
+        self,
+        hw: H,
+        mut truth: Option<(FollowJudge, Arc<World>)>,
         stop: &AtomicBool,
         progress: &mut dyn FnMut(&StepRow, &Follower),
     ) -> Result<FollowRun, FollowRunError> {
         let mut follower = self.follower()?;
-        let world = self.rig.world_arc();
-        let mut judge = FollowJudge::new(
-            follower.robot().clone(),
-            Arc::clone(&world),
-            self.rig.world_from_base(),
-            0.5 * follower.config().desired_distance_m,
-        )?;
         let mut snapshots = ModelSnapshots::new();
         let mut bag = self.rig.run_bag()?;
-        let mut tapped = Tap::with_sink(&mut self.rig, |e: &Event| bag_event(&mut bag, e));
+        let mut no_judge = follow::NoJudge;
+        let judge: &mut dyn follow::Judge = match &mut truth {
+            Some((judge, _)) => judge,
+            None => &mut no_judge,
+        };
+        let mut tapped = Tap::with_sink(hw, |e: &Event| bag_event(&mut bag, e));
         let episode = follow::run_episode(
             &mut tapped,
             &mut follower,
-            &mut judge,
+            judge,
             EpisodeOptions {
                 max_sets: self.options.max_sets,
                 timings: self.options.timings,
@@ -628,6 +662,40 @@ impl FollowSetup {
         bag.write(record::bag::topics::SURFACE_MODEL, end, &model_markers)
             .map_err(SimError::from)?;
         let bag = bag.finish().map_err(SimError::from)?;
+        let (judgement, score, scan_score) = match truth {
+            Some((judge, world)) => {
+                let (score, scan_score) = self.score(&follower, &world, &judge)?;
+                (judge.judgement(), score, scan_score)
+            }
+            None => (Judgement::default(), None, None),
+        };
+        let robot = follower.robot().name.clone();
+        let end_control_point = follower.control_point(&episode.end_joints)?;
+        Ok(FollowRun {
+            source: self.source,
+            robot,
+            start_joints: self.start_joints,
+            end_control_point,
+            options: self.options,
+            episode,
+            judgement,
+            model: follower.into_model(),
+            snapshots,
+            score,
+            scan_score,
+            a_priori_faces: self.a_priori_faces,
+            bag,
+        })
+    }
+
+    /// The model scored against the true scene (mesh worlds) or against
+    /// the scan points (point-cloud worlds).
+    fn score(
+        &self,
+        follower: &Follower,
+        world: &World,
+        judge: &FollowJudge,
+    ) -> Result<(Option<SurfaceScore>, Option<ModelScanScore>), FollowRunError> {
         let score = match world.as_scene() {
             Some(scene) => {
                 let surface = follower.model().config();
@@ -659,23 +727,7 @@ impl FollowSetup {
             }
             None => None,
         };
-        let robot = follower.robot().name.clone();
-        let end_control_point = follower.control_point(&episode.end_joints)?;
-        Ok(FollowRun {
-            source: self.source,
-            robot,
-            start_joints: self.start_joints,
-            end_control_point,
-            options: self.options,
-            episode,
-            judgement: judge.judgement(),
-            model: follower.into_model(),
-            snapshots,
-            score,
-            scan_score,
-            a_priori_faces: self.a_priori_faces,
-            bag,
-        })
+        Ok((score, scan_score))
     }
 }
 
@@ -1119,8 +1171,31 @@ pub fn follow(
     progress: &mut dyn FnMut(&StepRow, &Follower),
     finish: &mut dyn FnMut(&record::Staging) -> Result<(), String>,
 ) -> Result<FollowRun, FollowRunError> {
+    follow_with(
+        scenario_toml,
+        out,
+        |stop, progress| setup.run(stop, progress),
+        stop,
+        progress,
+        finish,
+    )
+}
+
+/// [`follow()`] with the episode `run` gives (a [`FollowSetup::run_on`] a
+/// ROS 2 robot, say): the same checks of `out`, run folder and report.
+pub fn follow_with(
+    scenario_toml: Option<String>,
+    out: &Path,
+    run: impl FnOnce(
+        &AtomicBool,
+        &mut dyn FnMut(&StepRow, &Follower),
+    ) -> Result<FollowRun, FollowRunError>,
+    stop: &AtomicBool,
+    progress: &mut dyn FnMut(&StepRow, &Follower),
+    finish: &mut dyn FnMut(&record::Staging) -> Result<(), String>,
+) -> Result<FollowRun, FollowRunError> {
     check_follow_out(out)?;
-    let run = setup.run(stop, progress)?;
+    let run = run(stop, progress)?;
     let staging = record::Staging::new(out).map_err(SimError::from)?;
     run.write(&staging)?;
     if let Some(text) = scenario_toml {

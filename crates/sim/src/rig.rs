@@ -247,6 +247,20 @@ impl SimRig {
     }
 }
 
+/// An error unless hardware at joints `q` stands at `start`, every joint
+/// within `tolerance` radians: a loop starts from the pose its setup checked.
+pub(crate) fn check_stands_at(q: &[Real], start: &[Real], tolerance: Real) -> Result<(), String> {
+    let there =
+        q.len() == start.len() && q.iter().zip(start).all(|(a, b)| (a - b).abs() <= tolerance);
+    if there {
+        Ok(())
+    } else {
+        Err(format!(
+            "stands at joints {q:?}, not at the run's start joints {start:?} (within {tolerance} rad): a run starts from the pose its setup checked"
+        ))
+    }
+}
+
 /// Hand one event of tapped hardware (`hw::script::Tap`) to a run's bag.
 pub fn bag_event(bag: &mut record::bag::RunBag, event: &hw::script::Event) {
     use hw::script::Event;

@@ -5,7 +5,9 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use scenario::{RobotChoice, Scenario};
 use sim::explore_job::{ExploreOptions, OracleOption};
+use std::cell::RefCell;
 use std::path::PathBuf;
+use std::rc::Rc;
 
 #[derive(Debug, Args)]
 #[command(after_help = "\
@@ -98,6 +100,8 @@ pub struct ExploreArgs {
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
+    #[command(flatten)]
+    ros2: super::robot_server::Ros2Flags,
 }
 
 pub fn explore(args: &ExploreArgs) -> Result<()> {
@@ -137,10 +141,17 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     }
     let options = run_options(args, &loaded, stage_two)?;
     let t = std::time::Instant::now();
-    let (outcome, blast) = sim::explore_job::explore(
-        &loaded,
+    let (hardware, live) = connect(args, &loaded)?.unzip();
+    let start_tolerance = args
+        .ros2
+        .start_tolerance(&loaded.scenario.ros2.clone().unwrap_or_default());
+    let watcher = live.clone();
+    #[allow(clippy::result_large_err)] // the error type of the sim jobs
+    let make = |options: &ExploreOptions| job(&loaded, options, hardware, watcher, start_tolerance);
+    let (outcome, blast) = sim::explore_job::explore_with(
         &options,
         &args.out,
+        make,
         &mut |r| {
             note!(
                 "stage {}, viewpoint {:>2}: H1 {:>9.1} (weighted {:>8.1}), H2 {:>7.3}, H3 {}, revealed {:>6}, A1 covered {}, {} candidates, decision {:>6.0} ms",
@@ -203,12 +214,22 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         say!(
             "stage two ended ({end}) after {} viewpoints; material right on {} of the discs the LRC observed",
             per_stage(2),
-            run.discs
-                .material_accuracy()
-                .map_or("none".into(), |a| format!("{:.1} %", 100.0 * a))
+            run.discs.material_accuracy().map_or_else(
+                || {
+                    if args.ros2.ros2 {
+                        "(not judged: no true materials)".into()
+                    } else {
+                        "none".into()
+                    }
+                },
+                |a| format!("{:.1} %", 100.0 * a)
+            )
         )?;
     }
     say_coverage(&outcome)?;
+    if let Some(live) = &live {
+        publish_markers(live, &loaded, run)?;
+    }
     if let Some(plan) = &blast {
         say!("{}", plan.summary())?;
     }
@@ -263,6 +284,87 @@ fn say_coverage(outcome: &sim::explore_job::ExploreOutcome) -> Result<()> {
     Ok(())
 }
 
+/// The live view's viewpoints and discs once the run has them.
+fn publish_markers(
+    live: &RefCell<ros2::LiveView>,
+    loaded: &scenario::LoadedScenario,
+    run: &explore::ExploreRun,
+) -> Result<()> {
+    let (viewpoints, discs) = sim::explore_job::explore_markers(
+        ros2::wall_clock_ns(),
+        run,
+        &loaded.build_robot()?,
+        &loaded.scenario.world_from_base(),
+    )?;
+    let mut view = live.borrow_mut();
+    view.markers(record::bag::topics::VIEWPOINTS, viewpoints);
+    view.markers(record::bag::topics::DISCS, discs);
+    drop(view);
+    super::robot_server::say_live(live)
+}
+
+/// The ROS 2 robot to explore with (`--ros2`), waiting for its first joint
+/// state, and the run's live view; `None` for the simulator.
+fn connect(
+    args: &ExploreArgs,
+    loaded: &scenario::LoadedScenario,
+) -> Result<Option<(ros2::Ros2Hardware, Rc<RefCell<ros2::LiveView>>)>> {
+    if !args.ros2.ros2 {
+        return Ok(None);
+    }
+    let spec = loaded.scenario.scanner.clone().unwrap_or_default();
+    let bearings = sensor::Scanner::new(spec.config)?.bearings_rad().to_vec();
+    args.ros2.open(
+        &loaded.scenario.ros2.clone().unwrap_or_default(),
+        &loaded.build_robot()?,
+        &loaded.scenario.world_from_base(),
+        &bearings,
+    )
+}
+
+/// The exploration of `loaded` under `options`: on `hardware` when given,
+/// else in the simulator.
+#[allow(clippy::result_large_err)] // the error type of the sim jobs
+fn job(
+    loaded: &scenario::LoadedScenario,
+    options: &ExploreOptions,
+    hardware: Option<ros2::Ros2Hardware>,
+    live: Option<Rc<RefCell<ros2::LiveView>>>,
+    start_tolerance: geom::Real,
+) -> Result<Job, sim::SimError> {
+    Ok(match hardware {
+        Some(hw) => {
+            let mut job =
+                sim::explore_job::HardwareExplore::new(loaded, options, hw, start_tolerance)?;
+            if let Some(live) = live {
+                job = job.judged_by(Box::new(super::robot_server::LiveWatcher(live)));
+            }
+            Job::Hardware(Box::new(job))
+        }
+        None => Job::Sim(Box::new(sim::explore_job::SimExplore::new(
+            loaded, options,
+        )?)),
+    })
+}
+
+/// The exploration of the simulator, or of a ROS 2 robot.
+enum Job {
+    Sim(Box<sim::explore_job::SimExplore>),
+    Hardware(Box<sim::explore_job::HardwareExplore<ros2::Ros2Hardware>>),
+}
+
+impl sim::explore_job::ExploreJob for Job {
+    fn run_job(
+        self,
+        progress: &mut dyn FnMut(&record::ViewpointRecord),
+    ) -> Result<sim::explore_job::ExploreOutcome, sim::SimError> {
+        match self {
+            Self::Sim(j) => j.run(progress),
+            Self::Hardware(j) => j.run(progress),
+        }
+    }
+}
+
 /// How to run: the caches (given, or the defaults), seed, budget, stages.
 fn run_options(
     args: &ExploreArgs,
@@ -289,7 +391,8 @@ fn run_options(
         seed: args.seed,
         max_viewpoints: args.max_viewpoints,
         config,
-        oracle: if args.no_oracle {
+        // A ROS 2 robot's world is not known: no oracle.
+        oracle: if args.no_oracle || args.ros2.ros2 {
             OracleOption::Off
         } else {
             OracleOption::On(Some(

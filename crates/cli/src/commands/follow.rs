@@ -121,6 +121,27 @@ pub struct FollowArgs {
     /// Output folder (created if missing).
     #[arg(long, required_unless_present = "print_config")]
     out: Option<PathBuf>,
+    #[command(flatten)]
+    ros2: super::robot_server::Ros2Flags,
+}
+
+/// A live view (`--ros2`) publishes the surface model every this many steps.
+const LIVE_MODEL_EVERY: u64 = 25;
+
+/// The live view of a step: the arm's frames at `q`, and `model` when given.
+fn live_step(
+    live: &std::cell::RefCell<ros2::LiveView>,
+    q: &[Real],
+    model: Option<&surface::SurfaceModel>,
+) {
+    let mut view = live.borrow_mut();
+    view.frames(q);
+    if let Some(model) = model {
+        view.markers(
+            record::bag::topics::SURFACE_MODEL,
+            record::bag::markers::surface_model(ros2::wall_clock_ns(), &model.to_model_json()),
+        );
+    }
 }
 
 /// The options of the run from the flags, each checked with the flag named.
@@ -226,11 +247,14 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     // The scenario as given (its paths made absolute), for the report's
     // ground truth; a --scene run has none.
     let mut scenario_toml = None;
+    // How --ros2 talks to the robot: the scenario's [ros2] table.
+    let mut spec = scenario::ros2::Ros2Spec::default();
     let setup = match (&a.scenario, &a.scene) {
         (_, Some(file)) => FollowSetup::from_scene_file(file, a.scale.unwrap_or(1.0), &opts)?,
         (Some(name), None) => {
             let loaded = Scenario::load(name)?;
             scenario_toml = Some(loaded.standalone().to_toml()?);
+            spec = loaded.scenario.ros2.clone().unwrap_or_default();
             FollowSetup::from_scenario(&loaded, &opts)?
         }
         (None, None) => bail!("give --scenario NAME|FILE or --scene FILE"),
@@ -249,13 +273,25 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     {
         pb.set_style(style.progress_chars("=> "));
     }
-    let run = sim::follow_job::follow(
-        setup,
+    let (hardware, live) = a
+        .ros2
+        .open(&spec, setup.rig.robot(), &setup.rig.world_from_base(), &[])?
+        .unzip();
+    let start_tolerance = a.ros2.start_tolerance(&spec);
+    let run = sim::follow_job::follow_with(
         scenario_toml,
         out,
+        |stop, progress| match hardware {
+            Some(hw) => setup.run_on(hw, start_tolerance, stop, progress),
+            None => setup.run(stop, progress),
+        },
         &stop,
         &mut |row, follower| {
             pb.set_position(row.step + 1);
+            if let Some(live) = &live {
+                let model = (row.step % LIVE_MODEL_EVERY == 0).then(|| follower.model());
+                live_step(live, &row.joints, model);
+            }
             if row.step % 10 == 0 {
                 pb.set_message(format!(
                     "{} · {} segments",
@@ -268,6 +304,10 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     );
     pb.finish_and_clear();
     let run = run?;
+    if let Some(live) = &live {
+        live_step(live, &run.episode.end_joints, Some(&run.model));
+        super::robot_server::say_live(live)?;
+    }
     let summary = run.summary();
     let collisions = summary
         .collisions

@@ -5,6 +5,8 @@ use clap::Args;
 use geom::Real;
 use scenario::Scenario;
 use sim::SimRig;
+use std::cell::RefCell;
+use std::rc::Rc;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -25,6 +27,10 @@ pub struct SimRobotArgs {
     /// only on loopback.
     #[arg(long)]
     all_networks: bool,
+    /// Another robot, placed and started as `surveyor follow --robot` places
+    /// it on this scenario (point3, arm4 or a URDF file; range finders only).
+    #[arg(long)]
+    robot: Option<String>,
     /// Seed of the sensor noise.
     #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::whole::<u64>, default_value_t = 0)]
     seed: u64,
@@ -41,6 +47,161 @@ pub struct SimRobotArgs {
     duration_s: Option<Real>,
 }
 
+/// How `explore` and `follow` drive a ROS 2 robot instead of the simulator.
+#[derive(Debug, Args)]
+pub struct Ros2Flags {
+    /// Drive a ROS 2 robot (DDS, no ROS installation needed) instead of the
+    /// simulator: joint states from /joint_states, scans from /scan, range
+    /// readings from /range/finder_K, motions sent as
+    /// trajectory_msgs/JointTrajectory to
+    /// /joint_trajectory_controller/joint_trajectory. The robot must stand at
+    /// the run's start joints. Domain from ROS_DOMAIN_ID; discovery on
+    /// loopback only unless --all-networks. No ground truth: no coverage,
+    /// contact or clearance figures, no true materials.
+    #[arg(long)]
+    pub ros2: bool,
+    /// With --ros2: discover and talk on every network interface (a robot
+    /// network), not only on loopback.
+    #[arg(long, requires = "ros2")]
+    pub all_networks: bool,
+    /// With --ros2: ask for every scan, range reading and noise seed on
+    /// /surveyor/sense, and wait for each motion to end exactly on its goal
+    /// (a `surveyor sim-robot --lockstep`: the run is then the in-process
+    /// run of the same seed).
+    #[arg(long, requires = "ros2")]
+    pub lockstep: bool,
+}
+
+impl Ros2Flags {
+    /// The ROS 2 robot of `robot` at `world_from_base`, its scanner's rays
+    /// at `bearings`: waits for its first joint state.
+    pub fn connect(
+        &self,
+        spec: &scenario::ros2::Ros2Spec,
+        robot: &robot::Robot,
+        world_from_base: &geom::Isometry3,
+        bearings: &[Real],
+    ) -> Result<ros2::Ros2Hardware> {
+        let mut config = ros2::Ros2Config::from_env()?;
+        config.loopback_only = !self.all_networks;
+        let node = ros2::Ros2Node::new("surveyor", &config)?;
+        let driver = ros2::DriverConfig {
+            ros2: spec.clone(),
+            lockstep: self.lockstep,
+        };
+        note!(
+            "waiting for {}'s joint states on ROS 2 domain {}{}",
+            robot.name,
+            config.domain_id,
+            if config.loopback_only {
+                " (loopback only)"
+            } else {
+                ""
+            }
+        );
+        Ok(ros2::Ros2Hardware::new(
+            node,
+            robot,
+            world_from_base,
+            bearings,
+            driver,
+        )?)
+    }
+
+    /// With --ros2: the robot ([`Ros2Flags::connect`]) and the run's live
+    /// view ([`Ros2Flags::live`]); without, none.
+    pub fn open(
+        &self,
+        spec: &scenario::ros2::Ros2Spec,
+        robot: &robot::Robot,
+        world_from_base: &geom::Isometry3,
+        bearings: &[Real],
+    ) -> Result<Option<(ros2::Ros2Hardware, Rc<RefCell<ros2::LiveView>>)>> {
+        if !self.ros2 {
+            return Ok(None);
+        }
+        let hw = self.connect(spec, robot, world_from_base, bearings)?;
+        Ok(Some((hw, self.live(robot, world_from_base)?)))
+    }
+
+    /// The live view of a run on `robot` standing at `world_from_base`:
+    /// its own node beside the driver's, publishing on the topics the run's
+    /// bag holds.
+    pub fn live(
+        &self,
+        robot: &robot::Robot,
+        world_from_base: &geom::Isometry3,
+    ) -> Result<Rc<RefCell<ros2::LiveView>>> {
+        let mut config = ros2::Ros2Config::from_env()?;
+        config.loopback_only = !self.all_networks;
+        let node = ros2::Ros2Node::new("surveyor_live", &config)?;
+        Ok(Rc::new(RefCell::new(ros2::LiveView::new(
+            node,
+            robot,
+            world_from_base,
+        )?)))
+    }
+
+    /// How far from the start joints the robot may stand, radians (the
+    /// `[ros2]` tolerance; none in lockstep).
+    pub fn start_tolerance(&self, spec: &scenario::ros2::Ros2Spec) -> Real {
+        ros2::DriverConfig {
+            ros2: spec.clone(),
+            lockstep: self.lockstep,
+        }
+        .tolerance_rad()
+    }
+}
+
+/// What the live view of an exploration publishes as the loop goes: the
+/// arm's frames at the end of every motion and every sweep's points (a
+/// watcher: it knows no truth).
+pub struct LiveWatcher(pub Rc<RefCell<ros2::LiveView>>);
+
+impl explore::Judge for LiveWatcher {
+    fn motion(
+        &mut self,
+        _viewpoint: usize,
+        _a: &[Real],
+        b: &[Real],
+        _checked: &[Vec<Real>],
+    ) -> Result<(), explore::ExploreError> {
+        self.0.borrow_mut().frames(b);
+        Ok(())
+    }
+
+    fn sweep(&mut self, sweep: &sensor::Sweep) {
+        self.0.borrow_mut().sweep(sweep.points());
+    }
+
+    fn coverage_a1(&self) -> Option<Real> {
+        None
+    }
+
+    fn true_material(&self, _: &geom::Point3, _: &geom::Vector3) -> Option<usize> {
+        None
+    }
+
+    fn tally(&self) -> explore::SafetyTally {
+        explore::SafetyTally::default()
+    }
+
+    fn restore(&mut self, _: explore::SafetyTally) {}
+}
+
+/// Say what the live view sent, and the first message it could not.
+pub fn say_live(live: &RefCell<ros2::LiveView>) -> Result<()> {
+    let live = live.borrow();
+    say!(
+        "live view: {} messages on /tf, /tf_static, /surveyor/sweep and the markers",
+        live.messages_sent()
+    )?;
+    if let Some(f) = live.first_failure() {
+        note!("live view: could not send {f}");
+    }
+    Ok(())
+}
+
 pub fn sim_robot(a: &SimRobotArgs) -> Result<()> {
     if !(a.joint_speed.is_finite() && a.joint_speed > 0.0 && a.joint_speed <= 10.0) {
         bail!(
@@ -54,7 +215,17 @@ pub fn sim_robot(a: &SimRobotArgs) -> Result<()> {
         bail!("--for {d}: expected more than 0 and at most a week of seconds");
     }
     let loaded = Scenario::load(&a.scenario)?;
-    let mut rig = SimRig::with_every_sensor(&loaded, a.seed)?;
+    let mut rig = match &a.robot {
+        None => SimRig::with_every_sensor(&loaded, a.seed)?,
+        Some(name) => {
+            let options = sim::follow_job::FollowRunOptions {
+                robot: Some(name.clone()),
+                seed: a.seed,
+                ..sim::follow_job::FollowRunOptions::default()
+            };
+            sim::follow_job::FollowSetup::from_scenario(&loaded, &options)?.rig
+        }
+    };
     let robot = rig.robot().clone();
     let mut config = ros2::Ros2Config::from_env()?;
     config.loopback_only = !a.all_networks;
@@ -66,6 +237,13 @@ pub fn sim_robot(a: &SimRobotArgs) -> Result<()> {
             .unwrap_or(ros2::ServeConfig::default().scan_range_m),
         finder_range_slack_m: 10.0 * rig.range_noise_sigma_m(),
         lockstep: a.lockstep,
+        ros2: loaded.scenario.ros2.clone().unwrap_or_default(),
+        // A lockstep robot answers each request at once.
+        tick_s: if a.lockstep {
+            0.0005
+        } else {
+            ros2::ServeConfig::default().tick_s
+        },
         ..ros2::ServeConfig::default()
     };
     let stop = Arc::new(AtomicBool::new(false));

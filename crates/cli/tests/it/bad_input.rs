@@ -837,6 +837,62 @@ fn sim_robot_refuses_what_it_cannot_serve() {
     }
 }
 
+/// `explore --ros2` and `follow --ros2` with no robot answering stop with
+/// an error naming what they waited for, after the `[ros2]` timeout, and
+/// write nothing; a bad `[ros2]` table and `--lockstep` without `--ros2`
+/// are refused before any DDS traffic.
+#[test]
+fn ros2_runs_without_a_robot_stop_with_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let quick = |name: &str, table: &str| {
+        let base = scenario::builtin_scenario(name).unwrap().to_toml().unwrap();
+        let file = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&file, format!("{base}\n[ros2]\n{table}\n")).unwrap();
+        file.to_str().unwrap().to_owned()
+    };
+    let (block1, bridge1) = (
+        quick("block1", "timeout_s = 0.5"),
+        quick("bridge1", "timeout_s = 0.5"),
+    );
+    let out = dir.path().join("run");
+    let domain = (200 + std::process::id() % 30).to_string();
+    for args in [
+        vec!["follow", "--scenario", &block1, "--ros2"],
+        vec!["explore", "--scenario", &bridge1, "--ros2", "--no-oracle"],
+    ] {
+        let done = std::process::Command::new(env!("CARGO_BIN_EXE_surveyor"))
+            .args(&args)
+            .args(["--out", out.to_str().unwrap()])
+            .env("ROS_DOMAIN_ID", &domain)
+            .output()
+            .unwrap();
+        assert!(!done.status.success(), "{args:?}");
+        let e = String::from_utf8(done.stderr).unwrap();
+        assert!(
+            e.contains("no joint state before the timeout"),
+            "{args:?}: {e}"
+        );
+        clean(&e);
+        assert!(!out.exists(), "{args:?} left {}", out.display());
+    }
+    let loose = quick("block1", "tolerance_rad = 1");
+    support::fails_with(
+        &["follow", "--scenario", &loose, "--ros2", "--out", "x"],
+        &["ros2.tolerance_rad", "at most 0.05"],
+    );
+    support::fails_with(
+        &[
+            "explore",
+            "--scenario",
+            "bridge1",
+            "--lockstep",
+            "--out",
+            "x",
+        ],
+        &["--ros2"],
+    );
+}
+
 /// `map --robot` belongs to `--bag`; given with `--scans` it would be
 /// ignored, so it is an error.
 #[test]

@@ -384,6 +384,54 @@ impl RosMessage for StdString {
     }
 }
 
+/// `std_msgs/msg/MultiArrayDimension`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct MultiArrayDimension {
+    /// Name of the dimension.
+    pub label: String,
+    /// Its size.
+    pub size: u32,
+    /// Its stride.
+    pub stride: u32,
+}
+
+/// `std_msgs/msg/MultiArrayLayout`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct MultiArrayLayout {
+    /// The dimensions (none: a flat array).
+    pub dim: Vec<MultiArrayDimension>,
+    /// Padding before the data.
+    pub data_offset: u32,
+}
+
+/// `std_msgs/msg/Float64MultiArray`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Float64MultiArray {
+    /// How `data` is laid out.
+    pub layout: MultiArrayLayout,
+    /// The values.
+    pub data: Vec<f64>,
+}
+
+impl RosMessage for Float64MultiArray {
+    const TYPE: &'static str = "std_msgs/msg/Float64MultiArray";
+    fn definition() -> String {
+        with_dependencies(
+            "std_msgs/MultiArrayLayout layout\nfloat64[] data\n",
+            &[
+                (
+                    "std_msgs/MultiArrayLayout",
+                    "std_msgs/MultiArrayDimension[] dim\nuint32 data_offset\n",
+                ),
+                (
+                    "std_msgs/MultiArrayDimension",
+                    "string label\nuint32 size\nuint32 stride\n",
+                ),
+            ],
+        )
+    }
+}
+
 /// `trajectory_msgs/msg/JointTrajectoryPoint`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct JointTrajectoryPoint {

@@ -213,27 +213,13 @@ impl RunBag {
         self.clock.advance(self.config.reading_period_s);
     }
 
-    /// `/tf_static`: the robot's base in the world, the scanner and the
-    /// range finders on their links.
+    /// `/tf_static`: [`static_frames`].
     fn write_static(&mut self, world_from_base: &Isometry3) -> Result<(), BagError> {
-        let base = self.robot.links.first().map_or("base_link", |l| &l.name);
-        let mut transforms = vec![stamped(0, ROOT_FRAME, base, world_from_base)];
-        if let Some(mount) = self.robot.scanner
-            && let Some(link) = self.robot.links.get(mount.link.0)
-        {
-            let laser = mount.link_from_scanner * scanner_from_laser();
-            transforms.push(stamped(0, &link.name, SCANNER_FRAME, &laser));
-        }
-        for (k, finder) in self.robot.range_finders.iter().enumerate() {
-            if let Some(link) = self.robot.links.get(finder.link.0) {
-                // ROS's range frame measures along its x axis.
-                let turn = turn_onto(&geom::Vector3::x_axis(), &finder.axis);
-                let pose = Isometry3::from_parts(finder.origin.coords.into(), turn);
-                transforms.push(stamped(0, &link.name, &range_frame(k), &pose));
-            }
-        }
-        self.bag
-            .write(topics::TF_STATIC, 0, &TfMessage { transforms })
+        self.bag.write(
+            topics::TF_STATIC,
+            0,
+            &static_frames(&self.robot, world_from_base),
+        )
     }
 
     /// `/joint_states` and `/tf` at `q`, now.
@@ -278,6 +264,30 @@ impl RunBag {
         }
         Ok(self.bag.finish()?.into_inner())
     }
+}
+
+/// The frames that do not move (`/tf_static`, stamped 0): `robot`'s base
+/// at `world_from_base` in [`ROOT_FRAME`], its scanner's [`SCANNER_FRAME`]
+/// and each range finder's [`range_frame`] (sensing along x) on their
+/// links.
+pub fn static_frames(robot: &Robot, world_from_base: &Isometry3) -> TfMessage {
+    let base = robot.links.first().map_or("base_link", |l| &l.name);
+    let mut transforms = vec![stamped(0, ROOT_FRAME, base, world_from_base)];
+    if let Some(mount) = robot.scanner
+        && let Some(link) = robot.links.get(mount.link.0)
+    {
+        let laser = mount.link_from_scanner * scanner_from_laser();
+        transforms.push(stamped(0, &link.name, SCANNER_FRAME, &laser));
+    }
+    for (k, finder) in robot.range_finders.iter().enumerate() {
+        if let Some(link) = robot.links.get(finder.link.0) {
+            // ROS's range frame measures along its x axis.
+            let turn = turn_onto(&geom::Vector3::x_axis(), &finder.axis);
+            let pose = Isometry3::from_parts(finder.origin.coords.into(), turn);
+            transforms.push(stamped(0, &link.name, &range_frame(k), &pose));
+        }
+    }
+    TfMessage { transforms }
 }
 
 /// The shortest rotation taking `from` onto `to` (opposite: half a turn

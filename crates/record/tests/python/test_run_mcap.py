@@ -3,7 +3,8 @@ independent readers (issue 26, acceptance 3).
 
 The run folders come from SURVEYOR_EXPLORE_RUN and SURVEYOR_FOLLOW_RUN (CI
 passes the README's explore run and its follow run); without them the
-tests make their own with SURVEYOR_BIN (default target/release/surveyor).
+tests make their own with SURVEYOR_BIN (default target/release/surveyor;
+conftest.py).
 
 - Foxglove's `mcap` + `mcap-ros2-support` decode every message with the
   schemas the bag carries;
@@ -15,48 +16,22 @@ tests make their own with SURVEYOR_BIN (default target/release/surveyor).
   path.csv and every viewpoint's joints appear in it, in order;
 - each LaserScan, placed by /tf_static and the /tf in force at its stamp,
   gives the points of the sweep clouds (the frames are right);
-- `surveyor map --bag` of the run's bag (scans placed by the joint states,
-  no /tf) gives the run's cloud.ply point for point, a mesh and discs;
+- (`surveyor map --bag` of the run's bag gives the run's cloud.ply and
+  mesh.ply byte for byte: test_rosbags_bag.py);
 - a follow run's bag: a Range per finder per step in frames on the robot,
   joint states through every step, the model's outlines; `surveyor model
   --bag` takes one set per model update of the run.
 """
 
-import csv
 import json
-import os
 import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-ROOT = Path(__file__).resolve().parents[4]
-BINARY = os.environ.get("SURVEYOR_BIN", str(ROOT / "target/release/surveyor"))
-
-
-def made(tmp_path_factory, env, name, args):
-    given = os.environ.get(env)
-    if given:
-        return Path(given)
-    out = tmp_path_factory.mktemp(name) / name
-    subprocess.run([BINARY, *args, "--out", str(out), "--no-timings"], check=True,
-                   stdout=subprocess.DEVNULL)
-    return out
-
-
-@pytest.fixture(scope="module")
-def run_dir(tmp_path_factory):
-    return made(tmp_path_factory, "SURVEYOR_EXPLORE_RUN", "bridge1",
-                ["explore", "--scenario", "bridge1"])
-
-
-@pytest.fixture(scope="module")
-def follow_dir(tmp_path_factory):
-    return made(tmp_path_factory, "SURVEYOR_FOLLOW_RUN", "block1",
-                ["follow", "--scenario", "block1", "--robot", "arm4"])
+from conftest import BINARY, read_rows
 
 
 def decode_all(path):
@@ -78,11 +53,6 @@ def decoded(run_dir):
 
 def topic(decoded, name):
     return [(t, m) for (c, t, m) in decoded if c == name]
-
-
-def read_rows(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
 
 
 def joints_of(row):
@@ -220,36 +190,6 @@ def test_scans_placed_by_tf_give_the_sweep_points(decoded):
     err = np.linalg.norm(placed.astype(np.float32) - swept, axis=1)
     print("max error", err.max(), "points", len(err))
     assert err.max() < 1e-3, err.max()
-
-
-def ply_rows(path):
-    with open(path, "rb") as f:
-        data = f.read()
-    head, _, body = data.partition(b"end_header\n")
-    props = [line for line in head.split(b"\n") if line.startswith(b"property")]
-    assert all(line.split()[1] == b"float" for line in props), props
-    return np.frombuffer(body, dtype=np.float32).reshape(-1, len(props))
-
-
-def test_map_from_the_bag_gives_the_run_cloud(run_dir, tmp_path):
-    out = tmp_path / "map"
-    subprocess.run(
-        [BINARY, "map", "--bag", str(run_dir / "run.mcap"), "--robot", "denso-vm6083",
-         "--out", str(out)],
-        check=True,
-        stdout=subprocess.DEVNULL,
-    )
-    ours, theirs = ply_rows(out / "cloud.ply"), ply_rows(run_dir / "cloud.ply")
-    assert ours.shape == theirs.shape
-    # Points from 32-bit ranges and bearings: well under a millimetre.
-    err = np.linalg.norm(ours[:, :3] - theirs[:, :3], axis=1)
-    print("map --bag: max point error", err.max())
-    assert err.max() < 1e-4, err.max()
-    assert np.abs(ours[:, 3:] - theirs[:, 3:]).max() < 1e-5
-    with open(out / "mesh.ply", "rb") as f:
-        head = f.read(400)
-    assert b"element face" in head
-    assert len(read_rows(out / "discs.csv")) > 1000
 
 
 def test_a_follow_run_s_bag(follow_dir):
