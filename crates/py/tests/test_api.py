@@ -17,9 +17,7 @@ Run against an installed wheel: ``pip install ./crates/py``, then
 
 import json
 import math
-import os
 import re
-import subprocess
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -27,29 +25,10 @@ import numpy as np
 import pytest
 
 import surveyor
+from conftest import REPO, run_cli
 
-REPO = Path(__file__).resolve().parents[3]
 UR5 = REPO / "data" / "robots" / "ur5" / "ur5_robot.urdf"
 VM6083_Q_DEG = [0, -55, 165, 0, -110, 0]
-
-
-@pytest.fixture(scope="session")
-def surveyor_bin():
-    path = Path(os.environ.get("SURVEYOR_BIN", REPO / "target" / "release" / "surveyor"))
-    if not path.is_file():
-        pytest.fail(
-            f"the surveyor CLI is not at {path}: build it (cargo build --release) "
-            "or point SURVEYOR_BIN at it"
-        )
-    return path
-
-
-def run_cli(bin_path, *args):
-    out = subprocess.run(
-        [str(bin_path), *map(str, args)], capture_output=True, text=True, check=False
-    )
-    assert out.returncode == 0, f"surveyor {' '.join(map(str, args))}: {out.stderr}"
-    return out.stdout
 
 
 def cli_fk(bin_path, robot, q, tip=None):
@@ -109,8 +88,10 @@ def test_the_readme_tour_runs():
     text = (REPO / "crates" / "py" / "README.md").read_text()
     blocks = re.findall(r"```python\n(.*?)```", text, re.S)
     assert blocks, "no python example in crates/py/README.md"
+    # The blocks go on from one another, as a reader runs them.
+    namespace = {}
     for block in blocks:
-        exec(compile(block, "crates/py/README.md", "exec"), {})
+        exec(compile(block, "crates/py/README.md", "exec"), namespace)
 
 
 def test_ur5_joints_and_limits_are_the_urdf_s():

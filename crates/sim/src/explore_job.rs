@@ -91,6 +91,25 @@ impl ExploreOptions {
         std::env::temp_dir().join(format!("surveyor-oracle-{stem}.json"))
     }
 
+    /// The Stage One parameters of a choice rule: `"information"` (the
+    /// scenario's own, `None`) or `"thesis"` (Paul's rank sum on the Pareto
+    /// front, viewpoint scans only: [`explore::ExploreConfig::thesis_stage_one`]
+    /// of the scenario's); `None` for another name.
+    pub fn stage_one_config(loaded: &LoadedScenario, rule: &str) -> Option<Option<ExploreConfig>> {
+        match rule {
+            "information" => Some(None),
+            "thesis" => Some(Some(
+                loaded
+                    .scenario
+                    .explore
+                    .clone()
+                    .unwrap_or_default()
+                    .thesis_stage_one(),
+            )),
+            _ => None,
+        }
+    }
+
     /// The default LRC cache of a run seed (the training's seed): one file
     /// per seed in the system's temporary folder, so runs that alternate
     /// seeds do not retrain each other's model.

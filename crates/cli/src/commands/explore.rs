@@ -375,17 +375,11 @@ fn run_options(
         Some(path) => path.clone(),
         None => ExploreOptions::default_cspace_cache(loaded)?,
     };
-    let config = match args.stage_one.as_str() {
-        "information" => None,
-        "thesis" => Some(
-            loaded
-                .scenario
-                .explore
-                .clone()
-                .unwrap_or_default()
-                .thesis_stage_one(),
-        ),
-        other => bail!("--stage-one {other}: expected `information` or `thesis`"),
+    let Some(config) = ExploreOptions::stage_one_config(loaded, &args.stage_one) else {
+        bail!(
+            "--stage-one {}: expected `information` or `thesis`",
+            args.stage_one
+        );
     };
     Ok(ExploreOptions {
         seed: args.seed,
