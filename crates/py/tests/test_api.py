@@ -461,7 +461,18 @@ def test_bad_files_and_names_raise_value_error(tmp_path):
 
 
 def test_the_api_is_documented():
-    for cls in (surveyor.Robot, surveyor.Scene):
+    """help(surveyor) lists the API: every public name of the package has a
+    docstring and a stub entry."""
+    import pydoc
+
+    page = pydoc.render_doc(surveyor, renderer=pydoc.plaintext)
+    for name in surveyor.__all__:
+        assert name in page, f"help(surveyor) does not list {name}"
+        if name != "__version__":
+            assert getattr(surveyor, name).__doc__, f"surveyor.{name} has no docstring"
+    for fn in (surveyor.explore, surveyor.follow, surveyor.Run.load):
+        assert fn.__doc__
+    for cls in (surveyor.Robot, surveyor.Scene, surveyor.SurfaceModel, surveyor.Mapper):
         assert cls.__doc__ and cls.__module__ == "surveyor"
         for name in dir(cls):
             if not name.startswith("_"):
@@ -471,7 +482,9 @@ def test_the_api_is_documented():
     assert stub.is_file() and stub.with_name("py.typed").is_file()
     # The stub names every public member.
     text = stub.read_text()
-    for cls in (surveyor.Robot, surveyor.Scene):
+    for cls in (surveyor.Robot, surveyor.Scene, surveyor.SurfaceModel, surveyor.Mapper):
         for name in dir(cls):
             if not name.startswith("_"):
                 assert re.search(rf"def {name}\b", text), f"{cls.__name__}.{name} is not in the stub"
+    for name in ("explore", "follow", "class Run", "def load", "def cloud", "def mesh"):
+        assert name in text, f"{name} is not in the stub"
