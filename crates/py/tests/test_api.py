@@ -1,4 +1,4 @@
-"""The Python package against independent oracles (issue 27, first part).
+"""Robot and Scene against independent oracles (issue 27).
 
 * ``Robot.fk`` / ``frames`` against ``surveyor fk --json`` (the CLI binary,
   ``SURVEYOR_BIN``, default ``<repo>/target/release/surveyor``), to 1e-12;
@@ -88,9 +88,12 @@ def test_the_readme_tour_runs():
     text = (REPO / "crates" / "py" / "README.md").read_text()
     blocks = re.findall(r"```python\n(.*?)```", text, re.S)
     assert blocks, "no python example in crates/py/README.md"
-    # The blocks go on from one another, as a reader runs them.
+    # The blocks go on from one another, as a reader runs them. The campaign
+    # example (20 runs into ./camp) is test_campaign.py's to check, smaller.
     namespace = {}
     for block in blocks:
+        if "campaign.run(" in block:
+            continue
         exec(compile(block, "crates/py/README.md", "exec"), namespace)
 
 
