@@ -6,7 +6,7 @@
 //! |---|---|
 //! | [`robot`](mod@robot) | [`PyRobot`] (`surveyor.Robot`): `from_urdf`, `builtin`, `fk`, `frames`, `jacobian`, `joint_limits` |
 //! | [`scene`](mod@scene) | [`PyScene`] (`surveyor.Scene`): `from_file`, `builtin`, `raycast` |
-//! | [`rays`] | [`rays::ray_records`]: NumPy rows checked and packed as the rays of `surveyor raycast` |
+//! | [`rays`] | [`rays::cast`]: NumPy rows checked, packed and cast as `surveyor raycast` casts its rays |
 //! | [`arrays`] | NumPy arguments in, arrays out; every bad argument a `ValueError` naming it |
 //! | [`runs`] | `surveyor.explore`, `surveyor.follow` (the jobs of the CLI into a run folder) and [`runs::PyRunFolder`] (a run folder read) |
 //! | [`errors`] | the library errors as Python exceptions: `OSError` for files, `ValueError` for the rest |

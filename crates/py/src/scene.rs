@@ -2,7 +2,7 @@
 
 use crate::arrays::rows3;
 use crate::errors::{scene_error, value_error};
-use crate::rays::{cast, range_bound, ray_records};
+use crate::rays::{cast, range_bound};
 use numpy::ndarray::Array2;
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
@@ -92,7 +92,9 @@ impl PyScene {
     /// shape (n,), indexing ``triangles``.
     ///
     /// Runs on all cores with the GIL released. A C-contiguous array is read
-    /// in place; other layouts are copied once. Raises ``ValueError`` for a
+    /// in place while the rays are cast, so do not write to ``origins`` or
+    /// ``directions`` from another thread during the call; other layouts are
+    /// copied once. Raises ``ValueError`` for a
     /// wrong dtype or shape, a NaN or infinite value, a zero-length or
     /// non-unit direction, or a negative or NaN ``max_range``.
     #[pyo3(signature = (origins, directions, max_range = f64::INFINITY))]
@@ -110,12 +112,11 @@ impl PyScene {
         let t_max = range_bound(max_range).map_err(value_error)?;
         let o = rows3("origins", origins)?;
         let d = rows3("directions", directions)?;
-        // Packed while the GIL is held: the arrays cannot change under us.
-        let rays = ray_records(o.flat(), d.flat()).map_err(value_error)?;
-        drop((o, d));
-        let scene = &self.scene;
-        let (distances, faces) = py.detach(|| cast(scene, &rays, t_max));
-        let distances: Vec<f64> = distances.into_iter().map(f64::from).collect();
+        let (o, d) = (o.flat(), d.flat());
+        // The rows are read in place with the GIL released (see above).
+        let (distances, faces) = py
+            .detach(|| cast(&self.scene, o, d, t_max))
+            .map_err(value_error)?;
         Ok((
             PyArray1::from_vec(py, distances),
             PyArray1::from_vec(py, faces),

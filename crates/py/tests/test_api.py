@@ -388,6 +388,25 @@ def test_bad_rays_raise_value_error(cube, origins, directions, pattern):
     assert cube.raycast(ORIGIN, DOWN)[0][0] == 2.0  # still alive and well
 
 
+def test_the_first_bad_ray_of_many_is_named(cube):
+    # Rays are checked a chunk of 1024 at a time on several threads: whichever
+    # chunk fails first, the message names the first bad ray of them all.
+    n = 50_000
+    origins = np.tile(ORIGIN, (n, 1))
+    directions = np.tile(DOWN, (n, 1))
+    origins[40_000, 1] = np.nan
+    directions[7_777] = [0.0, 0.0, -3.0]
+    directions[30_000] = 0.0
+    expect(ValueError, r"^directions\[7777\] is \(0, 0, -3\), of length 3", lambda: cube.raycast(origins, directions))
+    directions[7_777] = DOWN
+    expect(ValueError, r"^directions\[30000\] is \(0, 0, 0\)", lambda: cube.raycast(origins, directions))
+    directions[30_000] = DOWN
+    expect(ValueError, r"^origins\[40000\] is \(0, NaN, 3\)", lambda: cube.raycast(origins, directions))
+    origins[40_000, 1] = 0.0
+    distances, faces = cube.raycast(origins, directions)
+    assert np.all(distances == 2.0) and np.all(faces >= 0)
+
+
 @pytest.mark.parametrize("max_range", [-1.0, math.nan])
 def test_bad_max_range_raises_value_error(cube, max_range):
     expect(ValueError, r"max_range is .*expected a distance", lambda: cube.raycast(ORIGIN, DOWN, max_range))

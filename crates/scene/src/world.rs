@@ -607,6 +607,23 @@ impl Scene {
             });
     }
 
+    /// The first hit `(face, t)` of each of `rays` within `t_max`, `None` on a
+    /// miss, into `hits` (one slot per ray): the walk of one chunk of
+    /// [`Scene::cast_rays_f32`], on the calling thread, several rays at a
+    /// time, so the same hits, with their faces, for a caller that spreads
+    /// rays over threads itself (the Python package's `Scene.raycast`).
+    pub fn first_hits(&self, rays: &[RayF32], t_max: f32, hits: &mut [Option<(u32, f32)>]) {
+        let mut leaves = PacketLeaves {
+            packets: &self.packets,
+        };
+        self.bvh4.closest_hits(rays, t_max, &mut leaves, hits);
+        for h in hits {
+            *h = h
+                .and_then(|hit| self.lane_face(hit))
+                .map(|(t, face)| (face, t));
+        }
+    }
+
     /// The closest point of the scene's surface to `p` within `max_distance`:
     /// `(distance, triangle, point)`.
     pub fn closest_point(&self, p: &Point3, max_distance: Real) -> Option<(Real, FaceId, Point3)> {

@@ -11,6 +11,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers may panic
 
 use geom::{Point3, Ray, Real, UnitVector3, Vector3};
+use scene::bvh::RayF32;
 use scene::{MaterialId, RayCast, Scene, TriMesh, default_materials};
 
 const N: usize = 8;
@@ -100,7 +101,13 @@ fn bvh_paths_follow_the_geom_convention() {
             .collect();
         let mut batch = vec![0.0f32; raw.len()];
         scene.cast_rays_f32(&raw, t_max as f32, &mut batch);
-        for ((ray, r), b) in rays.iter().zip(&raw).zip(&batch) {
+        let mut with_faces = vec![None; raw.len()];
+        let prepared: Vec<RayF32> = raw
+            .iter()
+            .map(|r| RayF32::new([r[0], r[1], r[2]], [r[3], r[4], r[5]]))
+            .collect();
+        scene.first_hits(&prepared, t_max as f32, &mut with_faces);
+        for (((ray, r), b), wf) in rays.iter().zip(&raw).zip(&batch).zip(&with_faces) {
             let want = brute(&mesh, ray, t_max);
             let (x, y) = (ray.origin.x, ray.origin.y);
             let inside = (0.0..=1.0).contains(&x) && (0.0..=1.0).contains(&y);
@@ -111,17 +118,23 @@ fn bvh_paths_follow_the_geom_convention() {
                 (inside && surface_t <= t_max).then_some(surface_t),
                 "geom at ({x}, {y}, {z}), t_max {t_max}"
             );
-            let single = scene
-                .first_hit_f32([r[0], r[1], r[2]], [r[3], r[4], r[5]], t_max as f32)
-                .map(|(t, face)| {
-                    // The reported face is hit by geom's test at that distance.
-                    assert_eq!(
-                        mesh.triangle(face as usize).ray_hit(ray, t_max),
-                        Some(Real::from(t)),
-                        "face {face} at ({x}, {y}, {z})"
-                    );
-                    Real::from(t)
-                });
+            let single_hit =
+                scene.first_hit_f32([r[0], r[1], r[2]], [r[3], r[4], r[5]], t_max as f32);
+            // The batch with faces: the single walk's hit, face and all.
+            assert_eq!(
+                wf.map(|(face, t)| (t, face)),
+                single_hit,
+                "first_hits at ({x}, {y}, {z}), t_max {t_max}"
+            );
+            let single = single_hit.map(|(t, face)| {
+                // The reported face is hit by geom's test at that distance.
+                assert_eq!(
+                    mesh.triangle(face as usize).ray_hit(ray, t_max),
+                    Some(Real::from(t)),
+                    "face {face} at ({x}, {y}, {z})"
+                );
+                Real::from(t)
+            });
             assert_eq!(
                 single, want,
                 "first_hit_f32 at ({x}, {y}, {z}), t_max {t_max}"

@@ -4,6 +4,7 @@
 use geom::{Capsule, Point3, Ray, Real, Triangle, UnitVector3, Vector3, unit};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use scene::bvh::RayF32;
 use scene::{MaterialId, RayCast, Scene, TriMesh, default_materials};
 
 /// A random soup of triangles of varied sizes in a 4 m box.
@@ -151,6 +152,19 @@ fn batched_rays_equal_single_rays() {
             Some(h) => assert!((f64::from(*o) - h.distance).abs() < 1e-4),
             None => assert!(o.is_infinite()),
         }
+    }
+    // The batch with faces: each ray's hit, face included, is the single
+    // walk's, and its distance the plain batch's.
+    let mut with_faces = vec![None; raw.len()];
+    let prepared: Vec<RayF32> = raw
+        .iter()
+        .map(|r| RayF32::new([r[0], r[1], r[2]], [r[3], r[4], r[5]]))
+        .collect();
+    scene.first_hits(&prepared, f32::INFINITY, &mut with_faces);
+    for ((r, wf), o) in raw.iter().zip(&with_faces).zip(&out) {
+        let single = scene.first_hit_f32([r[0], r[1], r[2]], [r[3], r[4], r[5]], f32::INFINITY);
+        assert_eq!(wf.map(|(face, t)| (t, face)), single);
+        assert_eq!(wf.map_or(f32::INFINITY, |(_, t)| t).to_bits(), o.to_bits());
     }
 }
 
