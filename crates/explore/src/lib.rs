@@ -30,6 +30,6 @@ pub use config::{
 pub use discs::DiscMap;
 pub use error::ExploreError;
 pub use judge::{Judge, NoJudge, SafetyTally};
-pub use run::{ExploreRun, RunIdentity, RunOptions, run};
+pub use run::{ExploreRun, RunIdentity, RunOptions, run, viewpoint_seed};
 pub use setup::{Setup, SetupInputs};
 pub use stage_one::{Candidate, Choice, Decision, StageOne, Termination};

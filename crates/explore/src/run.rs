@@ -129,8 +129,9 @@ pub struct ExploreRun {
     pub timings: Option<record::explore::PhaseTimings>,
 }
 
-/// The noise seed of viewpoint `k`'s sweep.
-fn viewpoint_seed(seed: u64, k: usize) -> u64 {
+/// The noise seed of viewpoint `k`'s sweep in a run of seed `seed` (the
+/// start pose's sweep is viewpoint 0).
+pub fn viewpoint_seed(seed: u64, k: usize) -> u64 {
     seed ^ 0xa076_1d64_78bd_642f_u64.wrapping_mul(k as u64 + 1)
 }
 

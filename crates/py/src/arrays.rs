@@ -172,3 +172,13 @@ pub fn matrices4<'py>(py: Python<'py>, all: &[[[f64; 4]; 4]]) -> Bound<'py, nump
         Array3::from_shape_fn((all.len(), 4, 4), |(k, r, c)| all[k][r][c]),
     )
 }
+
+/// The rows of an `(n, 3)` float64 argument as points (see [`rows3`]).
+pub fn points_of(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<geom::Point3>> {
+    let rows = rows3(name, obj)?;
+    Ok(rows
+        .flat()
+        .chunks_exact(3)
+        .map(|c| geom::Point3::new(c[0], c[1], c[2]))
+        .collect())
+}

@@ -12,6 +12,7 @@
 //! | [`errors`] | the library errors as Python exceptions: `OSError` for files, `ValueError` for the rest |
 //! | [`surface_model`] | [`PySurfaceModel`] (`surveyor.SurfaceModel`): `add_set`, `add_initial_segment`, `polygons`, `shared_edges`, `to_obj`, `to_json`, `check`, `stats` |
 //! | [`mapper`](mod@mapper) | [`PyMapper`] (`surveyor.Mapper`): `insert_sweep`, `entropy`, `report`, `mesh`, `discs`, `segments` |
+//! | [`studies`] | `surveyor.scale_like_discs` (discs of any points, timed) and `surveyor.candidate_coverage` (Paul Fig. 3.2), behind `surveyor.studies` |
 //! | [`config_dict`] | configuration dicts in (serde, unknown keys refused), configs and reports out as dicts |
 
 pub mod arrays;
@@ -22,6 +23,7 @@ pub mod rays;
 pub mod robot;
 pub mod runs;
 pub mod scene;
+pub mod studies;
 pub mod surface_model;
 
 pub use mapper::PyMapper;
@@ -42,6 +44,8 @@ fn _surveyor(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<runs::PyRunFolder>()?;
     m.add_function(wrap_pyfunction!(runs::_explore, m)?)?;
     m.add_function(wrap_pyfunction!(runs::_follow, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::scale_like_discs, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::candidate_coverage, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -55,7 +55,10 @@ fn type_name(obj: &Bound<'_, PyAny>) -> String {
 }
 
 /// `obj` as a NumPy array (a list converted by `numpy.asarray`).
-fn as_array<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyUntypedArray>> {
+pub(crate) fn as_array<'py>(
+    name: &str,
+    obj: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyUntypedArray>> {
     if let Ok(a) = obj.cast::<PyUntypedArray>() {
         return Ok(a.clone());
     }
@@ -79,7 +82,7 @@ fn as_array<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyU
 }
 
 /// The shape of `a` as Python prints it.
-fn shape_text(a: &Bound<'_, PyUntypedArray>) -> String {
+pub(crate) fn shape_text(a: &Bound<'_, PyUntypedArray>) -> String {
     let s: Vec<String> = a.shape().iter().map(ToString::to_string).collect();
     if s.len() == 1 {
         format!("({},)", s[0])
@@ -159,7 +162,7 @@ fn cells_n(name: &str, obj: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<GridCel
 }
 
 /// Points of an `(n, 3)` argument, every coordinate finite.
-fn finite_points(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<Point3>> {
+pub(crate) fn finite_points(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<Point3>> {
     let rows = rows3(name, obj)?;
     rows.flat()
         .chunks_exact(3)
@@ -198,6 +201,53 @@ fn discs_and_segments(
         .map(|s| s.into_iter().map(|d| d.0).collect())
         .collect();
     Ok((sld.discs, segments))
+}
+
+/// Discs as a NumPy structured array, one row per disc: ``cx cy cz nx ny
+/// nz radius`` (float64), ``points`` (int64) and, when given, ``segment``
+/// (int64): the columns of ``discs.csv``.
+pub(crate) fn disc_table<'py>(
+    py: Python<'py>,
+    discs: &[Disc],
+    segment: Option<Vec<i64>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let np = py.import("numpy")?;
+    let f8 = "<f8";
+    let i8 = "<i8";
+    let mut fields = vec![
+        ("cx", f8),
+        ("cy", f8),
+        ("cz", f8),
+        ("nx", f8),
+        ("ny", f8),
+        ("nz", f8),
+        ("radius", f8),
+        ("points", i8),
+    ];
+    if segment.is_some() {
+        fields.push(("segment", i8));
+    }
+    let dtype = PyList::new(py, fields)?;
+    let out = np.getattr("empty")?.call1((discs.len(), dtype))?;
+    let column = |f: &dyn Fn(&Disc) -> f64| -> Vec<f64> { discs.iter().map(f).collect() };
+    let floats: [(&str, Vec<f64>); 7] = [
+        ("cx", column(&|d| d.centre.x)),
+        ("cy", column(&|d| d.centre.y)),
+        ("cz", column(&|d| d.centre.z)),
+        ("nx", column(&|d| d.normal.x)),
+        ("ny", column(&|d| d.normal.y)),
+        ("nz", column(&|d| d.normal.z)),
+        ("radius", column(&|d| d.radius_m)),
+    ];
+    for (name, values) in floats {
+        out.set_item(name, PyArray1::from_vec(py, values))?;
+    }
+    let points: Vec<i64> = discs.iter().map(|d| d.points as i64).collect();
+    out.set_item("points", PyArray1::from_vec(py, points))?;
+    if let Some(segment) = segment {
+        out.set_item("segment", PyArray1::from_vec(py, segment))?;
+    }
+    Ok(out)
 }
 
 #[pymethods]
@@ -373,39 +423,7 @@ impl PyMapper {
                 segment[d] = s as i64;
             }
         }
-        let np = py.import("numpy")?;
-        let f8 = "<f8";
-        let i8 = "<i8";
-        let fields = [
-            ("cx", f8),
-            ("cy", f8),
-            ("cz", f8),
-            ("nx", f8),
-            ("ny", f8),
-            ("nz", f8),
-            ("radius", f8),
-            ("points", i8),
-            ("segment", i8),
-        ];
-        let dtype = PyList::new(py, fields)?;
-        let out = np.getattr("empty")?.call1((discs.len(), dtype))?;
-        let column = |f: &dyn Fn(&Disc) -> f64| -> Vec<f64> { discs.iter().map(f).collect() };
-        let floats: [(&str, Vec<f64>); 7] = [
-            ("cx", column(&|d| d.centre.x)),
-            ("cy", column(&|d| d.centre.y)),
-            ("cz", column(&|d| d.centre.z)),
-            ("nx", column(&|d| d.normal.x)),
-            ("ny", column(&|d| d.normal.y)),
-            ("nz", column(&|d| d.normal.z)),
-            ("radius", column(&|d| d.radius_m)),
-        ];
-        for (name, values) in floats {
-            out.set_item(name, PyArray1::from_vec(py, values))?;
-        }
-        let points: Vec<i64> = discs.iter().map(|d| d.points as i64).collect();
-        out.set_item("points", PyArray1::from_vec(py, points))?;
-        out.set_item("segment", PyArray1::from_vec(py, segment))?;
-        Ok(out)
+        disc_table(py, &discs, Some(segment))
     }
 
     /// The segments of the discs (Paul §5.3, Algorithm 1, without the pose

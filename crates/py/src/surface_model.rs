@@ -1,10 +1,10 @@
 //! `surveyor.SurfaceModel`: Pudney's incremental surface model (the
 //! `surface` crate) fed with NumPy sensor sets, the model of `surveyor model`.
 
-use crate::arrays::rows3;
+use crate::arrays::{points_of, rows3};
 use crate::config_dict::{config_from_dict, to_python};
 use crate::errors::value_error;
-use geom::{Point3, UnitVector3, Vector3};
+use geom::{UnitVector3, Vector3};
 use numpy::ndarray::Array2;
 use numpy::{PyArray1, PyArray2};
 use pyo3::exceptions::PyOSError;
@@ -37,16 +37,6 @@ impl PySurfaceModel {
     pub fn model(&self) -> &SurfaceModel {
         &self.model
     }
-}
-
-/// Points of an `(n, 3)` argument.
-fn points_of(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<Point3>> {
-    let rows = rows3(name, obj)?;
-    Ok(rows
-        .flat()
-        .chunks_exact(3)
-        .map(|c| Point3::new(c[0], c[1], c[2]))
-        .collect())
 }
 
 /// `text` written to `path` through a temporary name in the same folder,

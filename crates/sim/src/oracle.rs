@@ -80,17 +80,23 @@ pub struct OraclePool {
     per_pose: Vec<(bool, bool, Vec<u64>)>,
 }
 
-impl OraclePool {
-    /// The pool of `setup` in `world` (a scene: the oracle needs true
-    /// surfaces) with the scanner `scanner` and the metric `metrics`:
-    /// the start, the roadmap's nodes and `extra` poses drawn uniformly
-    /// within the joint limits (seeded).
-    pub fn new(
-        setup: &Setup,
-        world: &Arc<World>,
-        scanner: &sensor::ScannerConfig,
+/// What a pose is checked and scored with: the A1 samples, the planning
+/// voxels a true surface passes through, and the scanner.
+struct PoseJudge<'a> {
+    setup: &'a Setup,
+    world: &'a Arc<World>,
+    scene: &'a scene::Scene,
+    scanner: &'a sensor::ScannerConfig,
+    tracker: CoverageTracker,
+    occupied: HashSet<VoxelKey>,
+}
+
+impl<'a> PoseJudge<'a> {
+    fn new(
+        setup: &'a Setup,
+        world: &'a Arc<World>,
+        scanner: &'a sensor::ScannerConfig,
         metrics: &MetricsConfig,
-        extra: usize,
     ) -> Result<Self, SimError> {
         let scene = world.as_scene().ok_or_else(|| SimError::InvalidArgument {
             what: "coverage oracle".into(),
@@ -110,63 +116,109 @@ impl OraclePool {
             .flatten()
             .filter_map(|s| VoxelKey::of_point(&s.point, voxel))
             .collect();
+        Ok(Self {
+            setup,
+            world,
+            scene,
+            scanner,
+            tracker,
+            occupied,
+        })
+    }
 
+    /// Pose `i` (`q`): clear by the run's rule, by the contact rule, and the
+    /// A1 samples its sweep (noise seeded by `noise_seed`) covers (empty
+    /// when neither rule clears it, except for the start, `i == 0`, whose
+    /// sweep a run always takes).
+    fn judge(
+        &self,
+        i: usize,
+        q: &[Real],
+        noise_seed: u64,
+    ) -> Result<(bool, bool, Vec<u64>), SimError> {
+        let setup = self.setup;
         let robot = &setup.robot;
         let world_from_base = setup.world_from_base;
         let safety = setup.stage.model().safety();
+        let voxel = setup.config.planning_voxel_m;
         let clearance_m = setup.config.stage_one_clearance_m;
+        let mut contact = true;
+        let mut run = true;
+        for c in &sweep_configurations(setup, q) {
+            let frames = robot.forward_kinematics(c)?;
+            contact &= plan::contact::robot_contacts(robot, &frames, &world_from_base, self.scene)
+                .is_empty();
+            if run {
+                run = plan::interfering_voxels(safety, c, voxel)
+                    .map_err(|e| SimError::Plan(Box::new(e)))?
+                    .iter()
+                    .all(|k| !self.occupied.contains(k))
+                    && (clearance_m <= 0.0
+                        || plan::contact::min_clearance(
+                            robot,
+                            &frames,
+                            &world_from_base,
+                            self.scene,
+                            clearance_m,
+                        ) >= clearance_m);
+            }
+        }
+        let bits = if i == 0 || contact || run {
+            let points = simulated_sweep(
+                setup,
+                self.world,
+                robot,
+                &world_from_base,
+                self.scanner,
+                q,
+                noise_seed,
+            )?;
+            self.tracker.stored_bits_of(&points)
+        } else {
+            Vec::new()
+        };
+        Ok((run, contact, bits))
+    }
+}
+
+/// `n` configurations drawn uniformly within `robot`'s joint limits
+/// (0 for an unlimited joint), seeded.
+fn uniform_poses(robot: &Robot, n: usize, seed: u64) -> Vec<Vec<Real>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..n)
+        .map(|_| {
+            robot
+                .limits()
+                .iter()
+                .map(|l| l.map_or(0.0, |l| rng.random_range(l.min..=l.max)))
+                .collect()
+        })
+        .collect()
+}
+
+impl OraclePool {
+    /// The pool of `setup` in `world` (a scene: the oracle needs true
+    /// surfaces) with the scanner `scanner` and the metric `metrics`:
+    /// the start, the roadmap's nodes and `extra` poses drawn uniformly
+    /// within the joint limits (seeded).
+    pub fn new(
+        setup: &Setup,
+        world: &Arc<World>,
+        scanner: &sensor::ScannerConfig,
+        metrics: &MetricsConfig,
+        extra: usize,
+    ) -> Result<Self, SimError> {
+        let judge = PoseJudge::new(setup, world, scanner, metrics)?;
         let mut poses: Vec<Vec<Real>> = vec![setup.start.clone()];
         poses.extend(setup.stage.model().roadmap().nodes().map(<[Real]>::to_vec));
-        let mut rng = ChaCha8Rng::seed_from_u64(0);
-        for _ in 0..extra {
-            poses.push(
-                robot
-                    .limits()
-                    .iter()
-                    .map(|l| l.map_or(0.0, |l| rng.random_range(l.min..=l.max)))
-                    .collect(),
-            );
-        }
+        poses.extend(uniform_poses(&setup.robot, extra, 0));
         let per_pose = poses
             .par_iter()
             .enumerate()
-            .map(|(i, q)| -> Result<_, SimError> {
-                let mut contact = true;
-                let mut run = true;
-                for c in &sweep_configurations(setup, q) {
-                    let frames = robot.forward_kinematics(c)?;
-                    contact &=
-                        plan::contact::robot_contacts(robot, &frames, &world_from_base, scene)
-                            .is_empty();
-                    if run {
-                        run = plan::interfering_voxels(safety, c, voxel)
-                            .map_err(|e| SimError::Plan(Box::new(e)))?
-                            .iter()
-                            .all(|k| !occupied.contains(k))
-                            && (clearance_m <= 0.0
-                                || plan::contact::min_clearance(
-                                    robot,
-                                    &frames,
-                                    &world_from_base,
-                                    scene,
-                                    clearance_m,
-                                ) >= clearance_m);
-                    }
-                }
-                // The start's sweep is taken whatever the rules say (a run
-                // takes it).
-                let bits = if i == 0 || contact || run {
-                    let points =
-                        simulated_sweep(setup, world, robot, &world_from_base, scanner, q, i)?;
-                    tracker.stored_bits_of(&points)
-                } else {
-                    Vec::new()
-                };
-                Ok((run, contact, bits))
-            })
+            .map(|(i, q)| judge.judge(i, q, i as u64))
             .collect::<Result<_, _>>()?;
         Ok(Self {
-            samples: tracker.len(),
+            samples: judge.tracker.len(),
             poses: poses.len(),
             per_pose,
         })
@@ -254,6 +306,104 @@ impl OraclePool {
             a1_all_poses: self.all(rule),
         }
     }
+}
+
+/// Most candidates [`candidate_coverage`] draws (the planner's own ceiling
+/// on `plan.n_q`).
+pub const MAX_CANDIDATES: usize = 20_000;
+
+/// Candidates judged at a time by [`candidate_coverage`] (their sample bits
+/// are dropped once united).
+const CANDIDATE_CHUNK: usize = 64;
+
+/// One point of Paul's Fig. 3.2: what the sweeps of `n_q` candidate poses
+/// together cover.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CandidateCoverage {
+    /// Candidates drawn.
+    pub n_q: usize,
+    /// Of them, clear by the run's rule ([`OracleRule::Run`]).
+    pub clear_run: usize,
+    /// A1 share covered by the start's sweep and every run-clear
+    /// candidate's.
+    pub coverage_run: Real,
+    /// Of them, clear by the contact rule ([`OracleRule::Contact`]).
+    pub clear_contact: usize,
+    /// A1 share covered by the start's sweep and every contact-clear
+    /// candidate's.
+    pub coverage_contact: Real,
+}
+
+/// Paul's Fig. 3.2 (§3.2.3) in simulation: the A1 coverage (SPEC §6) of the
+/// combined sweeps of `n_Q` contending viewpoints drawn uniformly in C-space,
+/// for each `n_Q` of `sizes`. Candidates are drawn uniformly within the
+/// joint limits (seeded by `seed`), each judged as the oracle's pool is (the
+/// sweep from it clear by a rule), its sweep's noise seeded as a run of seed
+/// `seed` seeds viewpoint `k` (the start is 0, candidate `i` is `i`); the
+/// first `n_Q` of the draw are a uniform sample of `n_Q`,
+/// so one draw of the largest size answers every size. The start pose's
+/// sweep is always counted (a run's map holds it before Stage One chooses),
+/// so `n_Q = 0` is the start's coverage alone. One row per size, ascending.
+pub fn candidate_coverage(
+    setup: &Setup,
+    world: &Arc<World>,
+    scanner: &sensor::ScannerConfig,
+    metrics: &MetricsConfig,
+    sizes: &[usize],
+    seed: u64,
+) -> Result<Vec<CandidateCoverage>, SimError> {
+    let mut sizes = sizes.to_vec();
+    sizes.sort_unstable();
+    sizes.dedup();
+    let n = sizes.last().copied().unwrap_or(0);
+    if n > MAX_CANDIDATES {
+        return Err(SimError::InvalidArgument {
+            what: "candidate sizes".into(),
+            message: format!("{n} candidates: expected at most {MAX_CANDIDATES}"),
+        });
+    }
+    let judge = PoseJudge::new(setup, world, scanner, metrics)?;
+    let share = |bits: &[u64]| count(bits) as Real / judge.tracker.len().max(1) as Real;
+    let noise = |i: usize| explore::viewpoint_seed(seed, i);
+    let start = judge.judge(0, &setup.start, noise(0))?.2;
+    let (mut run, mut contact) = (start.clone(), start);
+    let (mut clear_run, mut clear_contact) = (0, 0);
+    let mut rows = Vec::with_capacity(sizes.len());
+    let mut next = sizes.iter().copied().peekable();
+    let mut record = |k: usize, run: &[u64], contact: &[u64], cr: usize, cc: usize| {
+        while next.peek() == Some(&k) {
+            next.next();
+            rows.push(CandidateCoverage {
+                n_q: k,
+                clear_run: cr,
+                coverage_run: share(run),
+                clear_contact: cc,
+                coverage_contact: share(contact),
+            });
+        }
+    };
+    record(0, &run, &contact, 0, 0);
+    let poses = uniform_poses(&setup.robot, n, seed);
+    for (c, chunk) in poses.chunks(CANDIDATE_CHUNK).enumerate() {
+        let first = 1 + c * CANDIDATE_CHUNK;
+        let judged = chunk
+            .par_iter()
+            .enumerate()
+            .map(|(k, q)| judge.judge(first + k, q, noise(first + k)))
+            .collect::<Result<Vec<_>, _>>()?;
+        for (k, (is_run, is_contact, bits)) in judged.into_iter().enumerate() {
+            if is_run {
+                clear_run += 1;
+                or_into(&mut run, &bits);
+            }
+            if is_contact {
+                clear_contact += 1;
+                or_into(&mut contact, &bits);
+            }
+            record(first + k, &run, &contact, clear_run, clear_contact);
+        }
+    }
+    Ok(rows)
 }
 
 /// The cache file: the inputs the oracle was made for, and the oracle.
@@ -447,7 +597,7 @@ fn simulated_sweep(
     world_from_base: &Isometry3,
     scanner: &sensor::ScannerConfig,
     q: &[Real],
-    seed: usize,
+    seed: u64,
 ) -> Result<Vec<geom::Point3>, SimError> {
     let mut rig = crate::SimRig::new(
         robot.clone(),
@@ -455,7 +605,7 @@ fn simulated_sweep(
         *world_from_base,
         q,
         Some(sensor::Scanner::new(*scanner)?),
-        seed as u64,
+        seed,
     )?;
     let sweep = hw::tilt_sweep(
         &mut rig,

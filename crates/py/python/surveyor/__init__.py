@@ -18,6 +18,12 @@ The Python face of the surveyor workspace (Rust):
   ``insert_sweep(points, origins, intensities, cells)``, ``entropy()``,
   ``report()``, ``mesh()``, ``discs()``, ``segments()``.
 
+* ``scale_like_discs(points, triangles=None, origins=None, config=None,
+  seed=0)``: the discs of any points (``surveyor sld``), timed;
+  ``candidate_coverage(scenario, sizes, seed=0)``: the coverage of the
+  combined sweeps of n_Q candidate viewpoints (Paul Fig. 3.2);
+  ``surveyor.studies`` runs both as parameter studies on Ray.
+
 * ``explore(scenario, seed=0, out=None, **config)`` and ``follow(scenario,
   seed=0, out=None, **options)``: whole runs, as ``surveyor explore`` and
   ``surveyor follow`` make them, returned as a ``Run``;
@@ -31,10 +37,10 @@ file ``OSError``, each with the library's message.
 """
 
 from ._surveyor import Robot, Scene, __version__
-from ._surveyor import Mapper, SurfaceModel
+from ._surveyor import Mapper, SurfaceModel, candidate_coverage, scale_like_discs
 
 __all__ = ["Robot", "Scene", "__version__"]
-__all__ += ["SurfaceModel", "Mapper"]
+__all__ += ["SurfaceModel", "Mapper", "scale_like_discs", "candidate_coverage"]
 
 from ._runs import Run, explore, follow
 

@@ -9,7 +9,7 @@ import numpy.typing as npt
 
 __version__: str
 __all__ = ["Robot", "Scene", "__version__"]
-__all__ += ["SurfaceModel", "Mapper"]
+__all__ += ["SurfaceModel", "Mapper", "scale_like_discs", "candidate_coverage"]
 __all__ += ["explore", "follow", "Run"]
 
 _Path = Union[str, "os.PathLike[str]"]
@@ -219,6 +219,29 @@ class Mapper:
     @property
     def config(self) -> Dict[str, Any]:
         """The configuration in effect, every field."""
+
+def scale_like_discs(
+    points: _Rows,
+    triangles: npt.ArrayLike | None = None,
+    origins: _Rows | None = None,
+    config: Mapping[str, Any] | None = None,
+    seed: int = 0,
+) -> Tuple[npt.NDArray[np.void], Dict[str, Any]]:
+    """Scale-Like Discs of points (n, 3) float64, as ``surveyor sld``:
+    returns (discs, info). Normals follow the mesh ``triangles`` (m, 3)
+    when given, else the sensor ``origins`` (n, 3), else a canonical sign.
+    ``config``: SldConfig fields (radius_m, min_points, ...). discs: float64
+    cx cy cz nx ny nz radius, int64 points. info: points, registered,
+    registered_fraction, occupied_voxels, seconds (generation alone).
+    Raises ValueError for bad input."""
+
+def candidate_coverage(
+    scenario: str, sizes: Sequence[int], seed: int = 0
+) -> Dict[str, npt.NDArray[Any]]:
+    """Paul Fig. 3.2: the A1 coverage of the combined sweeps of n_Q
+    candidates drawn uniformly in C-space (and the start's), for each n_Q
+    of sizes (0 to 20000): arrays n_q, clear_run, coverage_run,
+    clear_contact, coverage_contact. Raises ValueError for bad input."""
 
 class Run:
     """A run folder of ``surveyor explore`` or ``surveyor follow``, read
