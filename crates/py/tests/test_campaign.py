@@ -30,10 +30,8 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 import uuid
-from pathlib import Path
 
 # Ray 2.60 writes an authentication token into the home folder when it
 # starts a local cluster with token authentication on; the tests (and the
@@ -41,10 +39,10 @@ from pathlib import Path
 os.environ.setdefault("RAY_AUTH_MODE", "disabled")
 
 import pytest  # noqa: E402
-import ray  # noqa: E402
 
 import surveyor  # noqa: E402
 from surveyor import campaign  # noqa: E402
+from conftest import MARKER, stop_marked  # noqa: E402
 
 CONFIG = {"stages": "one", "max_viewpoints": 2, "oracle": False, "report": False}
 CONFIG_JSON = json.dumps(CONFIG, sort_keys=True, separators=(",", ":"))
@@ -53,69 +51,10 @@ SEEDS = [0, 1, 2]
 COMBOS = [(scene, seed) for scene in SCENES for seed in SEEDS]
 HEADER = ["scene", "seed", "config", "viewpoints_stage_one", "viewpoints_stage_two",
           "coverage_a1", "material_accuracy", "collisions", "folder", "wall_s"]
-MARKER = "SURVEYOR_CAMPAIGN_TEST"
 
 
 def folder_of(scene, seed):
     return f"{scene}/seed{seed}/cfg-{hashlib.sha256(CONFIG_JSON.encode()).hexdigest()[:8]}"
-
-
-def marked_processes(tag):
-    """Pids of the processes whose environment holds MARKER=tag (Ray's,
-    started by these tests)."""
-    needle = f"{MARKER}={tag}".encode()
-    pids = []
-    for entry in os.listdir("/proc"):
-        if not entry.isdigit() or int(entry) == os.getpid():
-            continue
-        try:
-            with open(f"/proc/{entry}/environ", "rb") as f:
-                if needle in f.read().split(b"\0"):
-                    pids.append(int(entry))
-        except OSError:
-            pass
-    return pids
-
-
-def stop_marked(tag, wait_s=15.0):
-    """Wait for the marked processes to end; SIGKILL those that do not.
-    Returns the pids that had to be killed."""
-    deadline = time.monotonic() + wait_s
-    while marked_processes(tag) and time.monotonic() < deadline:
-        time.sleep(0.2)
-    left = marked_processes(tag)
-    for pid in left:
-        try:
-            os.kill(pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-    return left
-
-
-@pytest.fixture(scope="module")
-def ray_dir():
-    """A short temporary folder for Ray (its socket paths must stay under
-    107 bytes, which pytest's tmp_path can exceed)."""
-    d = tempfile.mkdtemp(prefix="ray27-", dir="/tmp")
-    yield Path(d)
-    shutil.rmtree(d, ignore_errors=True)
-
-
-@pytest.fixture(scope="module")
-def local_ray(ray_dir):
-    """A local Ray of 2 CPUs, shut down after the module; the campaign
-    joins it. Nothing it started may outlive it."""
-    tag = uuid.uuid4().hex
-    os.environ[MARKER] = tag  # inherited by every process Ray starts
-    try:
-        ray.init(address="local", num_cpus=2, include_dashboard=False,
-                 _temp_dir=str(ray_dir / "local"))
-        yield ray
-    finally:
-        ray.shutdown()
-        del os.environ[MARKER]
-        left = stop_marked(tag)
-        assert not left, f"Ray processes left after ray.shutdown(), killed: {left}"
 
 
 @pytest.fixture(scope="module")

@@ -289,6 +289,20 @@ def _start_ray(address: Optional[str], num_cpus: Optional[int], ray_options: Opt
     return ray, True
 
 
+def completed(ray, pending: Dict[Any, Any]):
+    """Yield ``(key, result, error)`` for each Ray task of ``pending`` (a
+    dict of object ref to key) as it finishes: ``error`` is None, or the
+    text of what the task raised (a crashed worker, a lost node)."""
+    waiting = list(pending)
+    while waiting:
+        done, waiting = ray.wait(waiting, num_returns=1)
+        for ref in done:
+            try:
+                yield pending[ref], ray.get(ref), None
+            except Exception as e:  # noqa: BLE001 - every failure is reported with its key
+                yield pending[ref], None, f"{type(e).__name__}: {e}"
+
+
 # ---------------------------------------------------------------------------
 # The campaign
 
@@ -374,24 +388,17 @@ def run(
                             os.fspath(out / c.folder)): c
                 for c in todo
             }
-            waiting = list(pending)
-            while waiting:
-                done, waiting = ray.wait(waiting, num_returns=1)
-                for ref in done:
-                    c = pending[ref]
-                    try:
-                        outcome = ray.get(ref)
-                    except Exception as e:  # noqa: BLE001 - a crashed worker, a lost node
-                        outcome = {"error": f"{type(e).__name__}: {e}"}
-                    if "error" in outcome:
-                        result.failed.append((c, outcome["error"]))
-                        say(f"FAILED {c}: {outcome['error']}")
-                    else:
-                        result.ran.append(c)
-                        wall[c] = outcome.get("wall_s")
-                        done_n = len(result.ran) + len(result.failed)
-                        say(f"[{done_n}/{len(todo)}] {c.folder}: {wall[c]:.1f} s"
-                            if wall[c] is not None else f"[{done_n}/{len(todo)}] {c.folder}")
+            for c, outcome, error in completed(ray, pending):
+                error = error or (outcome or {}).get("error")
+                if error is not None:
+                    result.failed.append((c, error))
+                    say(f"FAILED {c}: {error}")
+                else:
+                    result.ran.append(c)
+                    wall[c] = outcome.get("wall_s")
+                    done_n = len(result.ran) + len(result.failed)
+                    say(f"[{done_n}/{len(todo)}] {c.folder}: {wall[c]:.1f} s"
+                        if wall[c] is not None else f"[{done_n}/{len(todo)}] {c.folder}")
         finally:
             if started:
                 ray.shutdown()
