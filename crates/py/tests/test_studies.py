@@ -181,6 +181,24 @@ def test_bad_study_arguments_raise_before_anything_runs(small_run, tmp_path):
         studies.sld(small_run.dir, tmp_path, n_mins=[2])
     with pytest.raises(ValueError, match="sizes"):
         studies.candidates("bridge1", tmp_path, sizes=[30_000])
+    with pytest.raises(ValueError, match="sizes"):
+        studies.candidates("bridge1", tmp_path, sizes=[])
+    with pytest.raises(ValueError, match="no_such_scene"):
+        studies.candidates("no_such_scene", tmp_path, sizes=[2])
     with pytest.raises(OSError):
         studies.sld(tmp_path / "no_run", tmp_path)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("args", [
+    ["sld", "--run", "r", "--mus", "abc"],
+    ["candidates", "--sizes", "5-1:1"],
+    ["candidates", "--sizes", "x"],
+    ["candidates", "--seeds", "x"],
+    ["candidates", "--num-cpus", "0"],
+])
+def test_bad_study_command_lines_exit_with_code_2(tmp_path, args, capsys):
+    with pytest.raises(SystemExit) as e:
+        studies.main(args + ["--out", str(tmp_path / "o")])
+    assert e.value.code == 2 and "error:" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()

@@ -294,12 +294,20 @@ def candidates(scenario: str = "bridge1", out: PathLike = "studies", *,
     mean, and the exponential of ``fit_exponential`` through all points);
     returns the CSV's path. Draws already in ``out/candidates_study/`` are
     not computed again."""
-    sizes = sorted({0, *(int(s) for s in sizes)})
+    import surveyor
+
+    sizes = sorted({int(s) for s in sizes})
+    if not sizes:
+        raise ValueError("sizes: expected at least one n_Q")
     if sizes[-1] > 20_000 or sizes[0] < 0:
         raise ValueError("sizes: expected 0 to 20000 candidates")
+    sizes = sorted({0, *sizes})
     seeds = sorted({int(s) for s in seeds})
-    if not seeds:
-        raise ValueError("seeds: expected at least one")
+    if not seeds or seeds[0] < 0 or seeds[-1] >= 2**64:
+        raise ValueError("seeds: expected at least one, each 0 to 2**64 - 1")
+    # The scenario is loaded here (its regions), so that a bad one is an
+    # error before anything runs.
+    surveyor.Mapper(scenario=scenario)
     out = Path(out).absolute()
     out.mkdir(parents=True, exist_ok=True)
     say = log or (lambda line: None)
@@ -368,16 +376,26 @@ def _plot_candidates(path: Path, rows: List[dict], scene: str) -> None:
 
 
 def _numbers(text: str, kind):
-    return [kind(v) for v in text.split(",") if v.strip()]
+    try:
+        return [kind(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise ValueError(f"{text!r}: expected a comma list of numbers") from None
 
 
 def _sizes(text: str) -> List[int]:
     """``"50-3500:50"`` (a range with a step) or ``"0,10,20"``."""
-    if ":" in text:
-        span, step = text.split(":", 1)
-        lo, hi = span.split("-", 1)
-        return list(range(int(lo), int(hi) + 1, int(step)))
-    return _numbers(text, int)
+    try:
+        if ":" in text:
+            span, step = text.split(":", 1)
+            lo, hi = span.split("-", 1)
+            sizes = list(range(int(lo), int(hi) + 1, int(step)))
+        else:
+            sizes = _numbers(text, int)
+    except ValueError:
+        raise ValueError(f"--sizes {text!r}: expected A-B:STEP or a comma list of whole numbers") from None
+    if not sizes:
+        raise ValueError(f"--sizes {text!r}: no n_Q in it")
+    return sizes
 
 
 def main(argv: Optional[List[str]] = None) -> int:
@@ -407,18 +425,26 @@ def main(argv: Optional[List[str]] = None) -> int:
         print(line, file=sys.stderr, flush=True)
 
     common = dict(address=args.address, num_cpus=args.num_cpus, log=log)
+    kw: Dict[str, Any] = {}
     try:
         if args.study == "sld":
-            kw = {}
             if args.mus:
                 kw["mus_m"] = _numbers(args.mus, float)
             if args.n_mins:
                 kw["n_mins"] = _numbers(args.n_mins, int)
-            path = sld(args.run, args.out, inputs=_numbers(args.inputs, str),
+        else:
+            kw["sizes"] = _sizes(args.sizes)
+            kw["seeds"] = parse_seeds(args.seeds)
+    except ValueError as e:
+        parser.error(str(e))
+    if args.num_cpus is not None and args.num_cpus < 1:
+        parser.error("--num-cpus: expected at least 1")
+    try:
+        if args.study == "sld":
+            path = sld(args.run, args.out, inputs=[i.strip() for i in args.inputs.split(",")],
                        repeats=args.repeats, **kw, **common)
         else:
-            path = candidates(args.scenario, args.out, sizes=_sizes(args.sizes),
-                              seeds=parse_seeds(args.seeds), **common)
+            path = candidates(args.scenario, args.out, **kw, **common)
     except (ValueError, OSError, ImportError, RuntimeError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
