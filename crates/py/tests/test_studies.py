@@ -152,6 +152,11 @@ def test_the_sld_study_is_a_resumable_campaign(small_run, local_ray, tmp_path):
     studies.sld(small_run.dir, tmp_path, mus_m=mus, n_mins=n_mins, repeats=1, log=again.append)
     assert again == ["0 points to compute, 8 already done"]
     assert read_csv(path) == rows
+    # Another seed is another study: nothing of the first is reused.
+    other = []
+    studies.sld(small_run.dir, tmp_path, mus_m=[0.04], n_mins=[30], inputs=["mesh"], repeats=1,
+                seed=1, log=other.append)
+    assert other[0] == "2 points to compute, 0 already done"
 
 
 def test_the_candidate_study_is_a_resumable_campaign(local_ray, tmp_path):

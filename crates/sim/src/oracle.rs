@@ -339,9 +339,9 @@ pub struct CandidateCoverage {
 /// for each `n_Q` of `sizes`. Candidates are drawn uniformly within the
 /// joint limits (seeded by `seed`), each judged as the oracle's pool is (the
 /// sweep from it clear by a rule), its sweep's noise seeded as a run of seed
-/// `seed` seeds viewpoint `k` (the start is 0, candidate `i` is `i`); the
-/// first `n_Q` of the draw are a uniform sample of `n_Q`,
-/// so one draw of the largest size answers every size. The start pose's
+/// `seed` seeds viewpoint `k` (the start is 0, candidate `i` is `i`). The
+/// first `n_Q` of the draw are a uniform sample of `n_Q`, so one draw of the
+/// largest size answers every size. The start pose's
 /// sweep is always counted (a run's map holds it before Stage One chooses),
 /// so `n_Q = 0` is the start's coverage alone. One row per size, ascending.
 pub fn candidate_coverage(

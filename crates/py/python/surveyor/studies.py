@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import hashlib
 import json
 import os
 import statistics
@@ -61,6 +62,11 @@ def _write_atomic(path: Path, text: str) -> None:
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     tmp.write_text(text)
     os.replace(tmp, path)
+
+
+def _hash8(value: Any) -> str:
+    """The first 8 hex digits of the SHA-256 of ``value`` as JSON."""
+    return hashlib.sha256(json.dumps(value).encode()).hexdigest()[:8]
 
 
 def _load(path: Path) -> Optional[dict]:
@@ -172,11 +178,14 @@ def sld(run: PathLike, out: PathLike = "studies", *, mus_m: Sequence[float] = SL
     if "cloud" in inputs:
         arrays["cloud"] = (loaded.cloud(), None)
     points_of = [("mu", m, fixed_n_min) for m in mus_m] + [("n_min", fixed_mu_m, n) for n in n_mins]
+    # A point is kept for this run folder and seed: another run or seed in
+    # the same ``out`` is computed anew.
+    tag = _hash8([os.fspath(Path(run).resolve()), seed])
     tasks = {}
     where = {}
     for name, (points, triangles) in arrays.items():
         for vary, mu, n_min in points_of:
-            path = out / "sld_study" / f"{name}-{vary}-mu{_key(mu)}-n{n_min}.json"
+            path = out / "sld_study" / f"{name}-{vary}-mu{_key(mu)}-n{n_min}-{tag}.json"
             tasks[path] = (_sld_point, (points, triangles, mu, n_min, seed, repeats))
             where[path] = (name, vary, mu, n_min)
     _run_tasks(tasks, address, num_cpus, ray_options, say)
@@ -314,9 +323,7 @@ def candidates(scenario: str = "bridge1", out: PathLike = "studies", *,
     from .campaign import _for_worker, scene_folder_name
 
     scene = scene_folder_name(scenario)
-    import hashlib
-
-    tag = hashlib.sha256(json.dumps(sizes).encode()).hexdigest()[:8]
+    tag = _hash8(sizes)
     tasks = {out / "candidates_study" / f"{scene}-seed{s}-{tag}.json":
              (_candidates_point, (_for_worker(scenario), sizes, s)) for s in seeds}
     _run_tasks(tasks, address, num_cpus, ray_options, say)
