@@ -221,17 +221,8 @@ impl MaterialBelief {
             self.keys.len() - 1
         };
         let p = &mut self.probs[i * n..(i + 1) * n];
-        let floor = self.cfg.min_likelihood;
-        let evidence: Real = p
-            .iter()
-            .zip(observation)
-            .map(|(&prior, &l)| prior * l.max(floor))
-            .sum();
-        if !(evidence > 0.0 && evidence.is_finite()) {
+        if !bayes_update(p, observation, self.cfg.min_likelihood) {
             return Err(MapError::NoEvidence { key });
-        }
-        for (prior, &l) in p.iter_mut().zip(observation) {
-            *prior = *prior * l.max(floor) / evidence;
         }
         self.h3[i] = entropy(p);
         Ok(())
@@ -370,6 +361,26 @@ impl MaterialBelief {
     pub fn map_estimate(&self, key: VoxelKey) -> Option<usize> {
         self.probabilities(key).map(argmax)
     }
+}
+
+/// Bayes' update of one belief `p` by an LRC observation (eq. 4.15), each
+/// likelihood `P(z | x_m)` clamped below at `min_likelihood`
+/// ([`MaterialConfig::min_likelihood`]): what [`MaterialBelief::update`]
+/// does to a voxel. Returns `false`, `p` unchanged, when the evidence
+/// `P(z)` is not positive and finite.
+pub fn bayes_update(p: &mut [Real], observation: &[Real], min_likelihood: Real) -> bool {
+    let evidence: Real = p
+        .iter()
+        .zip(observation)
+        .map(|(&prior, &l)| prior * l.max(min_likelihood))
+        .sum();
+    if !(evidence > 0.0 && evidence.is_finite()) {
+        return false;
+    }
+    for (prior, &l) in p.iter_mut().zip(observation) {
+        *prior = *prior * l.max(min_likelihood) / evidence;
+    }
+    true
 }
 
 /// Index of the largest value (ties: the lowest index; NaN never wins).

@@ -4,7 +4,7 @@
 use geom::{Point3, Real, UnitVector3, Vector3};
 use map::MapError;
 use map::key::VoxelKey;
-use map::material::{MaterialBelief, MaterialConfig, argmax};
+use map::material::{MaterialBelief, MaterialConfig, argmax, bayes_update};
 use map::sld::Disc;
 use proptest::prelude::*;
 use rand::{RngExt, SeedableRng};
@@ -71,6 +71,27 @@ fn likelihood_floor_keeps_materials_recoverable() {
         m.update(k, &[0.0, 0.0, 1.0, 0.0, 0.0]).unwrap();
     }
     assert_eq!(m.map_estimate(k), Some(2));
+}
+
+/// `bayes_update` on a bare belief is the voxel update, bit for bit, and
+/// leaves the belief alone when there is no evidence.
+#[test]
+fn bayes_update_is_the_voxel_update() {
+    let mut m = MaterialBelief::new(MaterialConfig::default()).unwrap();
+    let k = VoxelKey::new(1, 2, 3);
+    let mut p = vec![0.2; 5];
+    for z in [[0.7, 0.1, 0.1, 0.05, 0.05], [0.0, 0.9, 0.1, 0.0, 0.0]] {
+        m.update(k, &z).unwrap();
+        assert!(bayes_update(
+            &mut p,
+            &z,
+            MaterialConfig::default().min_likelihood
+        ));
+        assert_eq!(m.probabilities(k).unwrap(), p.as_slice());
+    }
+    let before = p.clone();
+    assert!(!bayes_update(&mut p, &[0.0; 5], 0.0));
+    assert_eq!(p, before);
 }
 
 #[test]
