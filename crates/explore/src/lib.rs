@@ -10,11 +10,13 @@
 //! | [`stage_one`] | [`StageOne`]: the decision of A§3.2 |
 //! | [`pareto`] | the Pareto front and rank sum (eq. 3.7–3.8) |
 //! | [`discs`] | [`DiscMap`]: discs, segments, material belief |
+//! | [`lrc`] | [`lrc::train_lrc`], [`lrc::PatchIndex`], [`lrc::IDENTIFIED_P`]: the run's classifier and its observations |
 
 mod config;
 pub mod discs;
 mod error;
 pub mod judge;
+pub mod lrc;
 mod materials;
 mod output;
 pub mod pareto;
@@ -30,6 +32,7 @@ pub use config::{
 pub use discs::DiscMap;
 pub use error::ExploreError;
 pub use judge::{Judge, NoJudge, SafetyTally};
+pub use lrc::{IDENTIFIED_P, PatchIndex, lrc_config, patch_radius_m, train_lrc};
 pub use run::{ExploreRun, RunIdentity, RunOptions, run, viewpoint_seed};
 pub use setup::{Setup, SetupInputs};
 pub use stage_one::{Candidate, Choice, Decision, StageOne, Termination};
