@@ -14,7 +14,8 @@ use record::viewpoints::{
 
 impl ExploreRun {
     /// `run.json`'s summary; `coverage` is the judge's (`None` without a
-    /// ground truth).
+    /// ground truth). A judge that knows the true materials adds the
+    /// material identification against its oracle.
     pub fn summary(&self, coverage: Option<ExploreCoverage>) -> ExploreSummary {
         let times = |pick: &dyn Fn(&record::ViewpointRecord) -> bool| {
             Spread::of(
@@ -51,6 +52,7 @@ impl ExploreRun {
             coverage,
             material_accuracy: self.discs.material_accuracy(),
             discs_observed_by_lrc: self.discs.observations.iter().filter(|o| **o > 0).count(),
+            material_identification: None,
             h3: self.discs.h3_total,
             decision_ms: times(&|r| r.f.is_some()),
             stage_two_decision_ms: times(&|r| r.stage == 2),
@@ -61,12 +63,8 @@ impl ExploreRun {
 
     /// Stage the run's files: `viewpoints.csv`, `candidates.csv`, `path.csv`,
     /// `cloud.ply`, `mesh.ply`, `discs.csv`, `segments.json` and `run.json`
-    /// (with the judge's `coverage`).
-    pub fn write(
-        &self,
-        staging: &Staging,
-        coverage: Option<ExploreCoverage>,
-    ) -> Result<(), ExploreError> {
+    /// (`summary`: [`Self::summary`] with what a judge adds).
+    pub fn write(&self, staging: &Staging, summary: &ExploreSummary) -> Result<(), ExploreError> {
         staging.write(VIEWPOINTS_CSV, viewpoints_csv(&self.viewpoints))?;
         staging.write(CANDIDATES_CSV, candidates_csv(&self.viewpoints))?;
         staging.write(PATH_CSV, path_csv(&self.viewpoints))?;
@@ -74,7 +72,7 @@ impl ExploreRun {
         record::explore::write_mesh(&staging.path(MESH_PLY), &self.mesh)?;
         staging.write(DISCS_CSV, self.discs.table().to_csv()?)?;
         staging.write(SEGMENTS_JSON, self.discs.segments_file().to_json()?)?;
-        staging.write(RUN_JSON, self.summary(coverage).to_json()?)?;
+        staging.write(RUN_JSON, summary.to_json()?)?;
         Ok(())
     }
 

@@ -70,6 +70,11 @@ pub struct ExploreSummary {
     pub material_accuracy: Option<Real>,
     /// Discs with at least one LRC observation.
     pub discs_observed_by_lrc: usize,
+    /// The run's material identification on the true surfaces of A2 beside
+    /// the material oracle's (absent without a true scene with materials,
+    /// without Stage Two, or with `--no-oracle`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material_identification: Option<MaterialIdentification>,
     /// `H3` over every disc voxel at the end (eq. 4.17).
     pub h3: Option<Real>,
     /// Stage One decision times, ms.
@@ -92,9 +97,9 @@ pub struct PhaseTimings {
     /// The scenario's world, the C-space model (built or loaded), the
     /// planning grid, the judge.
     pub setup_s: Real,
-    /// The coverage oracle: read from its cache, or the wait for it after
-    /// the run when computed (it runs beside the run, on the cores the run
-    /// leaves idle; 0 without one).
+    /// The coverage and material oracles: read from their caches, or the
+    /// wait for them after the run when computed (they run beside the run,
+    /// on the cores the run leaves idle; 0 without them).
     #[serde(default)]
     pub oracle_s: Real,
     /// Stage One: decisions, motions, sweeps, integration (a resumed run's
@@ -311,6 +316,122 @@ impl OracleComparison {
             a1_after_12: twelve,
             ratio_after_12: ratio(at(11)),
             ratio_at_stage_one_end: ratio(at(n.saturating_sub(1))),
+            oracle,
+        }
+    }
+}
+
+/// The material oracle (`sim::material_oracle`): what Stage Two could
+/// identify *knowing the true scene*, with the run's robot, scanner, LRC
+/// and safety rule. Its samples are true-surface samples of A2; a sample is
+/// identified when its most probable material has `p ≥ 0.8` after the Bayes
+/// fusion of the LRC's observations of the patch around it. Its pool: the
+/// start, the roadmap's nodes and poses aimed at the samples by Stage Two's
+/// pose selection on a perfect map, those clear under the rule.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialOracle {
+    /// The safety rule the oracle's poses obey.
+    pub rule: String,
+    /// Poses in its pool (the start, the roadmap's nodes, the aimed poses).
+    pub poses: usize,
+    /// Of them, those clear under the rule with their whole sweep.
+    pub clear_poses: usize,
+    /// Aimed poses in the pool (valid pose selections, clear or not).
+    pub aimed_poses: usize,
+    /// True-surface samples of A2.
+    pub samples: usize,
+    /// Their density, per m².
+    pub samples_per_m2: Real,
+    /// Share of the samples that some clear pose's sweep (or the start's)
+    /// identifies on its own, or the greedy choice identifies.
+    pub identifiable: Real,
+    /// Share of the samples identified after 1, 2, … viewpoints (the
+    /// start's sweep first, then each the clear pose that identifies the
+    /// most more), until none adds one or the oracle's limit of viewpoints.
+    pub identified_after_viewpoints: Vec<Real>,
+    /// Share of the samples the greedy choice identified whose most
+    /// probable material is the true one (`null` when it identified none).
+    pub accuracy: Option<Real>,
+}
+
+impl MaterialOracle {
+    /// The share identified after `n` viewpoints (the last one when the
+    /// greedy stopped earlier; 0 for none).
+    pub fn after(&self, n: usize) -> Real {
+        match n {
+            0 => 0.0,
+            n => self
+                .identified_after_viewpoints
+                .get(n - 1)
+                .or(self.identified_after_viewpoints.last())
+                .copied()
+                .unwrap_or(0.0),
+        }
+    }
+}
+
+/// The run's material identification on the material oracle's samples,
+/// beside the oracle. A sample takes the belief of its *run disc*: the
+/// nearest disc whose centre lies within the disc's radius plus 10 mm of
+/// the sample and whose seen side faces the sample's (cosine above 0.5);
+/// a sample without one is not identified.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialIdentification {
+    /// Share of the samples whose run disc's most probable material has
+    /// `p ≥ 0.8`.
+    pub identified: Real,
+    /// Share of those whose most probable material is the true one (`null`
+    /// when none is identified).
+    pub accuracy: Option<Real>,
+    /// Discs with their centre in A2 whose most probable material has
+    /// `p ≥ 0.8`.
+    pub discs_identified: usize,
+    /// Viewpoints of Stage Two.
+    pub stage_two_viewpoints: usize,
+    /// The oracle's identified share after 10 viewpoints.
+    pub oracle_after_10: Real,
+    /// The oracle's identified share after as many viewpoints as Stage Two
+    /// took.
+    pub oracle_after_stage_two_viewpoints: Real,
+    /// `identified` over the oracle's identifiable share (`null` when that
+    /// is 0).
+    pub ratio_to_identifiable: Option<Real>,
+    /// `identified` over the oracle's after 10 viewpoints (`null` when
+    /// that is 0).
+    pub ratio_after_10: Option<Real>,
+    /// `identified` over the oracle's after as many viewpoints as Stage Two
+    /// took (`null` when that is 0, as after none).
+    pub ratio_after_stage_two_viewpoints: Option<Real>,
+    /// The oracle.
+    pub oracle: MaterialOracle,
+}
+
+impl MaterialIdentification {
+    /// The comparison of a run that identified the share `identified` of
+    /// the oracle's samples (right on the share `accuracy` of them), `discs_identified`
+    /// discs of A2, in `stage_two_viewpoints` viewpoints of Stage Two.
+    pub fn new(
+        oracle: MaterialOracle,
+        identified: Real,
+        accuracy: Option<Real>,
+        discs_identified: usize,
+        stage_two_viewpoints: usize,
+    ) -> Self {
+        let ratio = |of: Real| (of > 0.0).then(|| identified / of);
+        let ten = oracle.after(10);
+        let as_many = oracle.after(stage_two_viewpoints);
+        Self {
+            identified,
+            accuracy,
+            discs_identified,
+            stage_two_viewpoints,
+            oracle_after_10: ten,
+            oracle_after_stage_two_viewpoints: as_many,
+            ratio_to_identifiable: ratio(oracle.identifiable),
+            ratio_after_10: ratio(ten),
+            ratio_after_stage_two_viewpoints: ratio(as_many),
             oracle,
         }
     }
@@ -671,6 +792,7 @@ mod tests {
             )),
             material_accuracy: None,
             discs_observed_by_lrc: 0,
+            material_identification: None,
             h3: Some(0.5),
             decision_ms: Spread::of(vec![3.0, 1.0, 2.0]),
             stage_two_decision_ms: Spread::default(),
@@ -754,6 +876,44 @@ mod tests {
             "{table}"
         );
         assert!(table.contains("other              0.62 s"), "{table}");
+    }
+
+    /// The ratios are the run's share over the oracle's, `null` over 0; the
+    /// oracle after more viewpoints than its curve is its last value; the
+    /// object is written only when there is one, and read back.
+    #[test]
+    fn material_identification_is_compared_written_and_read_back() {
+        let oracle = MaterialOracle {
+            rule: "rule".into(),
+            poses: 10,
+            clear_poses: 6,
+            aimed_poses: 3,
+            samples: 1000,
+            samples_per_m2: 400.0,
+            identifiable: 0.8,
+            identified_after_viewpoints: vec![0.1, 0.3, 0.4, 0.5],
+            accuracy: Some(0.99),
+        };
+        assert_eq!(oracle.after(0), 0.0);
+        assert_eq!(oracle.after(2), 0.3);
+        assert_eq!(oracle.after(10), 0.5);
+        let m = MaterialIdentification::new(oracle.clone(), 0.2, Some(0.95), 17, 2);
+        assert_eq!(m.oracle_after_10, 0.5);
+        assert_eq!(m.oracle_after_stage_two_viewpoints, 0.3);
+        assert_eq!(m.ratio_to_identifiable, Some(0.25));
+        assert_eq!(m.ratio_after_10, Some(0.4));
+        assert!((m.ratio_after_stage_two_viewpoints.unwrap() - 2.0 / 3.0).abs() < 1e-15);
+        let none = MaterialIdentification::new(oracle, 0.2, None, 0, 0);
+        assert_eq!(none.ratio_after_stage_two_viewpoints, None);
+        let mut s = summary();
+        assert!(!s.to_json().unwrap().contains("material_identification"));
+        s.material_identification = Some(m);
+        let text = s.to_json().unwrap();
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert!(keys_sorted(&v));
+        assert_eq!(v["material_identification"]["oracle"]["aimed_poses"], 3);
+        let back: ExploreSummary = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, s);
     }
 
     #[test]
