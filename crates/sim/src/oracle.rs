@@ -80,33 +80,33 @@ pub struct OraclePool {
     per_pose: Vec<(bool, bool, Vec<u64>)>,
 }
 
-/// What a pose is checked and scored with: the A1 samples, the planning
-/// voxels a true surface passes through, and the scanner.
-struct PoseJudge<'a> {
-    setup: &'a Setup,
-    world: &'a Arc<World>,
-    scene: &'a scene::Scene,
-    scanner: &'a sensor::ScannerConfig,
-    tracker: CoverageTracker,
+/// The run's safety rule against the true scene ([`OracleRule::Run`] with a
+/// clearance of the caller's): the planning voxels a true surface passes
+/// through (in A3) stand for a perfect map, against which a configuration
+/// needs `dist(Q) > 1`, and the links' capsules keep the clearance from the
+/// true surface. The coverage oracle holds Stage One's clearance, the
+/// material oracle Stage Two's.
+pub(crate) struct TruthRule<'a> {
+    pub(crate) setup: &'a Setup,
+    pub(crate) scene: &'a scene::Scene,
     occupied: HashSet<VoxelKey>,
 }
 
-impl<'a> PoseJudge<'a> {
-    fn new(
+impl<'a> TruthRule<'a> {
+    /// The rule of `setup` in `world` (a scene: the rule needs true
+    /// surfaces); `metrics` gives the sampling that marks the voxels (its
+    /// seed; the region and density are the rule's). `what` names the
+    /// caller in an error.
+    pub(crate) fn new(
         setup: &'a Setup,
-        world: &'a Arc<World>,
-        scanner: &'a sensor::ScannerConfig,
+        world: &'a World,
         metrics: &MetricsConfig,
+        what: &str,
     ) -> Result<Self, SimError> {
         let scene = world.as_scene().ok_or_else(|| SimError::InvalidArgument {
-            what: "coverage oracle".into(),
+            what: what.into(),
             message: "needs a scene with true surfaces, not a point cloud".into(),
         })?;
-        let mut a1 = *metrics;
-        a1.sampling.region = Some(setup.regions.a1.aabb());
-        let tracker = CoverageTracker::new(scene, &a1)?;
-
-        // The planning voxels a true surface passes through (in A3).
         let voxel = setup.config.planning_voxel_m;
         let mut marks = metrics.sampling;
         marks.region = Some(setup.regions.a3.aabb());
@@ -118,11 +118,89 @@ impl<'a> PoseJudge<'a> {
             .collect();
         Ok(Self {
             setup,
-            world,
             scene,
+            occupied,
+        })
+    }
+
+    /// Whether configuration `c` (its link frames `frames`) has `dist(Q) >
+    /// 1` against the marked voxels and its links' capsules at least
+    /// `clearance_m` from the true surface (0: no clearance asked).
+    pub(crate) fn clear_at(
+        &self,
+        c: &[Real],
+        frames: &[Isometry3],
+        clearance_m: Real,
+    ) -> Result<bool, SimError> {
+        let setup = self.setup;
+        let safety = setup.stage.model().safety();
+        Ok(
+            plan::interfering_voxels(safety, c, setup.config.planning_voxel_m)
+                .map_err(|e| SimError::Plan(Box::new(e)))?
+                .iter()
+                .all(|k| !self.occupied.contains(k))
+                && (clearance_m <= 0.0
+                    || plan::contact::min_clearance(
+                        &setup.robot,
+                        frames,
+                        &setup.world_from_base,
+                        self.scene,
+                        clearance_m,
+                    ) >= clearance_m),
+        )
+    }
+
+    /// Whether `q` and every configuration of its tilt sweep
+    /// ([`sweep_configurations`]) is clear ([`Self::clear_at`]).
+    pub(crate) fn sweep_clear(&self, q: &[Real], clearance_m: Real) -> Result<bool, SimError> {
+        for c in &sweep_configurations(self.setup, q) {
+            let frames = self.setup.robot.forward_kinematics(c)?;
+            if !self.clear_at(c, &frames, clearance_m)? {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    /// The perfect map: the planning grid of the setup with every marked
+    /// voxel occupied and every other one free.
+    pub(crate) fn perfect_map(&self) -> Result<map::OccupancyGrid, SimError> {
+        let config = *self.setup.stage.grid().config();
+        Ok(map::OccupancyGrid::from_states(config, |_, key| {
+            if self.occupied.contains(&key) {
+                map::VoxelState::Occupied
+            } else {
+                map::VoxelState::Free
+            }
+        })?)
+    }
+}
+
+/// What a pose is checked and scored with: the A1 samples, the run's rule
+/// against the true scene, and the scanner.
+struct PoseJudge<'a> {
+    rule: TruthRule<'a>,
+    world: &'a Arc<World>,
+    scanner: &'a sensor::ScannerConfig,
+    tracker: CoverageTracker,
+}
+
+impl<'a> PoseJudge<'a> {
+    fn new(
+        setup: &'a Setup,
+        world: &'a Arc<World>,
+        scanner: &'a sensor::ScannerConfig,
+        metrics: &MetricsConfig,
+    ) -> Result<Self, SimError> {
+        let rule = TruthRule::new(setup, world, metrics, "coverage oracle")?;
+        let mut a1 = *metrics;
+        a1.sampling.region = Some(setup.regions.a1.aabb());
+        let tracker = CoverageTracker::new(rule.scene, &a1)?;
+        Ok(Self {
+            rule,
+            world,
             scanner,
             tracker,
-            occupied,
         })
     }
 
@@ -136,44 +214,24 @@ impl<'a> PoseJudge<'a> {
         q: &[Real],
         noise_seed: u64,
     ) -> Result<(bool, bool, Vec<u64>), SimError> {
-        let setup = self.setup;
+        let setup = self.rule.setup;
         let robot = &setup.robot;
         let world_from_base = setup.world_from_base;
-        let safety = setup.stage.model().safety();
-        let voxel = setup.config.planning_voxel_m;
         let clearance_m = setup.config.stage_one_clearance_m;
         let mut contact = true;
         let mut run = true;
         for c in &sweep_configurations(setup, q) {
             let frames = robot.forward_kinematics(c)?;
-            contact &= plan::contact::robot_contacts(robot, &frames, &world_from_base, self.scene)
-                .is_empty();
+            contact &=
+                plan::contact::robot_contacts(robot, &frames, &world_from_base, self.rule.scene)
+                    .is_empty();
             if run {
-                run = plan::interfering_voxels(safety, c, voxel)
-                    .map_err(|e| SimError::Plan(Box::new(e)))?
-                    .iter()
-                    .all(|k| !self.occupied.contains(k))
-                    && (clearance_m <= 0.0
-                        || plan::contact::min_clearance(
-                            robot,
-                            &frames,
-                            &world_from_base,
-                            self.scene,
-                            clearance_m,
-                        ) >= clearance_m);
+                run = self.rule.clear_at(c, &frames, clearance_m)?;
             }
         }
         let bits = if i == 0 || contact || run {
-            let points = simulated_sweep(
-                setup,
-                self.world,
-                robot,
-                &world_from_base,
-                self.scanner,
-                q,
-                noise_seed,
-            )?;
-            self.tracker.stored_bits_of(&points)
+            let sweep = simulated_sweep(setup, self.world, self.scanner, q, noise_seed)?;
+            self.tracker.stored_bits_of(&sweep.positions())
         } else {
             Vec::new()
         };
@@ -524,7 +582,7 @@ impl OracleJob {
 /// `SCHED_IDLE`): the oracle beside a run takes the cores the run leaves
 /// idle and slows it as little as it can. Where the system refuses, the
 /// thread keeps its priority (the oracle is the same either way).
-fn idle_priority() {
+pub(crate) fn idle_priority() {
     #[cfg(target_os = "linux")]
     {
         use thread_priority::unix::{
@@ -574,7 +632,7 @@ fn compute_oracle(
 
 /// The configurations of the tilt sweep from `q`: every `CHECK_TILT_DEG` of
 /// the sweep joint's range, ends included, and `q` itself.
-fn sweep_configurations(setup: &Setup, q: &[Real]) -> Vec<Vec<Real>> {
+pub(crate) fn sweep_configurations(setup: &Setup, q: &[Real]) -> Vec<Vec<Real>> {
     let (lo, hi) = setup.stage.sweep_range(q);
     let j = setup.config.sweep.joint - 1;
     let steps = ((hi[j] - lo[j]) / CHECK_TILT_DEG.to_radians())
@@ -589,32 +647,31 @@ fn sweep_configurations(setup: &Setup, q: &[Real]) -> Vec<Vec<Real>> {
     out
 }
 
-/// The points of the sweep from `q`, simulated with noise seeded by `seed`.
-fn simulated_sweep(
+/// The sweep from `q` of `setup`'s robot and sweep in `world` with the
+/// scanner `scanner`, simulated with noise seeded by `seed`.
+pub(crate) fn simulated_sweep(
     setup: &Setup,
     world: &Arc<World>,
-    robot: &Robot,
-    world_from_base: &Isometry3,
     scanner: &sensor::ScannerConfig,
     q: &[Real],
     seed: u64,
-) -> Result<Vec<geom::Point3>, SimError> {
+) -> Result<sensor::Sweep, SimError> {
+    let robot = &setup.robot;
     let mut rig = crate::SimRig::new(
         robot.clone(),
         Arc::clone(world),
-        *world_from_base,
+        setup.world_from_base,
         q,
         Some(sensor::Scanner::new(*scanner)?),
         seed,
     )?;
-    let sweep = hw::tilt_sweep(
+    Ok(hw::tilt_sweep(
         &mut rig,
         robot,
-        world_from_base,
+        &setup.world_from_base,
         &setup.config.sweep,
         &mut |_, _| {},
-    )?;
-    Ok(sweep.positions())
+    )?)
 }
 
 fn count(bits: &[u64]) -> usize {
