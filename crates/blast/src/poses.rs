@@ -204,8 +204,16 @@ impl BlastTool {
 /// `[d_min, d_max]`: the solid sector `{u d : ∠(u, n) ≤ φ_max, d ∈ [d_min,
 /// d_max]}`. Within the cone the distance is radial; outside it, it is the
 /// distance to the cone's boundary segment in the plane of `v` and `n` (the
-/// sector's arcs end on that segment, so they are never nearer).
-fn tip_gap(v: geom::Vector3, n: geom::Vector3, phi_max: Real, d_min: Real, d_max: Real) -> Real {
+/// sector's arcs end on that segment, so they are never nearer). The same
+/// sector holds the scanner positions whose centre ray meets a Stage Two
+/// target within the LRC's constraints (`sim::material_oracle` uses it so).
+pub fn tip_gap(
+    v: geom::Vector3,
+    n: geom::Vector3,
+    phi_max: Real,
+    d_min: Real,
+    d_max: Real,
+) -> Real {
     let len = v.norm();
     let along = v.dot(&n);
     if along >= len * phi_max.cos() {

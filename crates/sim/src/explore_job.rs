@@ -20,7 +20,9 @@ use rayon::prelude::*;
 use record::Staging;
 use record::bag::RunBag;
 use record::bag::msg::MarkerArray;
-use record::explore::{CoverageOracle, ExploreCoverage, ExploreSummary, OracleComparison};
+use record::explore::{
+    CoverageOracle, ExploreCoverage, ExploreSummary, MaterialIdentification, OracleComparison,
+};
 use robot::Robot;
 use scenario::LoadedScenario;
 use scene::{Scene, World};
@@ -55,7 +57,10 @@ pub struct ExploreOptions {
     /// Run Stage Two after Stage One.
     pub stage_two: bool,
     /// Whether the outcome holds the coverage oracle
-    /// ([`crate::oracle::run_oracle`]; mesh worlds only), and its cache.
+    /// ([`crate::oracle::run_oracle`]; mesh worlds only), and its cache;
+    /// with Stage Two in a scene with materials, the material oracle too
+    /// ([`crate::material_oracle`]), cached beside it
+    /// ([`crate::material_oracle::cache_beside`]).
     pub oracle: OracleOption,
 }
 
@@ -462,13 +467,36 @@ impl SimExplore {
             oracle,
         } = self;
         let t = Instant::now();
-        let pending = match oracle {
+        let pending = match &oracle {
             OracleOption::On(cache) if world.as_scene().is_some() => Some(
                 crate::oracle::OracleJob::start(&loaded, &setup, &world, cache.as_deref())?,
             ),
             _ => None,
         };
+        // The material oracle judges Stage Two: computed when it runs in a
+        // scene with materials. Its LRC is the run's of seed 0, whose cache
+        // is the run's own only when the run's seed is 0.
+        let materials = match &oracle {
+            OracleOption::On(cache)
+                if run_options.stage_two
+                    && world.as_scene().is_some()
+                    && !setup.materials.is_empty() =>
+            {
+                let lrc_cache = setup.lrc_cache.as_deref().filter(|_| run_options.seed == 0);
+                let cache = cache.as_deref().map(crate::material_oracle::cache_beside);
+                Some(crate::material_oracle::MaterialOracleJob::start(
+                    &loaded,
+                    &setup,
+                    &world,
+                    cache.as_deref(),
+                    lrc_cache,
+                )?)
+            }
+            _ => None,
+        };
         let loaded_s = t.elapsed().as_secs_f64();
+        let metrics = loaded.scenario.metrics;
+        let a2 = setup.regions.a2;
         let bag = rig.run_bag()?;
         // A computed oracle runs beside the exploration (it depends on the
         // scenario and the setup only): the run waits for it at the end.
@@ -477,6 +505,15 @@ impl SimExplore {
         let (mut run, bag) = run_loop(setup, rig, &mut judge, bag, &run_options, progress)?;
         let t = Instant::now();
         let oracle = pending.map(crate::oracle::OracleJob::finish).transpose()?;
+        let material_identification = match materials {
+            Some(job) => {
+                let oracle = job.finish()?;
+                let (samples, _) =
+                    crate::material_oracle::material_samples(&world, &metrics, a2.aabb())?;
+                Some(crate::material_oracle::compare(oracle, &samples, &run, &a2))
+            }
+            None => None,
+        };
         if let Some(t_run) = &mut run.timings {
             t_run.oracle_s = loaded_s + t.elapsed().as_secs_f64();
         }
@@ -485,6 +522,7 @@ impl SimExplore {
             coverage: judge.coverage(),
             observable: judge.observable(),
             oracle,
+            material_identification,
             run,
             loaded,
         })
@@ -611,6 +649,7 @@ impl<H: Arm + LineScanner> HardwareExplore<H> {
             coverage: None,
             observable: Vec::new(),
             oracle: None,
+            material_identification: None,
             run,
             loaded,
         })
@@ -630,6 +669,10 @@ pub struct ExploreOutcome {
     pub observable: Vec<(usize, usize)>,
     /// The coverage oracle (when asked for, mesh worlds).
     pub oracle: Option<CoverageOracle>,
+    /// The run's material identification beside the material oracle (when
+    /// the oracle was asked for and Stage Two ran in a scene with
+    /// materials).
+    pub material_identification: Option<MaterialIdentification>,
     /// `run.mcap`: what the hardware did, the sweeps, viewpoints and discs
     /// as ROS 2 messages ([`RunBag`]).
     pub bag: Vec<u8>,
@@ -728,7 +771,10 @@ impl ExploreOutcome {
 
     /// `run.json`.
     pub fn summary(&self) -> ExploreSummary {
-        self.run.summary(self.coverage_summary())
+        ExploreSummary {
+            material_identification: self.material_identification.clone(),
+            ..self.run.summary(self.coverage_summary())
+        }
     }
 
     /// What a blast plan over this run is made from: its discs and segments,
@@ -794,7 +840,7 @@ fn stage_files(
     plan: Option<&BlastPlan>,
     staging: &Staging,
 ) -> Result<(), SimError> {
-    outcome.run.write(staging, outcome.coverage_summary())?;
+    outcome.run.write(staging, &outcome.summary())?;
     staging.write(record::folder::RUN_MCAP, &outcome.bag)?;
     staging.write(
         record::folder::SCENARIO_TOML,

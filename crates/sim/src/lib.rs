@@ -11,11 +11,14 @@
 //! | [`metrics`] | [`metrics::coverage`], [`metrics::accuracy`], [`metrics::CoverageTracker`] against the ground truth |
 //! | [`surface_score`] | [`surface_score::score_surface_model`]: a surface model against the true faces, edges and corners |
 //! | [`scan_check`] | [`scan_check::ScanIndex`] (kd-tree over scan points), [`scan_check::scan_clearance`] (link capsules against a scan), [`scan_check::model_to_scan`] (model polygons against a scan) |
+//! | [`oracle`] | [`oracle::OracleJob`], [`oracle::OraclePool`]: the coverage oracle, greedy sweeps chosen knowing the true scene |
+//! | [`material_oracle`] | [`material_oracle::MaterialOracleJob`], [`material_oracle::MaterialPool`], [`material_oracle::compare`]: the material oracle, what Stage Two could identify knowing the true scene |
 //! | [`truth`] | [`truth::ground_truth_grid`], [`truth::reachable_discs`]: the blast plan's oracle |
 
 pub mod explore_job;
 pub mod follow_job;
 pub mod follow_reach;
+pub mod material_oracle;
 pub mod metrics;
 pub mod oracle;
 pub mod rig;
