@@ -79,14 +79,17 @@ pub struct ExploreArgs {
     /// dist(Q) > 1 alone).
     #[arg(long, default_value = "information")]
     stage_one: String,
-    /// Skip the coverage oracle (run.json's coverage.oracle: what greedy
-    /// sweeps chosen knowing the true scene cover, computed once per scene,
+    /// Skip the coverage and material oracles (run.json's coverage.oracle:
+    /// what greedy sweeps chosen knowing the true scene cover; and with
+    /// Stage Two, material_identification.oracle: what greedy viewpoints
+    /// chosen knowing the true scene identify; each computed once per scene,
     /// robot and scanner and cached).
     #[arg(long)]
     no_oracle: bool,
     /// Where to cache the coverage oracle [default: a file in the system's
     /// temporary folder named after the scenario]; it is computed again when
-    /// its inputs differ.
+    /// its inputs differ. The material oracle is cached beside it
+    /// (`<stem>-materials.json`).
     #[arg(long)]
     oracle_cache: Option<PathBuf>,
     /// Write zeros in the time columns so outputs are byte-identical run to run.
@@ -279,6 +282,23 @@ fn say_coverage(outcome: &sim::explore_job::ExploreOutcome) -> Result<()> {
             o.stage_one_viewpoints,
             100.0 * o.ratio_after_12,
             100.0 * o.ratio_at_stage_one_end
+        )?;
+    }
+    if let Some(m) = &outcome.material_identification {
+        let percent =
+            |r: Option<f64>| r.map_or_else(|| "–".to_owned(), |r| format!("{:.0} %", 100.0 * r));
+        say!(
+            "material oracle (viewpoints chosen knowing the true scene): {:.1} % of A2 identifiable, {:.1} % after 10 viewpoints, {:.1} % after {}; the run identified {:.1} % ({} discs at p ≥ 0.8, {} right): {} of the identifiable, {} of the oracle after 10, {} after as many",
+            100.0 * m.oracle.identifiable,
+            100.0 * m.oracle_after_10,
+            100.0 * m.oracle_after_stage_two_viewpoints,
+            m.stage_two_viewpoints,
+            100.0 * m.identified,
+            m.discs_identified,
+            percent(m.accuracy),
+            percent(m.ratio_to_identifiable),
+            percent(m.ratio_after_10),
+            percent(m.ratio_after_stage_two_viewpoints)
         )?;
     }
     Ok(())
