@@ -50,7 +50,7 @@ use scenario::{LoadedScenario, MetricsConfig};
 use scene::World;
 use sensor::classifier::LrcConfig;
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
+use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -175,14 +175,11 @@ fn facing_class(n: &Vector3) -> u8 {
 /// The aimed poses' targets: the first sample (in sample order) of each
 /// [`AIM_CELL_M`] cell and facing class, in order of first appearance.
 fn aim_targets(samples: &[MaterialSample]) -> Vec<usize> {
-    let mut seen: HashMap<([i64; 3], u8), ()> = HashMap::new();
+    let mut seen: HashSet<([i64; 3], u8)> = HashSet::new();
     let mut out = Vec::new();
     for (i, s) in samples.iter().enumerate() {
         let cell = [0, 1, 2].map(|a| (s.point[a] / AIM_CELL_M).floor() as i64);
-        if seen
-            .insert((cell, facing_class(&s.normal.into_inner())), ())
-            .is_none()
-        {
+        if seen.insert((cell, facing_class(&s.normal.into_inner()))) {
             out.push(i);
         }
     }
@@ -861,12 +858,12 @@ mod tests {
         }
     }
 
-    /// A pool of two materials over `samples`, each pose clear or not with
-    /// its observations (sample, posterior).
-    fn pool(
-        samples: Vec<MaterialSample>,
-        poses: Vec<(bool, Vec<(u32, [Real; 2])>)>,
-    ) -> MaterialPool {
+    /// A pose of a hand-made pool: clear or not, and its observations
+    /// (sample, posterior over two materials).
+    type HandPose = (bool, Vec<(u32, [Real; 2])>);
+
+    /// A pool of two materials over `samples`.
+    fn pool(samples: Vec<MaterialSample>, poses: Vec<HandPose>) -> MaterialPool {
         MaterialPool {
             samples,
             samples_per_m2: 400.0,
