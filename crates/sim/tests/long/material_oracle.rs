@@ -94,7 +94,7 @@ fn tmp() -> &'static Path {
 }
 
 #[test]
-#[ignore = "about a minute in release; run by .ci/run"]
+#[ignore = "seconds in release, with its C-space model cached; run by .ci/run"]
 fn the_material_oracle_identifies_what_the_geometry_allows_on_a_wall() {
     let dir = tempfile::tempdir().unwrap();
     let loaded = Scenario::load(wall(dir.path()).to_str().unwrap()).unwrap();
@@ -142,8 +142,8 @@ fn the_material_oracle_identifies_what_the_geometry_allows_on_a_wall() {
     assert!(samples.iter().all(|s| s.material == timber));
     let n = samples.len() as Real;
     let fronts = samples.iter().filter(|s| front(s)).count() as Real;
-    // 0.98 m² at 400 per m².
-    assert!((350.0..450.0).contains(&n), "{n} samples");
+    // 0.98 m² at 100 per m².
+    assert!((80.0..120.0).contains(&n), "{n} samples");
 
     // Which samples are identified: alone by a usable pose, or at the end
     // of the greedy choice.
@@ -179,7 +179,7 @@ fn the_material_oracle_identifies_what_the_geometry_allows_on_a_wall() {
         front(s) && s.point.y.abs() <= 0.25 && (0.35..=0.85).contains(&s.point.z)
     };
     let (found, total) = count(&middle);
-    assert!(total > 100, "{total}");
+    assert!(total > 15, "{total}");
     assert!(
         found as Real >= 0.9 * total as Real,
         "{found} of {total} samples in the middle of the front"
@@ -197,7 +197,7 @@ fn the_material_oracle_identifies_what_the_geometry_allows_on_a_wall() {
 /// oracle on computes it beside the run, writes it to its cache beside the
 /// coverage oracle's, and reads it back the next time.
 #[test]
-#[ignore = "about a minute in release; run by .ci/run"]
+#[ignore = "15 s in release, with its C-space model cached; run by .ci/run"]
 fn no_oracle_skips_the_material_oracle_and_the_oracle_caches_it() {
     let dir = tempfile::tempdir().unwrap();
     let loaded = Scenario::load(wall(dir.path()).to_str().unwrap()).unwrap();
