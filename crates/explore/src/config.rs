@@ -54,6 +54,26 @@ pub enum Selection {
     RankSum,
 }
 
+/// How Stage Two chooses its next viewpoint.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StageTwoChoice {
+    /// The most material information predicted: LM poses (g1–g6) are found
+    /// for up to `stage_two_candidates` of the discs with the most `H3`
+    /// left, each pose's sweep is predicted on Stage One's mesh, and the
+    /// pose whose predicted sweep gives the LRC a usable observation of the
+    /// most `H3` over *every* disc it sees is taken; the arm scans on the
+    /// way there (`motion_scan_step_deg`) and the LRC classifies those scans
+    /// too. A disc a chosen sweep was predicted to identify and did not is
+    /// not counted again. Our choice: one disc per viewpoint identified
+    /// 50–100 of bridge1's 8866 discs in A2 per viewpoint.
+    #[default]
+    Information,
+    /// A§3.3, §6.3.2: the disc with the most `H3` left that a valid,
+    /// reachable LM pose targets; scans at viewpoints only.
+    Thesis,
+}
+
 /// The map products made after Stage One (A§5.2–5.3, Table 6.1's
 /// "Mapping" row): Scale-Like Discs of the TSDF mesh (μ = 0.04 m, n_min = 8)
 /// and their segmentation (τq, τd, τp, τθ).
@@ -129,6 +149,13 @@ pub struct ExploreConfig {
     /// Two ends: a disc whose pose is invalid, whose sweep is unsafe or which
     /// no safe path reaches is passed over for good.
     pub stage_two_target_attempts: usize,
+    /// How Stage Two chooses (`"information"` or Paul's `"thesis"`).
+    pub stage_two: StageTwoChoice,
+    /// With [`StageTwoChoice::Information`], LM poses scored per decision
+    /// (each for a disc at least `stage_two_spread_m` from the others).
+    pub stage_two_candidates: usize,
+    /// The discs a decision aims at are at least this far apart, metres.
+    pub stage_two_spread_m: Real,
     /// Stage Two keeps the robot's collision capsules at least this far from
     /// the surface Stage One mapped (its TSDF mesh), along the path to a
     /// viewpoint and through its sweep, metres. `dist(Q)` is measured to
@@ -174,6 +201,9 @@ impl Default for ExploreConfig {
             stage_two_max_viewpoints: 20,
             significant_h3: 0.5,
             stage_two_target_attempts: 60,
+            stage_two: StageTwoChoice::Information,
+            stage_two_candidates: 16,
+            stage_two_spread_m: 0.3,
             stage_two_clearance_m: 0.05,
             mapping: MappingConfig::default(),
             motion_scan_step_deg: 1.0,
@@ -308,6 +338,7 @@ impl ExploreConfig {
                 "explore.stage_two_target_attempts",
                 self.stage_two_target_attempts,
             ),
+            ("explore.stage_two_candidates", self.stage_two_candidates),
         ] {
             if v > MAX_ATTEMPTS {
                 return Err(bad(field, "at most 10000", v.to_string()));
@@ -323,6 +354,7 @@ impl ExploreConfig {
         for (field, v) in [
             ("explore.stage_one_clearance_m", self.stage_one_clearance_m),
             ("explore.stage_two_clearance_m", self.stage_two_clearance_m),
+            ("explore.stage_two_spread_m", self.stage_two_spread_m),
         ] {
             if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
                 return Err(bad(field, "a length from 0 to 1 metre", v.to_string()));

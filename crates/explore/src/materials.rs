@@ -4,6 +4,7 @@
 
 use crate::ExploreError;
 use crate::discs::DiscMap;
+use crate::lrc::{IDENTIFIED_P, PatchIndex};
 use geom::{Real, TriMesh};
 use sensor::SweepPoint;
 
@@ -46,41 +47,12 @@ impl Materials {
         seed: u64,
         cache: Option<&std::path::Path>,
     ) -> Result<Option<Self>, ExploreError> {
-        use sensor::classifier::{LrcConfig, TrainingConfig};
         d.observations = vec![0; d.discs.len()];
         if materials.is_empty() || d.discs.is_empty() {
             return Ok(None);
         }
-        // The LRC's validity domain is Stage Two's constraints (Table 6.1:
-        // φ_max, d_min, d_max), read from one place, `[explore.pose]`.
-        let config = LrcConfig {
-            min_range_m: pose.d_min_m,
-            max_range_m: pose.d_max_m,
-            max_incidence_deg: pose.phi_max_deg,
-            ..LrcConfig::default()
-        };
-        let training = TrainingConfig {
-            observations_per_material: LRC_TRAINING_OBSERVATIONS,
-            ..TrainingConfig::default()
-        };
-        let classifier = |e: sensor::LrcError| ExploreError::Classifier(e.to_string());
-        let (lrc, obtained) = match cache {
-            Some(path) => {
-                let (lrc, outcome) =
-                    sensor::Lrc::load_or_train(path, config, &training, materials, scanner, seed)
-                        .map_err(classifier)?;
-                let obtained = match outcome {
-                    sensor::classifier::LrcCacheOutcome::Loaded => "loaded from cache".to_owned(),
-                    sensor::classifier::LrcCacheOutcome::Trained(why) => format!("trained ({why})"),
-                };
-                (lrc, obtained)
-            }
-            None => (
-                sensor::Lrc::train(config, &training, materials, scanner, seed)
-                    .map_err(classifier)?,
-                "trained (no cache file)".to_owned(),
-            ),
-        };
+        let config = crate::lrc::lrc_config(pose);
+        let (lrc, obtained) = crate::lrc::train_lrc(materials, scanner, pose, seed, cache)?;
         let mut belief = map::MaterialBelief::new(map::MaterialConfig {
             n_materials: materials.len(),
             ..map::MaterialConfig::default()
@@ -97,7 +69,7 @@ impl Materials {
         for key in voxels.iter().flatten() {
             belief.insert_surface(*key);
         }
-        let patch_m = training.patch_radius_m;
+        let patch_m = crate::lrc::patch_radius_m();
         let flat = flat_patches(
             &d.discs,
             &mesh.vertices,
@@ -126,30 +98,19 @@ impl Materials {
         if pts.is_empty() {
             return Ok(());
         }
-        let coords: Vec<[Real; 3]> = pts
-            .iter()
-            .map(|p| [p.point.x, p.point.y, p.point.z])
-            .collect();
-        let tree: kiddo::ImmutableKdTree<Real, 3> = kiddo::ImmutableKdTree::new_from_slice(&coords);
-        let origin = pts[pts.len() / 2].origin;
+        let index = PatchIndex::new(pts);
+        // The scanner's positions: a standing sweep's lie on a short arc, a
+        // motion's along its path.
+        let origins = geom::Aabb::from_points(pts.iter().map(|p| &p.origin));
         let (lrc, patch, reach) = (&self.lrc, self.patch_m, self.reach_m);
         let facing = &d.facing;
         let results: Vec<(usize, Vec<Real>)> = d
             .discs
             .par_iter()
             .enumerate()
-            .filter(|(_, disc)| (disc.centre - origin).norm() <= reach)
+            .filter(|(_, disc)| origins.distance_squared_to_point(&disc.centre) <= reach * reach)
             .filter_map(|(i, disc)| {
-                let mut obs = patch_observation(pts, &tree, &disc.centre, patch);
-                // Only returns from the seen side of the disc's surface: a
-                // patch around a disc on one face of a thin wall (the right
-                // web seen from under the beam) also holds the returns of
-                // the other face (its containment sheet seen from the
-                // channel), a few millimetres away.
-                if let Some(f) = facing.get(i) {
-                    obs.returns
-                        .retain(|r| (r.origin - disc.centre).dot(f) > 0.0);
-                }
+                let obs = index.observation(&disc.centre, patch, seen_side(facing.get(i)).as_ref());
                 lrc.classify(&obs).ok().map(|r| (i, r.posterior))
             })
             .collect();
@@ -162,6 +123,67 @@ impl Materials {
         Ok(())
     }
 
+    /// Of the discs `candidates`, those a sweep of `points` (a prediction on
+    /// the mapped surface) would give the LRC an observation of that passes
+    /// its geometric checks (range, incidence, returns and span in the fit
+    /// window, flatness), as [`Materials::observe`] forms it.
+    pub(crate) fn usable(
+        &self,
+        d: &DiscMap,
+        points: &[SweepPoint],
+        candidates: &[usize],
+    ) -> Vec<usize> {
+        if points.is_empty() {
+            return Vec::new();
+        }
+        let index = PatchIndex::new(points);
+        let origins = geom::Aabb::from_points(points.iter().map(|p| &p.origin));
+        let lrc = &self.lrc;
+        // Cheap refusals first (each one the LRC's checks would make): out
+        // of reach of every origin, every origin nearer than the shortest
+        // range (with room for the target's projection onto the patch's
+        // plane), or no origin on the disc's seen side (no returns left).
+        let near_m = (lrc.config.min_range_m - 0.15).max(0.0);
+        candidates
+            .iter()
+            .copied()
+            .filter(|&i| {
+                let c = &d.discs[i].centre;
+                if origins.distance_squared_to_point(c) > self.reach_m * self.reach_m {
+                    return false;
+                }
+                // The farthest corner of the origins' box, and the farthest
+                // any origin reaches along the disc's facing normal.
+                let far = (0..3)
+                    .map(|a| {
+                        (c[a] - origins.min[a])
+                            .abs()
+                            .max((c[a] - origins.max[a]).abs())
+                    })
+                    .map(|v| v * v)
+                    .sum::<Real>();
+                if far < near_m * near_m {
+                    return false;
+                }
+                d.facing.get(i).is_none_or(|f| {
+                    (0..3)
+                        .map(|a| (f[a] * origins.min[a]).max(f[a] * origins.max[a]))
+                        .sum::<Real>()
+                        > c.coords.dot(f)
+                })
+            })
+            .filter(|&i| {
+                let disc = &d.discs[i];
+                let obs = index.observation(
+                    &disc.centre,
+                    self.patch_m,
+                    seen_side(d.facing.get(i)).as_ref(),
+                );
+                lrc.check_geometry(&obs, &lrc.config).is_ok()
+            })
+            .collect()
+    }
+
     /// The material information remaining on disc `i` (eq. 4.16 over its
     /// voxels).
     pub(crate) fn h3(&self, i: usize) -> Real {
@@ -171,6 +193,35 @@ impl Materials {
             .iter()
             .filter_map(|k| self.belief.h3_voxel(*k))
             .sum()
+    }
+
+    /// The most probable material of disc `i` and its probability (the
+    /// mean over its belief voxels, as `MaterialBelief::disc_probabilities`).
+    fn best(&self, i: usize) -> Option<(usize, Real)> {
+        let n = self.belief.config().n_materials;
+        let mut sum = vec![0.0; n];
+        let mut count = 0usize;
+        for k in &self.voxels[i] {
+            if let Some(p) = self.belief.probabilities(*k) {
+                for (s, v) in sum.iter_mut().zip(p) {
+                    *s += v;
+                }
+                count += 1;
+            }
+        }
+        if count == 0 {
+            return None;
+        }
+        sum.iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))
+            .map(|(m, &s)| (m, s / count as Real))
+    }
+
+    /// Whether disc `i` is identified: its most probable material at
+    /// `p >= IDENTIFIED_P`.
+    pub(crate) fn identified(&self, i: usize) -> bool {
+        self.best(i).is_some_and(|(_, p)| p >= IDENTIFIED_P)
     }
 
     /// The belief voxels of disc `i`.
@@ -233,58 +284,11 @@ fn flat_patches(
         .collect()
 }
 
-/// The returns of `points` within `radius_m` of `target`, as an LRC
-/// observation ([`patch_observation`] with its own kd-tree).
-pub(crate) fn sweep_patch(
-    points: &[SweepPoint],
-    target: &geom::Point3,
-    radius_m: Real,
-) -> sensor::Observation {
-    let coords: Vec<[Real; 3]> = points
-        .iter()
-        .map(|p| [p.point.x, p.point.y, p.point.z])
-        .collect();
-    let tree: kiddo::ImmutableKdTree<Real, 3> = kiddo::ImmutableKdTree::new_from_slice(&coords);
-    patch_observation(points, &tree, target, radius_m)
+/// The seen side of a disc whose normal turned toward the scanner is
+/// `facing`, as [`PatchIndex::observation`] takes it.
+fn seen_side(facing: Option<&geom::Vector3>) -> Option<geom::UnitVector3> {
+    facing.and_then(|f| geom::UnitVector3::try_new(*f, 1e-12))
 }
-
-/// The returns of `points` (indexed by `tree`) within `radius_m` of
-/// `target`, in point order: `sensor::Observation::from_sweep` through a
-/// kd-tree.
-fn patch_observation(
-    points: &[SweepPoint],
-    tree: &kiddo::ImmutableKdTree<Real, 3>,
-    target: &geom::Point3,
-    radius_m: Real,
-) -> sensor::Observation {
-    let near = tree.within_unsorted::<kiddo::SquaredEuclidean>(
-        &[target.x, target.y, target.z],
-        radius_m * radius_m,
-    );
-    let mut idx: Vec<usize> = near.iter().map(|n| n.item as usize).collect();
-    idx.sort_unstable();
-    let returns = idx
-        .iter()
-        .filter_map(|&k| {
-            let p = &points[k];
-            let (direction, range_m) =
-                geom::UnitVector3::try_new_and_get(p.point - p.origin, 1e-12)?;
-            Some(sensor::classifier::ObservedReturn {
-                origin: p.origin,
-                direction,
-                range_m,
-                intensity: p.intensity,
-            })
-        })
-        .collect();
-    sensor::Observation {
-        returns,
-        target: Some(*target),
-    }
-}
-
-/// Simulated observations per material the LRC is trained on.
-const LRC_TRAINING_OBSERVATIONS: usize = 60;
 
 #[cfg(test)]
 mod tests {
@@ -323,14 +327,10 @@ mod tests {
         .unwrap();
         let pts = sweep.points();
         assert!(pts.len() > 1000, "{}", pts.len());
-        let coords: Vec<[Real; 3]> = pts
-            .iter()
-            .map(|p| [p.point.x, p.point.y, p.point.z])
-            .collect();
-        let tree = kiddo::ImmutableKdTree::new_from_slice(&coords);
+        let index = PatchIndex::new(pts);
         for k in (0..pts.len()).step_by(pts.len() / 7) {
             let target = pts[k].point + geom::Vector3::new(0.01, -0.02, 0.0);
-            let a = patch_observation(pts, &tree, &target, 0.18);
+            let a = index.observation(&target, 0.18, None);
             let b = sensor::Observation::from_sweep(&sweep, &target, 0.18);
             assert!(!a.returns.is_empty());
             assert_eq!(a, b);

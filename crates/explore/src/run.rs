@@ -21,11 +21,12 @@
 
 use crate::discs::{DiscMap, disc_map};
 use crate::judge::{Judge, SafetyTally};
-use crate::materials::{Materials, sweep_patch};
+use crate::lrc::PatchIndex;
+use crate::materials::Materials;
 use crate::probe::MapProbe;
 use crate::setup::Setup;
 use crate::stage_one::path_via_visited;
-use crate::{Choice, ExploreConfig, ExploreError, StageOne, Termination};
+use crate::{Choice, ExploreConfig, ExploreError, StageOne, StageTwoChoice, Termination};
 use geom::{Isometry3, Real, TriMesh};
 use hw::{Arm, LineScanner, tilt_sweep, tilt_sweep_through};
 use map::{IntegrationStats, TsdfConfig, TsdfMap};
@@ -720,6 +721,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             c
         };
         let mut tilts = stage.sweep_tilts(q);
+
         // Cut the tilt values at the first unsafe configuration on the way
         // out to each end, then check the motions the audit checks (out to
         // the lowest, across to the highest, back), cutting again while
@@ -919,6 +921,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         }
         let safety = self.stage().model().safety().clone();
         let mut aimer = Aimer::new(self, map_world, &safety)?;
+        let information = self.config().stage_two == StageTwoChoice::Information;
         loop {
             let done = self.viewpoints.iter().filter(|r| r.stage == 2).count();
             if done >= self.config().stage_two_max_viewpoints {
@@ -928,16 +931,24 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             // A replayed viewpoint: the arm is put where it stood (its
             // record and audit come from the checkpoint).
             let replayed = replay.pop_front();
+            let mut predicted = Vec::new();
             let aim = if let Some(r) = &replayed {
                 self.stand_at(r)?;
                 None
             } else {
                 let t = Instant::now();
-                let found = aimer.choose(self, m, discs, &mut tried, k)?;
+                let found = if information {
+                    aimer.choose_information(self, m, discs, &mut tried, k)?
+                } else {
+                    aimer
+                        .choose(self, m, discs, &mut tried, k)?
+                        .map(|(t, p, r)| (t, p, r, Vec::new()))
+                };
                 let decision_ms = self.timed(t);
-                let Some((target, path, ranked)) = found else {
+                let Some((target, path, ranked, usable)) = found else {
                     return Ok("no_targetable_disc");
                 };
+                predicted = usable;
                 self.move_along(k, &path.waypoints)?;
                 Some(Aim {
                     target,
@@ -947,6 +958,13 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                 })
             };
             let (_, taken) = self.take_viewpoint(k, replayed.is_some(), Some((m, discs)))?;
+            // A disc the sweep was predicted to observe and that is still
+            // not identified is not counted on again.
+            for &j in &predicted {
+                if !m.identified(j) {
+                    tried[j] = true;
+                }
+            }
             let record = match (replayed, aim) {
                 (Some(r), _) => r,
                 (None, None) => {
@@ -1026,6 +1044,29 @@ impl<'s> Aimer<'s> {
         })
     }
 
+    /// The discs worth targeting, most `H3` first (ties to the lower
+    /// index): not yet tried, flat within the LRC's patch, in A2, with more
+    /// than `significant_h3` of their uniform-prior information left.
+    fn ranked<H: Arm + LineScanner + ?Sized>(
+        &self,
+        episode: &Episode<'_, H>,
+        m: &Materials,
+        discs: &DiscMap,
+        tried: &[bool],
+    ) -> Vec<(usize, Real)> {
+        use rayon::prelude::*;
+        let a2 = episode.setup.regions.a2;
+        let significant = episode.setup.config.significant_h3 * self.uniform;
+        let mut ranked: Vec<(usize, Real)> = (0..discs.discs.len())
+            .into_par_iter()
+            .filter(|&i| !tried[i] && m.flat[i] && a2.contains(&discs.discs[i].centre))
+            .map(|i| (i, m.h3(i)))
+            .filter(|(i, h)| *h > significant * m.disc_voxels(*i).len() as Real)
+            .collect();
+        ranked.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        ranked
+    }
+
     /// The disc to aim at next, the path to its pose and how many discs
     /// were ranked; `None` when no disc can be targeted. Every disc tried
     /// is marked in `tried` for good.
@@ -1040,21 +1081,7 @@ impl<'s> Aimer<'s> {
         let s = &episode.setup;
         let config = &s.config;
         let stage = &s.stage;
-        let a2 = s.regions.a2;
-        let mut ranked: Vec<(usize, Real)> = {
-            use rayon::prelude::*;
-            let tried = &*tried;
-            (0..discs.discs.len())
-                .into_par_iter()
-                .filter(|&i| !tried[i] && m.flat[i] && a2.contains(&discs.discs[i].centre))
-                .map(|i| (i, m.h3(i)))
-                .filter(|(i, h)| {
-                    let voxels = m.disc_voxels(*i).len() as Real;
-                    *h > config.significant_h3 * self.uniform * voxels
-                })
-                .collect()
-        };
-        ranked.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        let ranked = self.ranked(episode, m, discs, tried);
         // One map for the whole decision: every motion checked while
         // trying one disc is known when trying the next.
         let mut checker = plan::MemoChecker::new(stage.model().safety().checker(stage.grid()));
@@ -1081,7 +1108,11 @@ impl<'s> Aimer<'s> {
                 &mut |_, _| {},
             )?;
             let check = m.lrc.check_geometry(
-                &sweep_patch(predicted.points(), &discs.discs[i].centre, m.patch_m),
+                &PatchIndex::new(predicted.points()).observation(
+                    &discs.discs[i].centre,
+                    m.patch_m,
+                    None,
+                ),
                 &m.lrc.config,
             );
             if check.is_err() {
@@ -1114,6 +1145,171 @@ impl<'s> Aimer<'s> {
         Ok(None)
     }
 }
+/// The robot's time as Stage Two weighs a candidate: the fastest joint's
+/// speed, rad/s, and the scanner's period, seconds (the Hokuyo URG-04LX of
+/// A§5.1 scans every 100 ms; `run.mcap`'s clock counts the same).
+const ROBOT_JOINT_SPEED: Real = 1.0;
+const ROBOT_SCAN_PERIOD_S: Real = 0.1;
+
+/// A Stage Two candidate: the disc aimed at, the LM pose, and the discs its
+/// predicted sweep gives a usable observation of (the target among them),
+/// with the `H3` they hold per second of the robot's time to get there and
+/// sweep.
+struct Aimed {
+    target: usize,
+    goal: Vec<Real>,
+    usable: Vec<usize>,
+    gain: Real,
+}
+
+impl Aimer<'_> {
+    /// [`StageTwoChoice::Information`]: LM poses for up to
+    /// `stage_two_candidates` discs (most `H3` first, each at least
+    /// `stage_two_spread_m` from the others aimed at), each kept when its
+    /// sweep is safe and its predicted sweep on the map gives a usable
+    /// observation of its target; the one whose predicted sweep observes the
+    /// most `H3` over every disc it sees per second of the robot's time (the
+    /// straight way there and the sweep) that a safe path reaches is chosen.
+    /// Returns the target, the path, the discs ranked and the discs the
+    /// chosen sweep is predicted to observe. Every disc aimed at is marked
+    /// in `tried` for good.
+    fn choose_information<H: Arm + LineScanner + ?Sized>(
+        &mut self,
+        episode: &Episode<'_, H>,
+        m: &Materials,
+        discs: &DiscMap,
+        tried: &mut [bool],
+        k: usize,
+    ) -> Result<Option<StageTwoChoiceMade>, ExploreError> {
+        use rayon::prelude::*;
+        let s = &episode.setup;
+        let config = &s.config;
+        let stage = &s.stage;
+        // The discs still worth an observation, most `H3` first.
+        let ranked = self.ranked(episode, m, discs, tried);
+        let open: Vec<usize> = ranked.iter().map(|&(i, _)| i).collect();
+        let h3: std::collections::HashMap<usize, Real> = ranked.iter().copied().collect();
+        // The targets: spread over the surfaces, each tried once.
+        let spread2 = config.stage_two_spread_m * config.stage_two_spread_m;
+        let mut targets: Vec<usize> = Vec::new();
+        for &(i, _) in ranked.iter().take(config.stage_two_target_attempts) {
+            if targets.len() >= config.stage_two_candidates {
+                break;
+            }
+            let c = discs.discs[i].centre;
+            if targets
+                .iter()
+                .any(|&t| (discs.discs[t].centre - c).norm_squared() < spread2)
+            {
+                continue;
+            }
+            tried[i] = true;
+            targets.push(i);
+        }
+        let q = &episode.q;
+        let selector = &self.selector;
+        let world = &self.map_world;
+        let mut aimed: Vec<Aimed> = targets
+            .par_iter()
+            .map(|&i| -> Result<Option<Aimed>, ExploreError> {
+                let target = plan::Target::from_disc(&discs.discs[i]);
+                let solution = selector.select(stage.grid(), &target, q)?;
+                if !solution.valid() {
+                    return Ok(None);
+                }
+                let goal = solution.joints().to_vec();
+                if stage.sweep_dist(&goal)?.is_none() {
+                    return Ok(None);
+                }
+                let mut probe = MapProbe::new(
+                    s.robot.clone(),
+                    Arc::clone(world),
+                    s.world_from_base,
+                    &goal,
+                    Scanner::new(s.scanner)?,
+                )?;
+                probe.seed_noise(viewpoint_seed(episode.options.seed, k) ^ i as u64);
+                let predicted = tilt_sweep(
+                    &mut probe,
+                    &s.robot,
+                    &s.world_from_base,
+                    &config.sweep,
+                    &mut |_, _| {},
+                )?;
+                let usable = m.usable(discs, predicted.points(), &open);
+                if !usable.contains(&i) {
+                    return Ok(None);
+                }
+                let h3_seen: Real = usable.iter().map(|j| h3[j]).sum();
+                // Per second of the robot's time: the way there (its
+                // largest joint change) and the sweep.
+                let travel = q
+                    .iter()
+                    .zip(&goal)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, Real::max);
+                let tilts = stage.sweep_tilts(&goal);
+                let tilt_travel = match (tilts.first(), tilts.last()) {
+                    (Some(lo), Some(hi)) => 2.0 * (hi - lo).abs(),
+                    _ => 0.0,
+                };
+                let seconds = (travel + tilt_travel) / ROBOT_JOINT_SPEED
+                    + tilts.len() as Real * ROBOT_SCAN_PERIOD_S;
+                Ok(Some(Aimed {
+                    target: i,
+                    goal,
+                    usable,
+                    gain: h3_seen / seconds.max(ROBOT_SCAN_PERIOD_S),
+                }))
+            })
+            .collect::<Result<Vec<_>, _>>()?
+            .into_iter()
+            .flatten()
+            .collect();
+        aimed.sort_by(|a, b| b.gain.total_cmp(&a.gain).then(a.target.cmp(&b.target)));
+        // The path keeps the clearance from the measured points that the
+        // motion's guard keeps as the arm scans on its way (as Stage One's
+        // paths do); the mapped surface's is checked after.
+        let mut checker = plan::MemoChecker::new(ClearanceChecker::new(
+            stage.model().safety().checker(stage.grid()),
+            stage.model().safety(),
+            &episode.points,
+            config.stage_two_clearance_m,
+            q,
+        ));
+        let visited: Vec<&[Real]> = episode
+            .viewpoints
+            .iter()
+            .map(|r| r.joints.as_slice())
+            .collect();
+        for a in aimed {
+            if let Some(path) = path_via_visited(
+                stage.model().roadmap(),
+                &visited,
+                q,
+                &a.goal,
+                config.link_k,
+                &mut checker,
+            ) && clear_of_map(
+                &s.robot,
+                &s.world_from_base,
+                &self.map_world,
+                &episode.fine,
+                &path.waypoints,
+                stage.sweep_range(&a.goal),
+                config.stage_two_clearance_m,
+            )? {
+                return Ok(Some((a.target, path, ranked.len(), a.usable)));
+            }
+        }
+        Ok(None)
+    }
+}
+
+/// What a Stage Two decision chose: the target disc, the path to its pose,
+/// the discs ranked, and the discs its sweep is predicted to observe.
+type StageTwoChoiceMade = (usize, plan::Path, usize, Vec<usize>);
+
 /// Whether the robot's collision capsules stay `clearance_m` or more from
 /// `map` (the mapped surface) at every configuration checked along
 /// `waypoints` and through the tilt sweep `(lo, hi)` at its end.
