@@ -1044,6 +1044,41 @@ impl<'s> Aimer<'s> {
         })
     }
 
+    /// A safe path from where the arm stands to `goal` (the roadmap's, or
+    /// through a pose of `visited`, checked by `checker`) whose motions and
+    /// the sweep at its end keep the robot `stage_two_clearance_m` from the
+    /// mapped surface; `None` when there is none.
+    fn reach<H: Arm + LineScanner + ?Sized>(
+        &self,
+        episode: &Episode<'_, H>,
+        visited: &[&[Real]],
+        goal: &[Real],
+        checker: &mut dyn plan::MotionChecker,
+    ) -> Result<Option<plan::Path>, ExploreError> {
+        let s = &episode.setup;
+        let stage = &s.stage;
+        let Some(path) = path_via_visited(
+            stage.model().roadmap(),
+            visited,
+            &episode.q,
+            goal,
+            s.config.link_k,
+            checker,
+        ) else {
+            return Ok(None);
+        };
+        let clear = clear_of_map(
+            &s.robot,
+            &s.world_from_base,
+            &self.map_world,
+            &episode.fine,
+            &path.waypoints,
+            stage.sweep_range(goal),
+            s.config.stage_two_clearance_m,
+        )?;
+        Ok(clear.then_some(path))
+    }
+
     /// The discs worth targeting, most `H3` first (ties to the lower
     /// index): not yet tried, flat within the LRC's patch, in A2, with more
     /// than `significant_h3` of their uniform-prior information left.
@@ -1123,22 +1158,7 @@ impl<'s> Aimer<'s> {
                 .iter()
                 .map(|r| r.joints.as_slice())
                 .collect();
-            if let Some(path) = path_via_visited(
-                stage.model().roadmap(),
-                &visited,
-                q,
-                &goal,
-                config.link_k,
-                &mut checker,
-            ) && clear_of_map(
-                &s.robot,
-                &s.world_from_base,
-                &self.map_world,
-                &episode.fine,
-                &path.waypoints,
-                stage.sweep_range(&goal),
-                config.stage_two_clearance_m,
-            )? {
+            if let Some(path) = self.reach(episode, &visited, &goal, &mut checker)? {
                 return Ok(Some((i, path, ranked.len())));
             }
         }
@@ -1283,22 +1303,7 @@ impl Aimer<'_> {
             .map(|r| r.joints.as_slice())
             .collect();
         for a in aimed {
-            if let Some(path) = path_via_visited(
-                stage.model().roadmap(),
-                &visited,
-                q,
-                &a.goal,
-                config.link_k,
-                &mut checker,
-            ) && clear_of_map(
-                &s.robot,
-                &s.world_from_base,
-                &self.map_world,
-                &episode.fine,
-                &path.waypoints,
-                stage.sweep_range(&a.goal),
-                config.stage_two_clearance_m,
-            )? {
+            if let Some(path) = self.reach(episode, &visited, &a.goal, &mut checker)? {
                 return Ok(Some((a.target, path, ranked.len(), a.usable)));
             }
         }
