@@ -62,11 +62,12 @@ pub enum StageTwoChoice {
     /// for up to `stage_two_candidates` of the discs with the most `H3`
     /// left, each pose's sweep is predicted on Stage One's mesh, and the
     /// pose whose predicted sweep gives the LRC a usable observation of the
-    /// most `H3` over *every* disc it sees is taken; the arm scans on the
-    /// way there (`motion_scan_step_deg`) and the LRC classifies those scans
-    /// too. A disc a chosen sweep was predicted to identify and did not is
-    /// not counted again. Our choice: one disc per viewpoint identified
-    /// 50–100 of bridge1's 8866 discs in A2 per viewpoint.
+    /// most `H3` over *every* disc it sees, per second of the robot's time
+    /// (the way there and the sweep), is taken among those a safe path
+    /// reaches; scans at viewpoints only. A disc a chosen sweep was
+    /// predicted to identify and did not is not counted again. Our choice:
+    /// Paul's one disc a viewpoint identified 50–100 of bridge1's 8866 discs
+    /// in A2 per viewpoint (the crate README measures both).
     #[default]
     Information,
     /// A§3.3, §6.3.2: the disc with the most `H3` left that a valid,

@@ -1287,9 +1287,10 @@ impl Aimer<'_> {
             .flatten()
             .collect();
         aimed.sort_by(|a, b| b.gain.total_cmp(&a.gain).then(a.target.cmp(&b.target)));
-        // The path keeps the clearance from the measured points that the
-        // motion's guard keeps as the arm scans on its way (as Stage One's
-        // paths do); the mapped surface's is checked after.
+        // The path keeps `stage_two_clearance_m` from the measured points
+        // (as Stage One's paths do: the noisy points can lie nearer than the
+        // TSDF mesh they were fused into); the mapped surface's clearance is
+        // checked after.
         let mut checker = plan::MemoChecker::new(ClearanceChecker::new(
             stage.model().safety().checker(stage.grid()),
             stage.model().safety(),
