@@ -39,6 +39,10 @@ pub struct DiscMap {
     pub h3: Vec<Real>,
     /// Per disc: LRC observations that updated it.
     pub observations: Vec<usize>,
+    /// Per disc: the viewpoint (`k`) since which its most probable material
+    /// has had `p ≥ 0.8` ([`crate::lrc::IDENTIFIED_P`]), `None` while it has
+    /// not; empty for worlds without materials.
+    pub identified_at: Vec<Option<usize>>,
     /// `H3` over every disc voxel (eq. 4.17; a voxel shared by two discs
     /// counts once), when materials were identified.
     pub h3_total: Option<Real>,
@@ -93,6 +97,7 @@ impl DiscMap {
             material_names: self.material_names.clone(),
             posterior: (self.posterior.len() == n).then(|| self.posterior.clone()),
             h3: (self.h3.len() == n).then(|| (self.h3.clone(), self.observations.clone())),
+            identified_at: (self.identified_at.len() == n).then(|| self.identified_at.clone()),
         }
     }
 

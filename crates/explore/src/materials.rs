@@ -48,6 +48,7 @@ impl Materials {
         cache: Option<&std::path::Path>,
     ) -> Result<Option<Self>, ExploreError> {
         d.observations = vec![0; d.discs.len()];
+        d.identified_at = vec![None; d.discs.len()];
         if materials.is_empty() || d.discs.is_empty() {
             return Ok(None);
         }
@@ -222,6 +223,21 @@ impl Materials {
     /// `p >= IDENTIFIED_P`.
     pub(crate) fn identified(&self, i: usize) -> bool {
         self.best(i).is_some_and(|(_, p)| p >= IDENTIFIED_P)
+    }
+
+    /// Mark the discs identified after viewpoint `k` in `d.identified_at`
+    /// (a disc identified before keeps its viewpoint, one no longer
+    /// identified loses it) and return how many are.
+    pub(crate) fn mark_identified(&self, d: &mut DiscMap, k: usize) -> usize {
+        use rayon::prelude::*;
+        let now: Vec<bool> = (0..d.discs.len())
+            .into_par_iter()
+            .map(|i| self.identified(i))
+            .collect();
+        for (at, now) in d.identified_at.iter_mut().zip(now) {
+            *at = if now { Some(at.unwrap_or(k)) } else { None };
+        }
+        d.identified_at.iter().filter(|a| a.is_some()).count()
     }
 
     /// The belief voxels of disc `i`.

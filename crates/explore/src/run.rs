@@ -221,6 +221,7 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
         // the map Stage One built: the baseline of Stage Two's curve.
         if let Some(last) = episode.viewpoints.last_mut() {
             last.h3 = Some(m.h3_total());
+            last.discs_identified = Some(m.mark_identified(&mut discs, last.k));
         }
     }
     phases.lrc_s = lap();
@@ -767,6 +768,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             h1_weighted,
             h2,
             h3: None,
+            discs_identified: None,
             target_disc: None,
             predicted_h1_weighted: None,
             candidates: 0,
@@ -958,6 +960,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                 })
             };
             let (_, taken) = self.take_viewpoint(k, replayed.is_some(), Some((m, discs)))?;
+            let identified = m.mark_identified(discs, k);
             // A disc the sweep was predicted to observe and that is still
             // not identified is not counted on again.
             for &j in &predicted {
@@ -975,6 +978,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                 }
                 (None, Some(aim)) => ViewpointRecord {
                     h3: Some(m.h3_total()),
+                    discs_identified: Some(identified),
                     target_disc: Some(aim.target),
                     candidates: aim.ranked,
                     joint_travel: aim.path.joint_travel(),

@@ -390,6 +390,14 @@ pub struct MaterialIdentification {
     pub discs_identified: usize,
     /// Viewpoints of Stage Two.
     pub stage_two_viewpoints: usize,
+    /// The run's identified share of the samples when Stage Two started
+    /// (Stage One's sweeps classified) and after each of its viewpoints
+    /// (a sample counts from the viewpoint since which its run disc has
+    /// been identified, discs.csv's `identified_at`): `stage_two_viewpoints
+    /// + 1` values, the last equal to `identified`; empty for a run without
+    /// that record.
+    #[serde(default)]
+    pub identified_after_viewpoints: Vec<Real>,
     /// The oracle's identified share after 10 viewpoints.
     pub oracle_after_10: Real,
     /// The oracle's identified share after as many viewpoints as Stage Two
@@ -411,13 +419,16 @@ pub struct MaterialIdentification {
 impl MaterialIdentification {
     /// The comparison of a run that identified the share `identified` of
     /// the oracle's samples (right on the share `accuracy` of them), `discs_identified`
-    /// discs of A2, in `stage_two_viewpoints` viewpoints of Stage Two.
+    /// discs of A2, in `stage_two_viewpoints` viewpoints of Stage Two, with
+    /// `identified_after_viewpoints` its share viewpoint by viewpoint (see
+    /// the field).
     pub fn new(
         oracle: MaterialOracle,
         identified: Real,
         accuracy: Option<Real>,
         discs_identified: usize,
         stage_two_viewpoints: usize,
+        identified_after_viewpoints: Vec<Real>,
     ) -> Self {
         let ratio = |of: Real| (of > 0.0).then(|| identified / of);
         let ten = oracle.after(10);
@@ -427,6 +438,7 @@ impl MaterialIdentification {
             accuracy,
             discs_identified,
             stage_two_viewpoints,
+            identified_after_viewpoints,
             oracle_after_10: ten,
             oracle_after_stage_two_viewpoints: as_many,
             ratio_to_identifiable: ratio(oracle.identifiable),
@@ -528,7 +540,9 @@ pub struct DiscRecord {
 /// the disc-file contract of `map::sld_io`), then per disc its `segment`,
 /// the `viewpoint` that saw it, its `true_material` (−1 when unknown), and
 /// when materials were identified the posterior `p_<material>` per
-/// material, `h3` and `lrc_observations`.
+/// material, `h3`, `lrc_observations` and `identified_at` (the viewpoint
+/// since which its most probable material has had `p ≥ 0.8`, −1 when it
+/// has not).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DiscTable {
     /// The discs.
@@ -547,6 +561,9 @@ pub struct DiscTable {
     /// Per disc: `H3` and the LRC observations that updated it (`None`: not
     /// written).
     pub h3: Option<(Vec<Real>, Vec<usize>)>,
+    /// Per disc: the viewpoint (`k`) since which it has been identified
+    /// (`None` per disc: not identified; `None`: not written).
+    pub identified_at: Option<Vec<Option<usize>>>,
 }
 
 /// Names `discs.csv` starts with.
@@ -586,6 +603,12 @@ impl DiscTable {
             columns.push((
                 "lrc_observations".into(),
                 obs.iter().map(|v| *v as Real).collect(),
+            ));
+        }
+        if let Some(at) = &self.identified_at {
+            columns.push((
+                "identified_at".into(),
+                at.iter().map(|k| k.map_or(-1.0, |v| v as Real)).collect(),
             ));
         }
         for (k, (name, values)) in columns.iter().enumerate() {
@@ -632,8 +655,8 @@ impl DiscTable {
 
     /// Read a run's `discs.csv`: the contract columns and every extra column
     /// the writer makes (`segment`, `viewpoint` and `true_material` are
-    /// required; the posterior, `h3` and `lrc_observations` are read when
-    /// present). Every number must be finite and every normal a unit vector.
+    /// required; the posterior, `h3`, `lrc_observations` and `identified_at`
+    /// are read when present). Every number must be finite and every normal a unit vector.
     pub fn read(path: &Path) -> Result<Self, RecordError> {
         let t = Table::read(path)?;
         let col = |n: &str| t.numbers(n);
@@ -689,6 +712,27 @@ impl DiscTable {
         } else {
             None
         };
+        let identified_at = if t.has("identified_at") {
+            let at = t.numbers("identified_at")?;
+            let mut out = Vec::with_capacity(at.len());
+            for (i, &v) in at.iter().enumerate() {
+                out.push(if v == -1.0 {
+                    None
+                } else if v >= 0.0 && v.fract() == 0.0 && v < usize::MAX as Real {
+                    Some(v as usize)
+                } else {
+                    return Err(RecordError::Field {
+                        file: t.source.clone(),
+                        line: i + 2,
+                        field: "identified_at".into(),
+                        message: format!("expected a viewpoint index or -1, found {v}"),
+                    });
+                });
+            }
+            Some(out)
+        } else {
+            None
+        };
         Ok(Self {
             discs,
             segment: t.indices("segment")?,
@@ -700,6 +744,7 @@ impl DiscTable {
             material_names,
             posterior,
             h3,
+            identified_at,
         })
     }
 }
@@ -897,13 +942,20 @@ mod tests {
         assert_eq!(oracle.after(0), 0.0);
         assert_eq!(oracle.after(2), 0.3);
         assert_eq!(oracle.after(10), 0.5);
-        let m = MaterialIdentification::new(oracle.clone(), 0.2, Some(0.95), 17, 2);
+        let m = MaterialIdentification::new(
+            oracle.clone(),
+            0.2,
+            Some(0.95),
+            17,
+            2,
+            vec![0.1, 0.15, 0.2],
+        );
         assert_eq!(m.oracle_after_10, 0.5);
         assert_eq!(m.oracle_after_stage_two_viewpoints, 0.3);
         assert_eq!(m.ratio_to_identifiable, Some(0.25));
         assert_eq!(m.ratio_after_10, Some(0.4));
         assert!((m.ratio_after_stage_two_viewpoints.unwrap() - 2.0 / 3.0).abs() < 1e-15);
-        let none = MaterialIdentification::new(oracle, 0.2, None, 0, 0);
+        let none = MaterialIdentification::new(oracle, 0.2, None, 0, 0, Vec::new());
         assert_eq!(none.ratio_after_stage_two_viewpoints, None);
         let mut s = summary();
         assert!(!s.to_json().unwrap().contains("material_identification"));
@@ -919,26 +971,41 @@ mod tests {
     #[test]
     fn disc_tables_round_trip() {
         let table = DiscTable {
-            discs: vec![DiscRecord {
-                centre: Point3::new(0.1, -0.2, 1.5),
-                normal: UnitVector3::new_normalize(Vector3::new(0.0, 0.6, 0.8)),
-                radius_m: 0.04,
-                points: 9,
-            }],
-            segment: vec![0],
-            viewpoint: vec![2],
-            true_material: vec![None],
+            discs: vec![
+                DiscRecord {
+                    centre: Point3::new(0.1, -0.2, 1.5),
+                    normal: UnitVector3::new_normalize(Vector3::new(0.0, 0.6, 0.8)),
+                    radius_m: 0.04,
+                    points: 9,
+                };
+                2
+            ],
+            segment: vec![0, 0],
+            viewpoint: vec![2, 3],
+            true_material: vec![None, Some(1)],
             material_names: vec!["timber".into(), "concrete".into()],
-            posterior: Some(vec![vec![0.25, 0.75]]),
-            h3: Some((vec![0.56], vec![1])),
+            posterior: Some(vec![vec![0.25, 0.75], vec![0.1, 0.9]]),
+            h3: Some((vec![0.56, 0.3], vec![1, 2])),
+            identified_at: Some(vec![None, Some(17)]),
         };
         let text = table.to_csv().unwrap();
         assert!(text.starts_with(
-            "cx,cy,cz,nx,ny,nz,radius,points,segment,viewpoint,true_material,p_timber,p_concrete,h3,lrc_observations\n"
+            "cx,cy,cz,nx,ny,nz,radius,points,segment,viewpoint,true_material,p_timber,p_concrete,h3,\
+             lrc_observations,identified_at\n"
         ));
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join(DISCS_CSV);
         std::fs::write(&path, &text).unwrap();
         assert_eq!(DiscTable::read(&path).unwrap(), table);
+        // Neither a fraction nor a negative other than -1 is a viewpoint.
+        for bad in ["17.5", "-2"] {
+            let edited = text.replacen(",17\n", &format!(",{bad}\n"), 1);
+            std::fs::write(&path, &edited).unwrap();
+            let err = DiscTable::read(&path).unwrap_err().to_string();
+            assert!(
+                err.contains("identified_at") && err.contains("line 3"),
+                "{err}"
+            );
+        }
     }
 }

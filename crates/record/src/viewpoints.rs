@@ -26,6 +26,10 @@ pub struct ViewpointRecord {
     /// Two row, and Stage One's last, once Stage One's sweeps are classified
     /// on its map (Stage Two's baseline); `None` on the other rows.
     pub h3: Option<Real>,
+    /// Discs whose most probable material has `p ≥ 0.8` after the
+    /// viewpoint, on the rows that hold `h3` (`None` on the others).
+    #[serde(default)]
+    pub discs_identified: Option<usize>,
     /// Unweighted H1 (eq. 4.10) after the sweep.
     pub h1: Real,
     /// Weighted H1 (eq. 4.11) after the sweep.
@@ -100,7 +104,7 @@ pub const PATH_CSV: &str = "path.csv";
 /// h1_weighted, h2, h3, predicted_h1_weighted, actual_h1_weighted,
 /// candidates, front, unreachable, predicted_revealed, revealed,
 /// coverage_a1, joint_travel, waypoints, decision_ms, plan_ms, sweep_ms,
-/// integrate_ms, target_disc`); empty cells for no value.
+/// integrate_ms, target_disc, discs_identified`); empty cells for no value.
 pub fn viewpoints_csv(viewpoints: &[ViewpointRecord]) -> String {
     let dof = viewpoints.first().map_or(0, |r| r.joints.len());
     let mut out = String::from("k,stage");
@@ -110,7 +114,7 @@ pub fn viewpoints_csv(viewpoints: &[ViewpointRecord]) -> String {
     out.push_str(
         ",f1,f2,f3,f4,h1,h1_weighted,h2,h3,predicted_h1_weighted,actual_h1_weighted,\
          candidates,front,unreachable,predicted_revealed,revealed,coverage_a1,joint_travel,waypoints,\
-         decision_ms,plan_ms,sweep_ms,integrate_ms,target_disc\n",
+         decision_ms,plan_ms,sweep_ms,integrate_ms,target_disc,discs_identified\n",
     );
     let opt = |v: Option<Real>| v.map_or(String::new(), |x| format!("{x}"));
     for r in viewpoints {
@@ -124,7 +128,7 @@ pub fn viewpoints_csv(viewpoints: &[ViewpointRecord]) -> String {
         }
         let _ = writeln!(
             out,
-            ",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{}",
+            ",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{}",
             r.h1,
             r.h1_weighted,
             r.h2,
@@ -143,7 +147,8 @@ pub fn viewpoints_csv(viewpoints: &[ViewpointRecord]) -> String {
             r.plan_ms,
             r.sweep_ms,
             r.integrate_ms,
-            r.target_disc.map_or(String::new(), |t| t.to_string())
+            r.target_disc.map_or(String::new(), |t| t.to_string()),
+            r.discs_identified.map_or(String::new(), |t| t.to_string())
         );
     }
     out
@@ -240,6 +245,12 @@ pub fn read_viewpoints(dir: &Path) -> Result<Vec<ViewpointRecord>, RecordError> 
         num("integrate_ms")?,
     ];
     let target = vp.optional_indices("target_disc")?;
+    // Runs written before the column existed have none.
+    let identified = if vp.has("discs_identified") {
+        vp.optional_indices("discs_identified")?
+    } else {
+        vec![None; vp.len()]
+    };
     let mut out = Vec::with_capacity(vp.len());
     for i in 0..vp.len() {
         let stage_i = u8::try_from(stage[i]).ok().filter(|s| (1..=2).contains(s));
@@ -262,6 +273,7 @@ pub fn read_viewpoints(dir: &Path) -> Result<Vec<ViewpointRecord>, RecordError> 
             f: fi,
             target_disc: target[i],
             h3: h3[i],
+            discs_identified: identified[i],
             h1: h1[i],
             h1_weighted: h1w[i],
             h2: h2[i],

@@ -821,15 +821,34 @@ pub fn compare(
 ) -> MaterialIdentification {
     let d = &run.discs;
     let (mut found, mut right) = (0usize, 0usize);
+    // Per identified sample: the viewpoint since which its disc has been.
+    let mut since = Vec::new();
     for (s, disc) in samples.iter().zip(run_discs(samples, d)) {
-        if let Some(p) = disc.and_then(|k| d.posterior.get(k))
+        if let Some(k) = disc
+            && let Some(p) = d.posterior.get(k)
             && !p.is_empty()
             && identified(p)
         {
             found += 1;
             right += usize::from(argmax(p) == s.material);
+            since.push(d.identified_at.get(k).copied().flatten());
         }
     }
+    // The share at Stage Two's start (Stage One's last row) and after each
+    // of its viewpoints.
+    let last_one = run.viewpoints.iter().rposition(|v| v.stage == 1);
+    let rows = match (last_one, &run.stage_two_termination) {
+        (Some(i), Some(_)) => &run.viewpoints[i..],
+        _ => &[][..],
+    };
+    let total = samples.len().max(1) as Real;
+    let curve = if d.identified_at.len() == d.discs.len() && !rows.is_empty() {
+        rows.iter()
+            .map(|v| since.iter().filter(|s| s.is_some_and(|k| k <= v.k)).count() as Real / total)
+            .collect()
+    } else {
+        Vec::new()
+    };
     let discs_identified = d
         .discs
         .iter()
@@ -839,10 +858,11 @@ pub fn compare(
     let stage_two = run.viewpoints.iter().filter(|v| v.stage == 2).count();
     MaterialIdentification::new(
         oracle,
-        found as Real / samples.len().max(1) as Real,
+        found as Real / total,
         (found > 0).then(|| right as Real / found as Real),
         discs_identified,
         stage_two,
+        curve,
     )
 }
 

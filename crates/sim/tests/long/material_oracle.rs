@@ -229,6 +229,37 @@ fn no_oracle_skips_the_material_oracle_and_the_oracle_caches_it() {
         first.run.viewpoints.iter().filter(|v| v.stage == 2).count()
     );
     assert!((0.0..=1.0).contains(&m.identified));
+    // Viewpoint by viewpoint: the share at Stage Two's start and after each
+    // of its viewpoints, ending on the run's; each row's identified discs
+    // are those marked since it, and the last row's those the final
+    // posteriors (computed apart, from the belief's voxels) put at p ≥ 0.8.
+    assert_eq!(
+        m.identified_after_viewpoints.len(),
+        m.stage_two_viewpoints + 1
+    );
+    assert_eq!(m.identified_after_viewpoints.last(), Some(&m.identified));
+    let d = &first.run.discs;
+    let rows: Vec<_> = first
+        .run
+        .viewpoints
+        .iter()
+        .filter(|v| v.discs_identified.is_some())
+        .collect();
+    assert_eq!(rows.len(), m.stage_two_viewpoints + 1);
+    for r in &rows {
+        let since = d
+            .identified_at
+            .iter()
+            .filter(|a| a.is_some_and(|k| k <= r.k))
+            .count();
+        assert!(since <= r.discs_identified.unwrap(), "viewpoint {}", r.k);
+    }
+    let by_posterior = d
+        .posterior
+        .iter()
+        .filter(|p| p.iter().copied().fold(0.0, f64::max) >= 0.8)
+        .count();
+    assert_eq!(rows.last().unwrap().discs_identified, Some(by_posterior));
     assert_eq!(first.summary().material_identification, Some(m.clone()));
     // The run's run.json is the same with or without the oracle but for
     // the oracles' entries.
