@@ -120,6 +120,20 @@ fn is_io(e: &sim::SimError) -> bool {
     matches!(e, sim::SimError::Record(record::RecordError::File { .. }))
 }
 
+/// The report of a staged explore run folder, when asked for, in the two
+/// steps of `sim::explore_job::Finish`.
+fn finish_explore(
+    report: bool,
+) -> impl FnMut(&record::Staging) -> Result<sim::explore_job::Complete, String> {
+    move |staging| {
+        if report {
+            report::in_two_steps(staging)
+        } else {
+            sim::explore_job::no_files(staging)
+        }
+    }
+}
+
 /// The report of a staged run folder, when asked for.
 fn finish(report: bool) -> impl FnMut(&record::Staging) -> Result<(), String> {
     move |staging| {
@@ -190,9 +204,15 @@ pub fn _explore(
     };
     let report = kw.report.unwrap_or(true);
     py.detach(|| {
-        sim::explore_job::explore(&loaded, &options, &out, &mut |_| {}, &mut finish(report))
-            .map(|_| ())
-            .map_err(|e| (e.to_string(), is_io(&e)))
+        sim::explore_job::explore(
+            &loaded,
+            &options,
+            &out,
+            &mut |_| {},
+            &mut finish_explore(report),
+        )
+        .map(|_| ())
+        .map_err(|e| (e.to_string(), is_io(&e)))
     })
     .map_err(|(message, io)| job_error(&message, io))
 }

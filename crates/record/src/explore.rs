@@ -393,9 +393,9 @@ pub struct MaterialIdentification {
     /// The run's identified share of the samples when Stage Two started
     /// (Stage One's sweeps classified) and after each of its viewpoints
     /// (a sample counts from the viewpoint since which its run disc has
-    /// been identified, discs.csv's `identified_at`): `stage_two_viewpoints
-    /// + 1` values, the last equal to `identified`; empty for a run without
-    /// that record.
+    /// been identified, discs.csv's `identified_at`): one more value than
+    /// `stage_two_viewpoints`, the last equal to `identified`; empty for a
+    /// run without that record.
     #[serde(default)]
     pub identified_after_viewpoints: Vec<Real>,
     /// The oracle's identified share after 10 viewpoints.

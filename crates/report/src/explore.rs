@@ -77,15 +77,16 @@ pub fn page(folder: &RunFolder, shown: &Path) -> Result<Page, ReportError> {
     let viewpoints = folder.viewpoints()?;
     let scenario = folder.scenario().to_owned();
     let mut page = Page::new(&format!("surveyor explore: {scenario}"));
-    page.paragraph(&format!(
+    page.intro(&format!(
         "AXBAM exploration (Paul 2010) of scenario {scenario}, run folder {}.",
         shown.display()
     ));
-    page.summary(run, &["reports", "format_version"]);
 
     let setup = setup(folder)?;
-    view_3d(&mut page, folder, &viewpoints, &setup)?;
+    let discs = folder.discs()?;
+    view_3d(&mut page, folder, &viewpoints, &setup, &discs)?;
     information_plots(&mut page, &viewpoints);
+    materials_section(&mut page, run, &viewpoints, &discs);
     Ok(page)
 }
 
@@ -94,6 +95,7 @@ fn view_3d(
     folder: &RunFolder,
     viewpoints: &[ViewpointRecord],
     setup: &Setup,
+    discs: &DiscTable,
 ) -> Result<(), ReportError> {
     let mut traces: Vec<Box<dyn Trace>> = Vec::new();
     let mut notes = Vec::new();
@@ -129,7 +131,7 @@ fn view_3d(
         ));
     }
     traces.push(mesh_trace(&shown, "TSDF mesh", "#b0c4de", Visible::True));
-    disc_traces(&folder.discs()?, &mut traces);
+    disc_traces(discs, &mut traces);
     viewpoint_traces(viewpoints, setup, &mut traces)?;
     if let Some(plan) = folder.blast_plan::<serde_json::Value>()? {
         blast_traces(&plan, &mut traces);
@@ -162,7 +164,7 @@ fn mesh_trace(
     name: &str,
     colour: &'static str,
     visible: Visible,
-) -> Box<dyn Trace> {
+) -> Box<Mesh3D<f32, f32, f32>> {
     let [x, y, z] = columns(&mesh.vertices);
     let idx = |c: usize| -> Vec<usize> { mesh.triangles.iter().map(|t| t[c] as usize).collect() };
     Mesh3D::new(x, y, z, Some(idx(0)), Some(idx(1)), Some(idx(2)))
@@ -215,28 +217,19 @@ pub(crate) fn truth_meshes(scene: &scene::Scene, traces: &mut Vec<Box<dyn Trace>
     }
 }
 
-/// Discs coloured by their most probable material (grey while every
-/// material is equally likely), drawn as 8-sided fans 3 mm above their
-/// plane, and each segment's outline (the convex hull of its discs' rims in
-/// the segment's mean plane).
+/// Discs coloured by their most probable material, solid where it is
+/// identified (`p ≥ 0.8`) and faded where it is not yet, apart in grey
+/// while every material is equally likely; drawn as 8-sided fans 3 mm
+/// above their plane, and each segment's outline (the convex hull of its
+/// discs' rims in the segment's mean plane).
 fn disc_traces(table: &DiscTable, traces: &mut Vec<Box<dyn Trace>>) {
     let discs = &table.discs;
     let segment = &table.segment;
     let names = &table.material_names;
-    let none = Vec::new();
-    let posterior = table.posterior.as_ref().unwrap_or(&none);
-    // The MAP material, or None when the belief is still flat.
-    let map: Vec<Option<usize>> = (0..discs.len())
-        .map(|i| {
-            let p: &[Real] = posterior.get(i).map_or(&[], Vec::as_slice);
-            let (best, &top) = p
-                .iter()
-                .enumerate()
-                .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))?;
-            let min = p.iter().copied().fold(Real::INFINITY, Real::min);
-            (top - min > 1e-6).then_some(best)
-        })
-        .collect();
+    // The MAP material and whether it is identified, or None while the
+    // belief is still flat.
+    let map: Vec<Option<(usize, bool)>> =
+        (0..discs.len()).map(|i| most_probable(table, i)).collect();
     let centre = |i: usize| discs[i].centre;
     let normal = |i: usize| discs[i].normal.into_inner();
     let rim = |i: usize| -> Vec<Point3> {
@@ -248,8 +241,8 @@ fn disc_traces(table: &DiscTable, traces: &mut Vec<Box<dyn Trace>>) {
             })
             .collect()
     };
-    let groups: Vec<Option<usize>> = std::iter::once(None)
-        .chain((0..names.len()).map(Some))
+    let groups: Vec<Option<(usize, bool)>> = std::iter::once(None)
+        .chain((0..names.len()).flat_map(|m| [Some((m, true)), Some((m, false))]))
         .collect();
     for g in groups {
         let members: Vec<usize> = (0..discs.len()).filter(|&i| map[i] == g).collect();
@@ -269,23 +262,31 @@ fn disc_traces(table: &DiscTable, traces: &mut Vec<Box<dyn Trace>>) {
                     .push([base, base + 1 + k, base + 1 + (k + 1) % 8]);
             }
         }
-        let (name, colour) = match g {
-            Some(m) => (
-                format!("discs: {} ({})", names[m], members.len()),
+        let n = members.len();
+        let trace = match g {
+            Some((m, true)) => mesh_trace(
+                &mesh,
+                &format!("discs: {}, p ≥ 0.8 ({n})", names[m]),
                 material_colour(&names[m], m),
+                Visible::True,
             ),
-            None => (
-                format!("discs: not identified ({})", members.len()),
+            Some((m, false)) => mesh_trace(
+                &mesh,
+                &format!("discs: {}, p < 0.8 ({n})", names[m]),
+                material_colour(&names[m], m),
+                Visible::True,
+            )
+            .opacity(0.35),
+            // Discs with no material information start hidden: the mesh
+            // shows there.
+            None => mesh_trace(
+                &mesh,
+                &format!("discs: no material information ({n})"),
                 "#c8c8c8",
+                Visible::LegendOnly,
             ),
         };
-        // Discs with no material information start hidden: the mesh shows there.
-        let visible = if g.is_none() {
-            Visible::LegendOnly
-        } else {
-            Visible::True
-        };
-        traces.push(mesh_trace(&mesh, &name, colour, visible));
+        traces.push(trace);
     }
     let mut by_segment: std::collections::BTreeMap<usize, Vec<usize>> =
         std::collections::BTreeMap::new();
@@ -661,3 +662,192 @@ fn effort_plots(page: &mut Page, vp: &[ViewpointRecord]) {
 
 /// A per-viewpoint series of the time plots and its label.
 type Series = (fn(&ViewpointRecord) -> Real, &'static str);
+
+/// Disc `i`'s most probable material and whether it is identified (`p ≥
+/// 0.8`), `None` while its belief is flat (or there is none).
+fn most_probable(table: &DiscTable, i: usize) -> Option<(usize, bool)> {
+    let p: &[Real] = table
+        .posterior
+        .as_ref()
+        .and_then(|p| p.get(i))
+        .map_or(&[], Vec::as_slice);
+    let (best, &top) = p
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))?;
+    let min = p.iter().copied().fold(Real::INFINITY, Real::min);
+    (top - min > 1e-6).then_some((best, top >= IDENTIFIED_P))
+}
+
+/// A disc's material counts as identified at this probability of its most
+/// probable material (`explore::lrc::IDENTIFIED_P`).
+const IDENTIFIED_P: Real = 0.8;
+
+/// Materials (A§3.3, §4.4): the identified share viewpoint by viewpoint
+/// against the material oracle's, beside H3 (Fig. 6.12), and the true ×
+/// most probable material of the discs.
+fn materials_section(
+    page: &mut Page,
+    run: &serde_json::Value,
+    vp: &[ViewpointRecord],
+    discs: &DiscTable,
+) {
+    let rows: Vec<&ViewpointRecord> = vp.iter().filter(|r| r.discs_identified.is_some()).collect();
+    if rows.is_empty() || discs.posterior.is_none() {
+        return;
+    }
+    page.heading("Materials identified, viewpoint by viewpoint");
+    let mi = &run["material_identification"];
+    let share = |key: &str| -> Vec<Real> {
+        mi[key]
+            .as_array()
+            .map(|a| a.iter().filter_map(serde_json::Value::as_f64).collect())
+            .unwrap_or_default()
+    };
+    let run_curve = share("identified_after_viewpoints");
+    let oracle_curve: Vec<Real> = mi["oracle"]["identified_after_viewpoints"]
+        .as_array()
+        .map(|a| a.iter().filter_map(serde_json::Value::as_f64).collect())
+        .unwrap_or_default();
+    let n: Vec<usize> = (0..rows.len()).collect();
+    let mut traces: Vec<Box<dyn Trace>> = Vec::new();
+    let y_title = if run_curve.len() == rows.len() {
+        page.paragraph(
+            "The share of A2's true surface whose disc's most probable material has p ≥ 0.8, \
+             when Stage Two starts (Stage One's sweeps classified) and after each of its \
+             viewpoints, beside what viewpoints chosen knowing the scene (the material oracle, \
+             greedy) identify after as many; and the material information left, H3 (eq. 4.17, \
+             Fig. 6.12), relative to Stage Two's start.",
+        );
+        traces.push(
+            Scatter::new(n.clone(), run_curve.iter().map(|x| 100.0 * x).collect())
+                .mode(Mode::LinesMarkers)
+                .name("the run"),
+        );
+        let k = rows.len().min(oracle_curve.len() + 1);
+        let oracle: Vec<Real> = std::iter::once(0.0)
+            .chain(oracle_curve.iter().map(|x| 100.0 * x))
+            .take(k)
+            .collect();
+        traces.push(
+            Scatter::new((0..k).collect(), oracle)
+                .mode(Mode::LinesMarkers)
+                .name("material oracle (greedy, knowing the scene)")
+                .line(Line::new().dash(plotly::common::DashType::Dash)),
+        );
+        if let Some(all) = mi["oracle"]["identifiable"].as_f64() {
+            traces.push(
+                Scatter::new(vec![0, rows.len() - 1], vec![100.0 * all; 2])
+                    .mode(Mode::Lines)
+                    .name("identifiable from some safe pose (oracle)")
+                    .line(
+                        Line::new()
+                            .color("#888888")
+                            .dash(plotly::common::DashType::Dot),
+                    ),
+            );
+        }
+        "A2 identified (%)"
+    } else {
+        page.paragraph(
+            "The discs whose most probable material has p ≥ 0.8, when Stage Two starts (Stage \
+             One's sweeps classified) and after each of its viewpoints (no material oracle in \
+             this run), and the material information left, H3 (eq. 4.17, Fig. 6.12), relative \
+             to Stage Two's start.",
+        );
+        traces.push(
+            Scatter::new(
+                n.clone(),
+                rows.iter()
+                    .map(|r| r.discs_identified.unwrap_or(0) as Real)
+                    .collect(),
+            )
+            .mode(Mode::LinesMarkers)
+            .name("discs identified"),
+        );
+        "discs identified"
+    };
+    if let Some(first) = rows[0].h3.filter(|h| *h > 0.0) {
+        traces.push(
+            Scatter::new(
+                n,
+                rows.iter()
+                    .map(|r| r.h3.map_or(Real::NAN, |h| h / first))
+                    .collect(),
+            )
+            .mode(Mode::LinesMarkers)
+            .name("H3 left (right axis)")
+            .y_axis("y2"),
+        );
+    }
+    let layout = xy_layout(
+        "Identified materials against the material oracle",
+        "Stage Two viewpoints",
+        y_title,
+    )
+    .y_axis2(
+        Axis::new()
+            .title(Title::with_text("H3 left"))
+            .tick_format(".3f")
+            .overlaying("y")
+            .side(plotly::common::AxisSide::Right),
+    )
+    .legend(Legend::new().x(1.08));
+    page.plot("materials", &plot_of(traces, layout), 400, "xy");
+    confusion_table(page, discs);
+}
+
+/// The true × most probable material of the discs with a known true
+/// material.
+fn confusion_table(page: &mut Page, discs: &DiscTable) {
+    let names = &discs.material_names;
+    let Some(posterior) = &discs.posterior else {
+        return;
+    };
+    let m = names.len();
+    // Per true material: identified as each material, not identified
+    // (p < 0.8), no information.
+    let mut counts = vec![vec![0usize; m + 2]; m];
+    for (i, t) in discs.true_material.iter().enumerate() {
+        let Some(t) = t.filter(|t| *t < m) else {
+            continue;
+        };
+        if posterior.get(i).is_none() {
+            continue;
+        }
+        match most_probable(discs, i) {
+            Some((best, true)) => counts[t][best] += 1,
+            Some((_, false)) => counts[t][m] += 1,
+            None => counts[t][m + 1] += 1,
+        }
+    }
+    page.heading("True and most probable materials of the discs");
+    page.paragraph(
+        "Per true material (the nearest true surface's), the discs identified (p ≥ 0.8) as each \
+         material, those with some information but below 0.8, and those without any; the last \
+         column is the share of the identified that is right.",
+    );
+    let mut header = vec!["true \\ most probable".to_owned()];
+    header.extend(names.iter().cloned());
+    header.extend([
+        "p < 0.8".to_owned(),
+        "no information".to_owned(),
+        "right".to_owned(),
+    ]);
+    let table: Vec<Vec<String>> = counts
+        .iter()
+        .enumerate()
+        .map(|(t, row)| {
+            let identified: usize = row[..m].iter().sum();
+            let mut cells = vec![names[t].clone()];
+            cells.extend(row.iter().map(usize::to_string));
+            cells.push(if identified > 0 {
+                format!("{:.1} %", 100.0 * row[t] as Real / identified as Real)
+            } else {
+                "–".to_owned()
+            });
+            cells
+        })
+        .collect();
+    page.grid_table("materials-confusion", &header, &table);
+}

@@ -377,11 +377,10 @@ pub fn page(folder: &RunFolder, shown: &Path) -> Result<Page, ReportError> {
     let scenario = folder.scenario().to_owned();
     let robot = run["robot"].as_str().unwrap_or("?").to_owned();
     let mut page = Page::new(&format!("surveyor follow: {scenario}, {robot}"));
-    page.paragraph(&format!(
+    page.intro(&format!(
         "Surface following (Pudney 1994) of {scenario} with {robot}, run folder {}.",
         shown.display()
     ));
-    page.summary(run, &["initial_segments", "format_version"]);
 
     let path: Vec<Point3> = steps.iter().map(|r| r.control_point).collect();
     let mut framed = sensed_points(&model);

@@ -8,6 +8,7 @@
 //! `surveyor follow` run the page of [`follow`] (Pudney's Figs 44–47); the
 //! page ([`page`]) embeds plotly.js, so it opens offline.
 
+pub mod cards;
 pub mod error;
 pub mod explore;
 pub mod follow;
@@ -18,14 +19,55 @@ pub use error::ReportError;
 use record::{RunFolder, RunKind, Staging};
 use std::path::{Path, PathBuf};
 
+/// A page drawn from a run folder's files but for the parts made from its
+/// final `run.json` (the summary cards and the table of every figure),
+/// which [`Draft::complete`] adds: a run's timings are final only once its
+/// report has been drawn.
+#[derive(Debug)]
+pub struct Draft {
+    page: page::Page,
+    kind: RunKind,
+}
+
+impl Draft {
+    /// The page of the run in `dir`, naming the folder `shown`.
+    pub fn of(dir: &Path, shown: &Path) -> Result<Self, ReportError> {
+        let folder = RunFolder::open(dir)?;
+        let kind = folder.kind();
+        let page = match kind {
+            RunKind::Explore => explore::page(&folder, shown)?,
+            RunKind::Follow => follow::page(&folder, shown)?,
+        };
+        Ok(Self { page, kind })
+    }
+
+    /// The whole page, with the summary cards and the table of `run`
+    /// (the run's `run.json`).
+    pub fn complete(&self, run: &serde_json::Value) -> String {
+        let (cards, skip): (_, &[&str]) = match self.kind {
+            RunKind::Explore => (cards::explore(run), &["reports", "format_version"]),
+            RunKind::Follow => (cards::follow(run), &["initial_segments", "format_version"]),
+        };
+        self.page.finish_with(&cards, Some((run, skip)))
+    }
+
+    /// Complete the page with the `run.json` now in `staging` and write it
+    /// there as `report.html`.
+    pub fn write_staged(&self, staging: &Staging) -> Result<(), ReportError> {
+        let folder = RunFolder::open(staging.dir())?;
+        staging.write(
+            record::folder::REPORT_HTML,
+            self.complete(folder.summary_json()),
+        )?;
+        Ok(())
+    }
+}
+
 /// The page of the run in `dir`, naming the folder `shown`.
 pub fn render_as(dir: &Path, shown: &Path) -> Result<String, ReportError> {
+    let draft = Draft::of(dir, shown)?;
     let folder = RunFolder::open(dir)?;
-    let page = match folder.kind() {
-        RunKind::Explore => explore::page(&folder, shown)?,
-        RunKind::Follow => follow::page(&folder, shown)?,
-    };
-    Ok(page.finish())
+    Ok(draft.complete(folder.summary_json()))
 }
 
 /// The page of the run in `dir`.
@@ -45,12 +87,31 @@ pub fn write(dir: &Path) -> Result<PathBuf, ReportError> {
     Ok(path)
 }
 
+/// The draft of the report of a run folder being staged ([`Staging`]),
+/// naming it by its final place; [`Draft::write_staged`] completes and
+/// writes it.
+pub fn draft_staged(staging: &Staging) -> Result<Draft, ReportError> {
+    Draft::of(staging.dir(), staging.out())
+}
+
+/// The step that completes a staged report ([`Draft::write_staged`]), its
+/// errors as text.
+pub type CompleteStaged = Box<dyn FnOnce(&Staging) -> Result<(), String>>;
+
+/// [`draft_staged`], returning the step that completes and writes the page
+/// once the staged `run.json` is final: the two steps an explore job
+/// finishes its folder with (`sim::explore_job::Finish`).
+pub fn in_two_steps(staging: &Staging) -> Result<CompleteStaged, String> {
+    let draft = draft_staged(staging).map_err(|e| e.to_string())?;
+    Ok(Box::new(move |staging: &Staging| {
+        draft.write_staged(staging).map_err(|e| e.to_string())
+    }))
+}
+
 /// Write the report of a run folder being staged ([`Staging`]), naming it
-/// by its final place.
+/// by its final place, from the `run.json` it holds now.
 pub fn write_staged(staging: &Staging) -> Result<(), ReportError> {
-    let html = render_as(staging.dir(), staging.out())?;
-    staging.write(record::folder::REPORT_HTML, html)?;
-    Ok(())
+    draft_staged(staging)?.write_staged(staging)
 }
 
 /// The scenario a run folder holds (`scenario.toml`, its paths absolute),

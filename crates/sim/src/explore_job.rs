@@ -867,13 +867,14 @@ const FOLLOW_FILES: [&str; 2] = [
 /// not a `surveyor follow` run, holding a checkpoint when resuming), run the
 /// exploration of `loaded` with its checkpoint in `out`, stage the run
 /// folder ([`write_run`]), let `finish` add files to the staged folder
-/// (the report), and move everything into place, `run.json` last.
+/// (the report, see [`Finish`]), and move everything into place,
+/// `run.json` last.
 pub fn explore(
     loaded: &LoadedScenario,
     options: &ExploreOptions,
     out: &Path,
     progress: &mut dyn FnMut(&record::ViewpointRecord),
-    finish: &mut dyn FnMut(&Staging) -> Result<(), String>,
+    finish: &mut Finish<'_>,
 ) -> Result<(ExploreOutcome, Option<BlastPlan>), SimError> {
     explore_with(
         options,
@@ -882,6 +883,21 @@ pub fn explore(
         progress,
         finish,
     )
+}
+
+/// What adds files to a staged explore run folder (the report), in two
+/// steps: the first, timed as the job's `report` phase, sees the folder
+/// with `run.json` as it stands before that phase; the step it returns
+/// sees the final `run.json`, whose timings include the first step (so a
+/// report's figures can be the run's final ones).
+pub type Finish<'a> = dyn FnMut(&Staging) -> Result<Complete, String> + 'a;
+
+/// The second step of a [`Finish`].
+pub type Complete = Box<dyn FnOnce(&Staging) -> Result<(), String>>;
+
+/// A [`Finish`] that adds nothing.
+pub fn no_files(_: &Staging) -> Result<Complete, String> {
+    Ok(Box::new(|_| Ok(())))
 }
 
 /// An exploration ready to run, in the simulator ([`SimExplore`]) or on
@@ -920,7 +936,7 @@ pub fn explore_with<J: ExploreJob>(
     out: &Path,
     make: impl FnOnce(&ExploreOptions) -> Result<J, SimError>,
     progress: &mut dyn FnMut(&record::ViewpointRecord),
-    finish: &mut dyn FnMut(&Staging) -> Result<(), String>,
+    finish: &mut Finish<'_>,
 ) -> Result<(ExploreOutcome, Option<BlastPlan>), SimError> {
     let bad_out = |message: String| SimError::InvalidArgument {
         what: out.display().to_string(),
@@ -966,19 +982,20 @@ pub fn explore_with<J: ExploreJob>(
     let staging = Staging::new(out)?;
     stage_files(&outcome, plan.as_ref(), &staging)?;
     let write_s = lap();
-    finish(&staging).map_err(|message| SimError::InvalidArgument {
+    let failed = |message: String| SimError::InvalidArgument {
         what: out.display().to_string(),
         message,
-    })?;
+    };
+    let complete = finish(&staging).map_err(failed)?;
     let report_s = lap();
     if let Some(t) = &mut outcome.run.timings {
         t.write_s = write_s;
         t.report_s = report_s;
         t.total_s = t_job.elapsed().as_secs_f64();
-        // run.json again, with the whole job's times (the report read the
-        // times so far).
+        // run.json again, with the whole job's times.
         staging.write(record::explore::RUN_JSON, outcome.summary().to_json()?)?;
     }
+    complete(&staging).map_err(failed)?;
     staging.commit()?;
     Ok((outcome, plan))
 }

@@ -171,7 +171,7 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
                 r.decision_ms
             );
         },
-        &mut |staging| report::write_staged(staging).map_err(|e| e.to_string()),
+        &mut report::in_two_steps,
     )?;
     let run = &outcome.run;
     let summary = outcome.summary();

@@ -31,7 +31,7 @@ use std::sync::mpsc::{self, Receiver};
 use std::time::{Duration, Instant};
 
 /// The plots an explore report must hold.
-const EXPLORE_PLOTS: [&str; 9] = [
+const EXPLORE_PLOTS: [&str; 10] = [
     "plot-view3d",
     "plot-f1",
     "plot-f2",
@@ -41,6 +41,7 @@ const EXPLORE_PLOTS: [&str; 9] = [
     "plot-prediction",
     "plot-coverage",
     "plot-timings",
+    "plot-materials",
 ];
 
 /// The plots every follow report holds; one `plot-evolution-<sets>` per
@@ -309,6 +310,27 @@ fn check_report_in_chromium(run: &Path, expected_ids: &[String]) {
         expected,
         "the page has other plots than the ones checked"
     );
+    // Issue 48: the summary cards come first and hold the run's figures as
+    // its run.json does, each shown with its value.
+    let run_json: Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("run.json")).unwrap()).unwrap();
+    let cards = tab.eval(
+        "JSON.stringify([...document.querySelectorAll('#summary-cards .card')].map(c => \
+         [c.dataset.key, c.dataset.value, c.querySelector('.card-value').innerText, \
+         c.getBoundingClientRect().top < document.querySelector('h2').getBoundingClientRect().top]))",
+    );
+    let cards: Vec<(String, String, String, bool)> =
+        serde_json::from_str(cards.as_str().unwrap()).unwrap();
+    assert!(cards.len() >= 6, "too few summary cards: {cards:?}");
+    for (key, value, shown, first) in &cards {
+        let held = key
+            .split('.')
+            .try_fold(&run_json, |v, p| v.get(p))
+            .unwrap_or_else(|| panic!("card {key} is not in run.json"));
+        let value: Value = serde_json::from_str(value).unwrap();
+        assert_eq!(held, &value, "card {key}");
+        assert!(!shown.trim().is_empty() && *first, "card {key}: {shown:?}");
+    }
     // The 3-D view is WebGL: a canvas exists and plotly did not fall back to
     // its "WebGL is not supported" notice.
     assert!(tab.eval_u64("document.querySelectorAll('#plot-view3d canvas').length") > 0);
