@@ -28,6 +28,9 @@ pub(crate) struct Materials {
     /// Per disc, its belief voxels (`MaterialBelief::disc_voxels`, in its
     /// order): the discs do not change during a run.
     voxels: Vec<Vec<map::VoxelKey>>,
+    /// Per disc, the belief's slots of its voxels, in the same order (every
+    /// disc voxel has a belief from the start, and keeps its slot).
+    slots: Vec<Vec<usize>>,
     /// How the LRC was obtained: trained (and why the cache was not used)
     /// or loaded from its cache.
     pub(crate) obtained: String,
@@ -70,6 +73,10 @@ impl Materials {
         for key in voxels.iter().flatten() {
             belief.insert_surface(*key);
         }
+        let slots = voxels
+            .iter()
+            .map(|v| v.iter().filter_map(|k| belief.slot(*k)).collect())
+            .collect();
         let patch_m = crate::lrc::patch_radius_m();
         let flat = flat_patches(
             &d.discs,
@@ -84,6 +91,7 @@ impl Materials {
             patch_m,
             reach_m: config.max_range_m + patch_m,
             voxels,
+            slots,
             obtained,
         }))
     }
@@ -190,10 +198,7 @@ impl Materials {
     pub(crate) fn h3(&self, i: usize) -> Real {
         // `MaterialBelief::h3_disc` over the remembered voxels, summed in
         // the same order.
-        self.voxels[i]
-            .iter()
-            .filter_map(|k| self.belief.h3_voxel(*k))
-            .sum()
+        self.slots[i].iter().map(|&s| self.belief.h3_in(s)).sum()
     }
 
     /// The most probable material of disc `i` and its probability (the
@@ -202,13 +207,11 @@ impl Materials {
         let n = self.belief.config().n_materials;
         let mut sum = vec![0.0; n];
         let mut count = 0usize;
-        for k in &self.voxels[i] {
-            if let Some(p) = self.belief.probabilities(*k) {
-                for (s, v) in sum.iter_mut().zip(p) {
-                    *s += v;
-                }
-                count += 1;
+        for &slot in &self.slots[i] {
+            for (s, v) in sum.iter_mut().zip(self.belief.probabilities_in(slot)) {
+                *s += v;
             }
+            count += 1;
         }
         if count == 0 {
             return None;

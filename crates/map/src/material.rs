@@ -292,7 +292,31 @@ impl MaterialBelief {
     /// `H3(ʲM) = −Σ_m P(ʲx_m) ln P(ʲx_m)` of one voxel (eq. 4.16, sign such
     /// that the information remaining is positive), `None` without a belief.
     pub fn h3_voxel(&self, key: VoxelKey) -> Option<Real> {
-        self.index.get(&key).map(|&i| self.h3[i as usize])
+        self.slot(key).map(|i| self.h3[i])
+    }
+
+    /// Where voxel `key`'s belief is kept, `None` without one. A voxel keeps
+    /// its slot for the belief's life (voxels are only ever added), so a
+    /// caller that reads the same voxels many times may look them up once.
+    pub fn slot(&self, key: VoxelKey) -> Option<usize> {
+        self.index.get(&key).map(|&i| i as usize)
+    }
+
+    /// The material probabilities of the voxel in `slot` ([`Self::slot`]).
+    ///
+    /// # Panics
+    /// When `slot` is not one of this belief's.
+    pub fn probabilities_in(&self, slot: usize) -> &[Real] {
+        let n = self.cfg.n_materials;
+        &self.probs[slot * n..(slot + 1) * n]
+    }
+
+    /// `H3` of the voxel in `slot` ([`Self::slot`]).
+    ///
+    /// # Panics
+    /// When `slot` is not one of this belief's.
+    pub fn h3_in(&self, slot: usize) -> Real {
+        self.h3[slot]
     }
 
     /// `H3(M)`: the information remaining over all belief voxels (eq. 4.17).
