@@ -28,6 +28,11 @@
 //!   [`MIN_GAIN_FRACTION`]`·λ`, so that a formation always makes progress instead
 //!   of rebuilding the same edge.
 //!
+//! * (our addition) when no section pair passes, the pairs that failed only on
+//!   sight or on the built perimeter's validity are tried again with `L`'s
+//!   ends pulled a short step (`split`, λ·10⁻²) inward along the line (one
+//!   end, the other, then both; see `SurfaceModel::plan_shared_edge`).
+//!
 //! A vertex at `p₁` that already lies on the line (the end of an edge S₁ shares
 //! with S₂, or a corner vertex) becomes the new edge's end itself (step 4).
 //! Attempts repeat until no valid perimeter points are found (at most
@@ -57,6 +62,10 @@ pub const MAX_PLAN_TRIES: usize = 512;
 /// A formation must lengthen the shared edges between the pair by this
 /// fraction of λ.
 pub const MIN_GAIN_FRACTION: Real = 0.1;
+
+/// Section pairs kept for the retry with `L`'s ends pulled inward (see the
+/// [module docs](self)), longest first.
+pub const MAX_PULLED_RETRIES: usize = 16;
 
 /// The concavity decision of P§2.6.1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -326,6 +335,27 @@ struct Anchor {
     t2: Real,
 }
 
+impl Anchor {
+    /// The anchor moved by `dt` along the line in both views.
+    fn moved(self, dt: Real) -> Self {
+        Self {
+            t1: self.t1 + dt,
+            t2: self.t2 + dt,
+        }
+    }
+}
+
+/// Why [`SurfaceModel::check_and_build`] found no formation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Refusal {
+    /// A rule on the sections themselves (vertices, progress, shared edges):
+    /// moving `L`'s ends cannot change it.
+    Sections,
+    /// A sight test, or the perimeter the formation would leave: both depend
+    /// on where `L`'s ends lie.
+    Geometry,
+}
+
 /// The buffers of [`SurfaceModel::check_and_build`], kept over one search:
 /// the edges of `P` and `Q` and their membership masks.
 #[derive(Default)]
@@ -559,7 +589,8 @@ impl SurfaceModel {
         let mut tries = 0;
         let mut scratch = CheckScratch::default();
         let (mut secs1, mut secs2) = (Vec::new(), Vec::new());
-        for (_, i, j) in candidates {
+        let mut retry: Vec<(Section, Section, Anchor, Anchor)> = Vec::new();
+        'search: for (_, i, j) in candidates {
             let (a, b) = (anchors[i], anchors[j]);
             let from1 = starts1[i].get_or_insert_with(|| starts_at(&v1, a.t1, tol.lambda, tol.eps));
             sections(&v1, from1, a.t1, b.t1, tol.lambda, tol.eps, &mut secs1);
@@ -572,48 +603,77 @@ impl SurfaceModel {
                 for sec2 in secs2.iter().take(4) {
                     tries += 1;
                     if tries > MAX_PLAN_TRIES {
-                        return None;
+                        break 'search;
                     }
-                    if let Some(plan) = self.check_and_build(
+                    let (ends, sections) = ((a, b), (*sec1, *sec2));
+                    match self.check_and_build(
                         s1,
                         s2,
-                        &v1,
-                        &v2,
+                        (&v1, &v2),
                         line,
-                        *sec1,
-                        *sec2,
-                        a,
-                        b,
+                        sections,
+                        ends,
                         &mut scratch,
                     ) {
-                        return Some(plan);
+                        Ok(plan) => return Some(plan),
+                        Err(Refusal::Geometry) if retry.len() < MAX_PULLED_RETRIES => {
+                            retry.push((*sec1, *sec2, a, b));
+                        }
+                        Err(_) => {}
                     }
+                }
+            }
+        }
+        // Our addition: `L` with its ends pulled inward. Its ends are where
+        // the sections' end vertices project, and a vertex a fraction of a
+        // millimetre off the line whose neighbour edge crosses the line just
+        // before it projects outside what remains of the perimeter (noisy
+        // cube, seed 3: the −y face's corner vertex 0.06 mm off the line
+        // shared with the −x face, the top edge reaching the line 5.5 µm
+        // below its projection; the l₁–l₂ sight test then fails at every
+        // later update and the two faces never share an edge again). A step
+        // of `split` along the line (as `extend_to_line` steps off a vertex
+        // of another neighbour) puts the end inside; the section's end vertex
+        // is joined to it by a short edge. Tried only when nothing else
+        // formed, so every formation the rules above allow is unchanged.
+        for (sec1, sec2, a, b) in retry {
+            let step = tol.split.min(0.25 * (b.t1 - a.t1).abs());
+            let inward = sigma * step;
+            for ends in [
+                (a, b.moved(-inward)),
+                (a.moved(inward), b),
+                (a.moved(inward), b.moved(-inward)),
+            ] {
+                let sections = (sec1, sec2);
+                if let Ok(plan) =
+                    self.check_and_build(s1, s2, (&v1, &v2), line, sections, ends, &mut scratch)
+                {
+                    return Some(plan);
                 }
             }
         }
         None
     }
 
+    /// The rules of the [module docs](self) on one pair of sections with `L`
+    /// from anchor `a` to anchor `b`, and the formation they allow.
     #[allow(clippy::too_many_arguments)]
     fn check_and_build(
         &mut self,
         s1: SegmentId,
         s2: SegmentId,
-        v1: &View,
-        v2: &View,
+        (v1, v2): (&View, &View),
         line: &Line3,
-        sec1: Section,
-        sec2: Section,
-        a: Anchor,
-        b: Anchor,
+        (sec1, sec2): (Section, Section),
+        (a, b): (Anchor, Anchor),
         scratch: &mut CheckScratch,
-    ) -> Option<Plan> {
+    ) -> Result<Plan, Refusal> {
         let tol = self.tol;
         let (p1, p2) = (sec1.start, sec1.end);
         let (q1, q2) = (sec2.start, sec2.end);
         // At least one of p₁, q₂ and one of p₂, q₁ is a vertex.
         if !(p1.is_vertex() || q2.is_vertex()) || !(p2.is_vertex() || q1.is_vertex()) {
-            return None;
+            return Err(Refusal::Sections);
         }
         // The rules below only reject (without side effects), so their order
         // does not change the outcome: the progress rule, which needs P's
@@ -635,7 +695,7 @@ impl SurfaceModel {
             .map(|&e| v1.poly.edge_len(e))
             .sum();
         if (b.t1 - a.t1).abs() < replaced + MIN_GAIN_FRACTION * tol.lambda {
-            return None;
+            return Err(Refusal::Sections);
         }
         // Shared edges on P and Q: only with each other, whole, corresponding.
         v2.poly.section_edges_into(q1, q2, edges2);
@@ -660,27 +720,28 @@ impl SurfaceModel {
                     None => plain = true,
                     Some(sh) => {
                         if sh.neighbour != other {
-                            return None;
+                            return Err(Refusal::Sections);
                         }
                         let cut = (e == from.edge % view.poly.len() && from.t > 0.0)
                             || (e == to.edge % view.poly.len() && to.t > 0.0);
                         if cut {
-                            return None;
+                            return Err(Refusal::Sections);
                         }
                         let partner = other_view
                             .poly
                             .nodes
                             .iter()
-                            .position(|x| x.edge.share.is_some_and(|s| s.pair == sh.pair))?;
+                            .position(|x| x.edge.share.is_some_and(|s| s.pair == sh.pair))
+                            .ok_or(Refusal::Sections)?;
                         if !other_on[partner] {
-                            return None;
+                            return Err(Refusal::Sections);
                         }
                     }
                 }
             }
         }
         if !plain {
-            return None;
+            return Err(Refusal::Sections);
         }
         // Points of L in each view.
         let (l1a, l2a) = (v1.at(a.t1), v1.at(b.t1));
@@ -698,11 +759,11 @@ impl SurfaceModel {
         let sees1 = |x: &Point2, y: &Point2| v1.sight(x, y, tol.eps, |e| on1[e]);
         let sees2 = |x: &Point2, y: &Point2| v2.sight(x, y, tol.eps, |e| on2[e]);
         if !sees1(&xp1, &l1a) || !sees1(&xp2, &l2a) || !sees2(&xq1, &l2b) || !sees2(&xq2, &l1b) {
-            return None;
+            return Err(Refusal::Geometry);
         }
         // l₁ sights l₂ relative to what remains of each perimeter.
         if !sees1(&l1a, &l2a) || !sees2(&l1b, &l2b) {
-            return None;
+            return Err(Refusal::Geometry);
         }
         // Build.
         let pair = self.new_pair();
@@ -736,7 +797,8 @@ impl SurfaceModel {
                 line,
                 (tol.eps, tol.split),
                 &mut fresh,
-            )?
+            )
+            .ok_or(Refusal::Geometry)?
         };
         let nodes2 = {
             let mut fresh = Self::key_source(&mut self.ids.edge);
@@ -750,9 +812,10 @@ impl SurfaceModel {
                 line,
                 (tol.eps, tol.split),
                 &mut fresh,
-            )?
+            )
+            .ok_or(Refusal::Geometry)?
         };
-        Some(Plan { nodes1, nodes2 })
+        Ok(Plan { nodes1, nodes2 })
     }
 }
 
