@@ -26,12 +26,12 @@
 //! * `P` and `Q` as long as possible: candidates are tried longest `L` first;
 //! * (our addition) `L` is longer than the S₁–S₂ shared edges it replaces by
 //!   [`MIN_GAIN_FRACTION`]`·λ`, so that a formation always makes progress instead
-//!   of rebuilding the same edge.
-//!
-//! * (our addition) when no section pair passes, the pairs that failed only on
-//!   sight or on the built perimeter's validity are tried again with `L`'s
-//!   ends pulled a short step (`split`, λ·10⁻²) inward along the line (one
-//!   end, the other, then both; see `SurfaceModel::plan_shared_edge`).
+//!   of rebuilding the same edge;
+//! * (our addition) when no section pair passes between segments that share
+//!   no edge yet, the pairs that failed only on sight or on the built
+//!   perimeter's validity are tried again with `L`'s ends pulled a short step
+//!   (`split`, λ·10⁻²) inward along the line (one end, the other, then both;
+//!   see `SurfaceModel::plan_shared_edge`).
 //!
 //! A vertex at `p₁` that already lies on the line (the end of an edge S₁ shares
 //! with S₂, or a corner vertex) becomes the new edge's end itself (step 4).
@@ -635,7 +635,13 @@ impl SurfaceModel {
         // of `split` along the line (as `extend_to_line` steps off a vertex
         // of another neighbour) puts the end inside; the section's end vertex
         // is joined to it by a short edge. Tried only when nothing else
-        // formed, so every formation the rules above allow is unchanged.
+        // formed, so every formation the rules above allow is unchanged, and
+        // only between segments that share no edge yet: extending a shared
+        // edge this way (tried) left point3's block2 run with shared edges
+        // along 91.5 % instead of 95.2 % and 7 of 8 corners instead of 8.
+        if self.are_neighbours(s1, s2) {
+            retry.clear();
+        }
         for (sec1, sec2, a, b) in retry {
             let step = tol.split.min(0.25 * (b.t1 - a.t1).abs());
             let inward = sigma * step;
