@@ -30,8 +30,8 @@
 //! * (our addition) when no section pair passes between segments that share
 //!   no edge yet, the pairs that failed only on sight or on the built
 //!   perimeter's validity are tried again with `L`'s ends pulled a short step
-//!   ([`PULL_EPS`]`·ε`, then `split` = λ·10⁻²) inward along the line (one end,
-//!   the other, then both; see `SurfaceModel::plan_shared_edge`).
+//!   (`split`, λ·10⁻²) inward along the line (one end, the other, then both;
+//!   see `SurfaceModel::plan_shared_edge`).
 //!
 //! A vertex at `p₁` that already lies on the line (the end of an edge S₁ shares
 //! with S₂, or a corner vertex) becomes the new edge's end itself (step 4).
@@ -66,10 +66,6 @@ pub const MIN_GAIN_FRACTION: Real = 0.1;
 /// Section pairs kept for the retry with `L`'s ends pulled inward (see the
 /// [module docs](self)), longest first.
 pub const MAX_PULLED_RETRIES: usize = 16;
-
-/// The shorter of the two pulls of `L`'s ends, in coincidence lengths ε
-/// (`λ·10⁻⁴`); the longer is `λ·10⁻²`.
-pub const PULL_EPS: Real = 4.0;
 
 /// The concavity decision of P§2.6.1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -647,21 +643,18 @@ impl SurfaceModel {
             retry.clear();
         }
         for (sec1, sec2, a, b) in retry {
-            // The shortest pull first (a shared edge that stops short of a
-            // corner cannot be lengthened by less than λ/10 later).
-            for pull in [PULL_EPS * tol.eps, tol.split] {
-                let inward = sigma * pull.min(0.25 * (b.t1 - a.t1).abs());
-                for ends in [
-                    (a, b.moved(-inward)),
-                    (a.moved(inward), b),
-                    (a.moved(inward), b.moved(-inward)),
-                ] {
-                    let sections = (sec1, sec2);
-                    if let Ok(plan) =
-                        self.check_and_build(s1, s2, (&v1, &v2), line, sections, ends, &mut scratch)
-                    {
-                        return Some(plan);
-                    }
+            let step = tol.split.min(0.25 * (b.t1 - a.t1).abs());
+            let inward = sigma * step;
+            for ends in [
+                (a, b.moved(-inward)),
+                (a.moved(inward), b),
+                (a.moved(inward), b.moved(-inward)),
+            ] {
+                let sections = (sec1, sec2);
+                if let Ok(plan) =
+                    self.check_and_build(s1, s2, (&v1, &v2), line, sections, ends, &mut scratch)
+                {
+                    return Some(plan);
                 }
             }
         }
