@@ -197,6 +197,39 @@ pub fn reconfiguration(
     z
 }
 
+/// The largest weight `(1 − d/d₀)^(g−1)` that eq. 5 (or App. B's
+/// switches) gives any link, `d = ½‖lᵢ − sᵢ‖²` and `d₀ = ½(√(2d₀))²` as in
+/// [`reconfiguration`]: 1 at the model, 0 beyond the influence distance.
+/// It scales the joint-limit term down where link avoidance needs the null
+/// space ([`FollowConfig::joint_limit_yield`]).
+pub fn largest_link_weight(
+    objective: Objective,
+    proximities: &[LinkProximity],
+    switches: &[SwitchContact],
+    config: &FollowConfig,
+) -> Real {
+    let d0 = 0.5 * config.influence_m * config.influence_m;
+    let g = config.exponent as i32;
+    let weight = |d: Real| {
+        if d < d0 {
+            (1.0 - d / d0).powi(g - 1)
+        } else {
+            0.0
+        }
+    };
+    let distances: Vec<Real> = match objective {
+        Objective::LinkDistance => proximities
+            .iter()
+            .map(|p| 0.5 * p.distance * p.distance)
+            .collect(),
+        Objective::ProximitySwitches => switches
+            .iter()
+            .map(|s| 0.5 * (s.position - s.field_centre).norm_squared())
+            .collect(),
+    };
+    distances.into_iter().map(weight).fold(0.0, Real::max)
+}
+
 /// Exponent of the joint-limit cost of [`joint_limit_gradient`]: flat over
 /// most of a joint's range, steep near its limits (at 80 % of the way from
 /// the middle to a limit the gradient is 3 % of its value at the limit).
@@ -819,6 +852,27 @@ mod tests {
                 .iter()
                 .all(|v| *v == 0.0)
         );
+    }
+
+    /// The weight the joint-limit term yields to, by hand: with Pudney's
+    /// influence √(2d₀) = 0.2 and g = 6, a link 0.1 m from the model has
+    /// d = 0.005 of d₀ = 0.02 and weight (1 − 0.25)⁵; the largest of the
+    /// links counts, a link beyond 0.2 m weighs 0, and one at the model 1.
+    #[test]
+    fn largest_link_weight_by_hand() {
+        let cfg = FollowConfig::default();
+        let near = |link: usize, distance: Real| LinkProximity {
+            link: LinkId(link),
+            on_link: Point3::new(0.0, 0.0, distance),
+            on_model: Point3::origin(),
+            distance,
+            radius: 0.02,
+        };
+        let w = |ps: &[LinkProximity]| largest_link_weight(Objective::LinkDistance, ps, &[], &cfg);
+        assert_eq!(w(&[]), 0.0);
+        assert_eq!(w(&[near(1, 0.25)]), 0.0);
+        assert!((w(&[near(1, 0.25), near(2, 0.1)]) - 0.75_f64.powi(5)).abs() < 1e-12);
+        assert!((w(&[near(1, 0.1), near(2, 0.0)]) - 1.0).abs() < 1e-12);
     }
 
     /// A step of eq. 3 moves the control point by the first-order `J θ̇`

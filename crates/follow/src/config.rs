@@ -142,6 +142,13 @@ pub struct FollowConfig {
     /// [`crate::actuator::joint_limit_gradient`]); 0 (the default) turns it
     /// off.
     pub joint_limit_gain: Real,
+    /// How far the joint-limit term yields to link avoidance (our addition):
+    /// the term is scaled by `1 − yield·w`, `w` the largest weight eq. 5
+    /// gives any link ([`crate::actuator::largest_link_weight`]: 1 at the
+    /// model, 0 beyond the influence distance). 0 (the default) takes the
+    /// term whole; 1 leaves the null space to link avoidance wherever a link
+    /// touches the model (measured in the crate README: not better).
+    pub joint_limit_yield: Real,
     /// A link closer to the model than its radius plus this margin may not be
     /// brought closer by the control-point motion (our addition to P§3.3,
     /// see [`crate::actuator::actuator_change`]), metres.
@@ -194,6 +201,7 @@ impl Default for FollowConfig {
             damping: 1e-3,
             task_share: 0.15,
             joint_limit_gain: 0.0,
+            joint_limit_yield: 0.0,
             link_margin_m: 0.05,
             guard: true,
             guard_margin_m: 0.02,
@@ -245,6 +253,13 @@ impl FollowConfig {
                 "joint_limit_gain",
                 "a finite gain ≥ 0",
                 self.joint_limit_gain.to_string(),
+            );
+        }
+        if !(self.joint_limit_yield.is_finite() && (0.0..=1.0).contains(&self.joint_limit_yield)) {
+            return bad(
+                "joint_limit_yield",
+                "a fraction in 0..=1",
+                self.joint_limit_yield.to_string(),
             );
         }
         if !(self.link_margin_m.is_finite() && self.link_margin_m >= 0.0) {

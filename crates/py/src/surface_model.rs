@@ -19,9 +19,10 @@ use surface::{SegmentJson, SensorSet, SurfaceConfig, SurfaceModel};
 ///
 /// ``config`` is a dict of ``SurfaceConfig`` fields (``lambda``,
 /// ``mu_deg``, ``psi``, ``phi``, ``collinear_fraction``,
-/// ``max_set_points``, ``merge_order``), the keys of ``surveyor model
-/// --print-config``; missing fields keep Pudney's defaults. An unknown key
-/// or a value out of range is a ``ValueError`` naming it.
+/// ``max_set_points``, ``merge_order``, ``snap_near_line_ends``), the keys
+/// of ``surveyor model --print-config``; missing fields keep Pudney's
+/// defaults. An unknown key or a value out of range is a ``ValueError``
+/// naming it.
 ///
 /// Feeding the sets of a file to ``add_set`` in order (after the file of
 /// ``--initial`` segments to ``add_initial_segment``) builds the model

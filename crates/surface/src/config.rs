@@ -58,6 +58,17 @@ pub struct SurfaceConfig {
     /// The order in which a new point segment tries its merger candidates
     /// (P§2.3 step 2(a)).
     pub merge_order: MergeOrder,
+    /// Our addition (issue 45), off by default: when a shared edge between
+    /// segments that share none yet would be refused only because the
+    /// perimeter it leaves is not valid, a section end vertex within
+    /// `λ·10⁻²` of its point on the line is moved onto the line and ends
+    /// the shared edge (see [`crate::share`]). Without it a vertex a few
+    /// `λ·10⁻⁴` off the line would be joined to its projection by an edge
+    /// shorter than the perimeters' separation tolerance allows, and the
+    /// pair can stay without a shared edge (the scripted noisy cube, seed 3).
+    /// Off by default because it changes the models the follower builds
+    /// (`crates/surface/README.md` measures it).
+    pub snap_near_line_ends: bool,
 }
 
 /// The order in which a new point segment tries the segments near it for a
@@ -92,6 +103,7 @@ impl Default for SurfaceConfig {
             collinear_fraction: 0.1,
             max_set_points: DEFAULT_MAX_SET_POINTS,
             merge_order: MergeOrder::default(),
+            snap_near_line_ends: false,
         }
     }
 }

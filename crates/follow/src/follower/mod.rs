@@ -7,8 +7,8 @@
 
 use crate::FollowError;
 use crate::actuator::{
-    LinkBody, LinkProximity, SwitchContact, actuator_change, joint_limit_gradient, link_bodies,
-    link_proximities, reconfiguration,
+    LinkBody, LinkProximity, SwitchContact, actuator_change, joint_limit_gradient,
+    largest_link_weight, link_bodies, link_proximities, reconfiguration,
 };
 use crate::config::{FollowConfig, GapTargetRule, Objective};
 use crate::guard::{Guard, GuardAction, GuardCounts};
@@ -639,8 +639,12 @@ impl Follower {
         );
         // The joint-limit term, for robots with joints to spare (point3's
         // three joints have no null space to take it in).
-        if self.robot.dof() > 3 {
-            z += joint_limit_gradient(&self.robot, q, &self.config);
+        // It yields to link avoidance where a link is near the model
+        // (`joint_limit_yield`): there the null space is the links'.
+        if self.robot.dof() > 3 && self.config.joint_limit_gain > 0.0 {
+            let w = largest_link_weight(self.config.objective, proximities, switches, &self.config);
+            let share = 1.0 - self.config.joint_limit_yield * w;
+            z += joint_limit_gradient(&self.robot, q, &self.config) * share;
         }
         actuator_change(
             &self.robot,
