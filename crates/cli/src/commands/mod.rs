@@ -379,6 +379,36 @@ fn fk(a: &FkArgs) -> Result<()> {
     Ok(())
 }
 
+/// `--skip-bad-messages` as the bag reader's choice.
+fn bad_messages(skip: bool) -> record::bag::BadMessages {
+    if skip {
+        record::bag::BadMessages::Skip
+    } else {
+        record::bag::BadMessages::Refuse
+    }
+}
+
+/// Say what reading the bag at `path` skipped (nothing when nothing was).
+fn say_skipped(path: &Path, skipped: &record::bag::Skipped) -> Result<()> {
+    if skipped.what.is_empty() {
+        return Ok(());
+    }
+    say!(
+        "{}: skipped {} messages ({} damaged chunks and bad messages):",
+        path.display(),
+        skipped.messages,
+        skipped.what.len()
+    )?;
+    const SHOWN: usize = 10;
+    for what in skipped.what.iter().take(SHOWN) {
+        say!("  {what}")?;
+    }
+    if skipped.what.len() > SHOWN {
+        say!("  and {} more", skipped.what.len() - SHOWN)?;
+    }
+    Ok(())
+}
+
 fn progress_bar(len: u64, what: &str) -> ProgressBar {
     let pb = ProgressBar::new(len);
     if let Ok(style) = ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} {elapsed}") {
