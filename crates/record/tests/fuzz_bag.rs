@@ -20,113 +20,23 @@
     reason = "test helpers fail the test on any error"
 )]
 
+mod support;
+
 use proptest::prelude::*;
-use record::bag::{
-    BadMessages, BagSweeps, BagWriter, RangeSets, SCANNER_FRAME, ScanTopics, joint_state,
-    laser_scan, link_frames, point_cloud, range, sets_from_bag, static_frames, sweeps_from_bag,
-    topics,
-};
-use std::io::Cursor;
+use record::bag::{BadMessages, BagSweeps, RangeSets, ScanTopics, sets_from_bag, sweeps_from_bag};
 use std::path::Path;
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use support::{EXPLORE, FOLLOW, explore_bag, follow_bag, robot};
 use testkit::{LONG_CASES, Run, fuzz, names_source};
 
 /// Cases in `cargo test`: issue 48 asks for at least 10 000 damaged bags.
 const BAG_CASES: u32 = 10_000;
-/// Chunks of about this many bytes (uncompressed): several per bag.
-const CHUNK_BYTES: u64 = 1500;
-
-const EXPLORE: &str = "explore.mcap";
-const FOLLOW: &str = "follow.mcap";
-
-fn robot(name: &str) -> robot::Robot {
-    robot::builtin(name).unwrap()
-}
-
-/// An explore run's bag: the arm moving through six joint states, a scan
-/// of 12 bearings every 0.25 s between them, a sweep cloud every 2 s.
-fn explore_bag() -> Vec<u8> {
-    let robot = robot("denso-vm6083");
-    let names: Vec<String> = robot
-        .joint_names()
-        .iter()
-        .map(|s| (*s).to_owned())
-        .collect();
-    let mut w = BagWriter::with_chunk_size(Cursor::new(Vec::new()), Some(CHUNK_BYTES)).unwrap();
-    let base = geom::Isometry3::translation(0.5, 0.0, 0.0);
-    w.write(topics::TF_STATIC, 0, &static_frames(&robot, &base))
-        .unwrap();
-    let bearings: Vec<f64> = (0..12).map(|i| -0.6 + 0.1 * f64::from(i)).collect();
-    let second = 1_000_000_000;
-    for k in 0..6u32 {
-        let t = u64::from(k) * second;
-        let q = [
-            0.1 * f64::from(k),
-            -0.96,
-            2.88 - 0.05 * f64::from(k),
-            0.0,
-            -1.92,
-            0.0,
-        ];
-        w.write(topics::JOINT_STATES, t, &joint_state(t, &names, &q))
-            .unwrap();
-        if k == 5 {
-            break;
-        }
-        for s in 0..4u32 {
-            let ts = t + u64::from(s) * second / 4;
-            let ranges: Vec<Option<f64>> = (0..12)
-                .map(|i| (i % 5 != 3).then(|| 1.0 + 0.05 * f64::from(i + s)))
-                .collect();
-            let intensities: Vec<f64> = (0..12).map(f64::from).collect();
-            let mut scan = laser_scan(ts, &bearings, &ranges, &intensities, (0.1, 10.0), 0.1);
-            scan.header.frame_id = SCANNER_FRAME.to_owned();
-            w.write(topics::SCAN, ts, &scan).unwrap();
-        }
-        if k % 2 == 1 {
-            let tm = t + second - 1;
-            w.write(topics::SWEEP, tm, &point_cloud(tm, [])).unwrap();
-        }
-    }
-    w.finish().unwrap().into_inner()
-}
-
-/// A follow run's bag: the point robot moving through ten joint states, its
-/// links on `/tf` with each, four range finders read at each.
-fn follow_bag() -> Vec<u8> {
-    let robot = robot("point3");
-    let names: Vec<String> = robot
-        .joint_names()
-        .iter()
-        .map(|s| (*s).to_owned())
-        .collect();
-    let mut w = BagWriter::with_chunk_size(Cursor::new(Vec::new()), Some(CHUNK_BYTES)).unwrap();
-    w.write(
-        topics::TF_STATIC,
-        0,
-        &static_frames(&robot, &geom::Isometry3::identity()),
-    )
-    .unwrap();
-    for k in 0..10u32 {
-        let t = u64::from(k) * 100_000_000;
-        let q: Vec<f64> = (0..robot.dof())
-            .map(|j| 0.01 * f64::from(k) * (j as f64 + 1.0))
-            .collect();
-        w.write(topics::JOINT_STATES, t, &joint_state(t, &names, &q))
-            .unwrap();
-        w.write(topics::TF, t, &link_frames(t, &robot, &q)).unwrap();
-        for j in 0..4 {
-            let d = (j != 2).then(|| 0.5 + 0.01 * f64::from(k));
-            w.write(&topics::range_finder(j), t, &range(t, j, 2.0, d))
-                .unwrap();
-        }
-    }
-    w.finish().unwrap().into_inner()
-}
-
 fn seeds() -> Vec<(&'static str, Vec<u8>)> {
-    vec![(EXPLORE, explore_bag()), (FOLLOW, follow_bag())]
+    vec![
+        (EXPLORE, explore_bag(&|_| {})),
+        (FOLLOW, follow_bag(&|_| {})),
+    ]
 }
 
 /// What a bag of one kind maps to, the way its command reads it.

@@ -775,9 +775,38 @@ fn bad_bags_are_refused_by_name() {
     clean(&e);
     let e = fails(&["map", "--bag", &p("small.mcap"), "--out", &p("m")]);
     assert!(e.contains("--robot"), "{e}");
+    // Issue 48: bag flags without a bag, and a topic of another type given
+    // as a Range topic.
+    let sets = p("sets.jsonl");
+    std::fs::write(&sets, "{\"points\": [[0,0,0]], \"axes\": [[0,0,1]]}\n").unwrap();
+    let e = fails(&[
+        "model",
+        "--sets",
+        &sets,
+        "--range-topics",
+        "/range/a",
+        "--out",
+        &p("md"),
+    ]);
+    assert!(e.contains("--range-topics applies with --bag"), "{e}");
+    let e = fails(&[
+        "model",
+        "--sets",
+        &sets,
+        "--skip-bad-messages",
+        "--out",
+        &p("md"),
+    ]);
+    assert!(e.contains("--skip-bad-messages applies with --bag"), "{e}");
+    let e = model("small.mcap", &["--range-topics", "/joint_states"]);
+    assert!(
+        e.contains("/joint_states is not `sensor_msgs/msg/Range`"),
+        "{e}"
+    );
+    clean(&e);
     let left: Vec<_> = listing(dir.path())
         .into_iter()
-        .filter(|f| f.extension().is_none_or(|e| e != "mcap"))
+        .filter(|f| f.extension().is_none_or(|e| e != "mcap" && e != "jsonl"))
         .collect();
     assert!(left.is_empty(), "{left:?}");
 }

@@ -332,6 +332,15 @@ pub fn sweeps_from_bag(
     })
 }
 
+/// `v` in a message: in exponent form when it is huge or tiny.
+fn short(v: Real) -> String {
+    if v.is_finite() && v != 0.0 && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// How far a joint state may pass its joint's limits, radians or metres
 /// (encoders read a little past a limit); a value further out, or not
 /// finite, is a bad message. Joints without limits may read up to
@@ -391,11 +400,14 @@ fn joint_states(
                 if !ok {
                     return Err(match l {
                         Some(l) => format!(
-                            "joint `{n}` at {v}, beyond its limits [{}, {}] by more than {JOINT_LIMIT_SLACK}",
-                            l.min, l.max
+                            "joint `{n}` at {}, beyond its limits [{}, {}] by more than {JOINT_LIMIT_SLACK}",
+                            short(*v),
+                            l.min,
+                            l.max
                         ),
                         None => format!(
-                            "joint `{n}` at {v}, beyond ±{MAX_UNLIMITED_JOINT}"
+                            "joint `{n}` at {}, beyond ±{MAX_UNLIMITED_JOINT}",
+                            short(*v)
                         ),
                     });
                 }

@@ -328,33 +328,36 @@ pub(super) fn read(
     if bytes.len() < MAGIC.len() || bytes[..MAGIC.len()] != *MAGIC {
         return Err("not an MCAP file (no magic at its start)".into());
     }
+    let all: Vec<(usize, u8, &[u8])> = records(bytes, MAGIC.len(), 0).collect::<Result<_, _>>()?;
+    let data_end = all
+        .iter()
+        .position(|(_, opcode, _)| *opcode == op::DATA_END)
+        .unwrap_or(all.len());
     let mut out = Contents::default();
     let mut schemas = HashMap::new();
+    // The summary's schemas and channels first: a damaged chunk may have
+    // defined a channel that later chunks use, and they name what it held.
+    for (_, opcode, body) in &all[data_end..] {
+        if *opcode == op::SCHEMA || *opcode == op::CHANNEL {
+            let mut ignored = Vec::new();
+            let (mut s, mut c) = (schemas.clone(), out.channels.clone());
+            if read_record(*opcode, body, &mut s, &mut c, &mut ignored).is_ok() {
+                (schemas, out.channels) = (s, c);
+            }
+        }
+    }
     let mut bad: Option<BadChunk> = None;
-    let mut in_data = true;
     let mut footer_end = None;
-    for record in records(bytes, MAGIC.len(), 0) {
-        let (offset, opcode, body) = record?;
+    for &(offset, opcode, body) in &all {
         if opcode != op::MESSAGE_INDEX
             && let Some(b) = bad.take()
         {
             out.bad_chunks.push(b);
         }
-        if !in_data {
-            // The summary: its channels name what a damaged chunk held; the
-            // rest is not needed.
-            if opcode == op::SCHEMA || opcode == op::CHANNEL {
-                let mut ignored = Vec::new();
-                let mut channels = out.channels.clone();
-                if read_record(opcode, body, &mut schemas, &mut channels, &mut ignored).is_ok() {
-                    for (id, c) in channels {
-                        out.channels.entry(id).or_insert(c);
-                    }
-                }
-            }
-            if opcode == op::FOOTER {
-                footer_end = Some(offset + RECORD_HEAD + body.len());
-            }
+        if opcode == op::FOOTER {
+            footer_end = Some(offset + RECORD_HEAD + body.len());
+        }
+        if footer_end.is_some() || offset > all.get(data_end).map_or(usize::MAX, |r| r.0) {
             continue;
         }
         match opcode {
@@ -400,7 +403,6 @@ pub(super) fn read(
                 }
             }
             op::DATA_END => {
-                in_data = false;
                 let mut b = Body::new(body, "data end");
                 let saved = b.u32().map_err(|e| format!("offset {offset}: {e}"))?;
                 let found = crc32fast::hash(&bytes[..offset]);
@@ -410,7 +412,6 @@ pub(super) fn read(
                     ));
                 }
             }
-            op::FOOTER => footer_end = Some(offset + RECORD_HEAD + body.len()),
             _ => {
                 read_record(
                     opcode,
