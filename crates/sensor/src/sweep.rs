@@ -594,7 +594,10 @@ mod tests {
             .validate()
             .unwrap_err()
             .to_string();
-            assert!(e.contains("step_deg") && e.contains("at most tilt_deg"), "{e}");
+            assert!(
+                e.contains("step_deg") && e.contains("at most tilt_deg"),
+                "{e}"
+            );
         }
         let whole = SweepConfig {
             step_deg: 60.0,

@@ -615,6 +615,21 @@ fn bad_inputs_are_typed_errors() {
             },
             "pose.starts",
         ),
+        // Issue 48: no stated ceiling before.
+        (
+            PoseConfig {
+                starts: 1_000_000,
+                ..PoseConfig::default()
+            },
+            "pose.starts",
+        ),
+        (
+            PoseConfig {
+                max_iterations: 1_000_000_000,
+                ..PoseConfig::default()
+            },
+            "pose.max_iterations",
+        ),
         (
             PoseConfig {
                 desired: [0.0, 0.0, Real::NAN, 0.0, 0.0, 0.0],
