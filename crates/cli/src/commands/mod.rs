@@ -113,9 +113,6 @@ impl JointArgs {
             }
             return Ok(None);
         };
-        if !self.deg {
-            return Ok(Some(q.clone()));
-        }
         let robot = robot()?;
         let kinds: Vec<robot::JointKind> = robot
             .joints
@@ -123,17 +120,37 @@ impl JointArgs {
             .filter(|j| j.is_actuated())
             .map(|j| j.kind)
             .collect();
-        Ok(Some(
-            q.iter()
-                .enumerate()
-                .map(|(i, v)| match kinds.get(i) {
-                    Some(robot::JointKind::Prismatic) => *v,
-                    _ => v.to_radians(),
-                })
-                .collect(),
-        ))
+        let mut out = Vec::with_capacity(q.len());
+        for (i, v) in q.iter().enumerate() {
+            let prismatic = matches!(kinds.get(i), Some(robot::JointKind::Prismatic));
+            let value = if self.deg && !prismatic {
+                v.to_radians()
+            } else {
+                *v
+            };
+            // Issue 48: `fk --deg` took 1e308 as it was.
+            let (limit, what) = if prismatic {
+                (MAX_PRISMATIC_JOINT_M, "1000 m")
+            } else if self.deg {
+                (MAX_REVOLUTE_JOINT_RAD, "720° (two turns)")
+            } else {
+                (MAX_REVOLUTE_JOINT_RAD, "4π rad (two turns)")
+            };
+            // (Not finite: the robot's own check names the joint.)
+            if value.is_finite() && value.abs() > limit {
+                bail!("--joints value {} ({v}) is beyond ±{what}", i + 1);
+            }
+            out.push(value);
+        }
+        Ok(Some(out))
     }
 }
+
+/// Largest revolute joint value `--joints` takes, radians (two turns either
+/// way, past any arm's joint range).
+const MAX_REVOLUTE_JOINT_RAD: Real = 4.0 * std::f64::consts::PI;
+/// Largest prismatic joint value `--joints` takes, metres.
+const MAX_PRISMATIC_JOINT_M: Real = 1000.0;
 
 #[derive(Debug, Args)]
 struct FkArgs {

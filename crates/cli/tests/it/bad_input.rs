@@ -475,6 +475,25 @@ fn degrees_convert_revolute_joints_only() {
         x.abs() < 1e-9 && (y - 1.5).abs() < 1e-9,
         "tip at ({x}, {y})"
     );
+    // Issue 48: 1e308 (degrees or radians) was taken as it was.
+    for args in [
+        &["--deg", "--joints", "1e308,0,0,0,0,0"][..],
+        &["--joints", "0,0,0,0,0,13"],
+    ] {
+        let mut all = vec!["fk", "--robot", "denso-vm6083"];
+        all.extend(args);
+        let e = fails(&all);
+        assert!(
+            e.contains("--joints value") && e.contains("two turns"),
+            "{e}"
+        );
+        clean(&e);
+    }
+    let e = fails(&["fk", "--robot", "point3", "--joints", "0,0,1e308"]);
+    assert!(
+        e.contains("--joints value 3") && e.contains("1000 m"),
+        "{e}"
+    );
 }
 
 #[test]
