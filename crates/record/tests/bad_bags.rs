@@ -57,12 +57,16 @@ fn sweeps(path: &Path, mode: BadMessages) -> Result<BagSweeps, record::bag::BagE
 fn scan_at(t: u64, f: impl Fn(&mut LaserScan)) -> LaserScan {
     let bearings: Vec<f64> = (0..12).map(|i| -0.6 + 0.1 * f64::from(i)).collect();
     let mut s = laser_scan(t, &bearings, &[Some(1.0); 12], &[1.0; 12], (0.1, 10.0), 0.1);
-    s.header.frame_id = record::bag::SCANNER_FRAME.to_owned();
+    record::bag::SCANNER_FRAME.clone_into(&mut s.header.frame_id);
     f(&mut s);
     s
 }
 
 const LATE: u64 = 4_900_000_000;
+
+/// A bad-message case: its name, where the error must say it is, what it
+/// must say, and what writes the bad message.
+type Case<'a> = (&'a str, &'a str, &'a str, Box<dyn Fn(&mut Writer)>);
 
 /// Each bad message of an explore bag (written after the good ones, on
 /// `topic` as its 20th, 6th, 3rd... message): refused naming the bag, the
@@ -90,8 +94,7 @@ fn bad_messages_of_an_explore_bag_are_named_or_skipped() {
         (q.x, q.y, q.z, q.w) = (0.0, 0.0, 0.0, w);
         tf
     };
-    type Case<'a> = (&'a str, &'a str, &'a str, Box<dyn Fn(&mut Writer)>);
-    let cases: Vec<Case> = vec![
+    let cases: Vec<Case<'_>> = vec![
         (
             "cut_scan",
             "/scan message 20",
@@ -226,8 +229,7 @@ fn bad_messages_of_a_follow_bag_are_named_or_skipped() {
     )
     .unwrap();
     let late = 950_000_000;
-    type Case<'a> = (&'a str, &'a str, &'a str, Box<dyn Fn(&mut Writer)>);
-    let cases: Vec<Case> = vec![
+    let cases: Vec<Case<'_>> = vec![
         (
             "cut_range",
             "/range/finder_1 message 10 (logged at 0.950000000 s)",

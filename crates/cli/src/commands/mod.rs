@@ -405,6 +405,9 @@ fn bad_messages(skip: bool) -> record::bag::BadMessages {
     }
 }
 
+/// Skips [`say_skipped`] lists one by one; the rest are counted.
+const SHOWN: usize = 10;
+
 /// Say what reading the bag at `path` skipped (nothing when nothing was).
 fn say_skipped(path: &Path, skipped: &record::bag::Skipped) -> Result<()> {
     if skipped.what.is_empty() {
@@ -416,7 +419,6 @@ fn say_skipped(path: &Path, skipped: &record::bag::Skipped) -> Result<()> {
         skipped.messages,
         skipped.what.len()
     )?;
-    const SHOWN: usize = 10;
     for what in skipped.what.iter().take(SHOWN) {
         say!("  {what}")?;
     }

@@ -65,7 +65,7 @@ pub fn explore_bag(more: &dyn Fn(&mut Writer)) -> Vec<u8> {
                 .collect();
             let intensities: Vec<f64> = (0..12).map(f64::from).collect();
             let mut scan = laser_scan(ts, &bearings, &ranges, &intensities, (0.1, 10.0), 0.1);
-            scan.header.frame_id = SCANNER_FRAME.to_owned();
+            SCANNER_FRAME.clone_into(&mut scan.header.frame_id);
             w.write(topics::SCAN, ts, &scan).unwrap();
         }
         if k % 2 == 1 {
