@@ -312,7 +312,7 @@ pub fn read_viewpoints(dir: &Path) -> Result<Vec<ViewpointRecord>, RecordError> 
     // Every Stage One decision's candidates are there: a file cut at a line
     // end would otherwise be drawn short without a word (issue 48).
     for (i, r) in out.iter().enumerate() {
-        if r.stage == 1 && r.scored.len() != r.candidates {
+        if r.stage == 1 && r.scored.len() < r.candidates {
             return Err(RecordError::Field {
                 file: cands.source.clone(),
                 line: cands.len() + 1,

@@ -14,7 +14,7 @@ use record::bag::{
 use serde::Serialize;
 use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
-use support::{EXPLORE, FOLLOW, Writer, explore_bag, follow_bag, robot};
+use support::{EXPLORE, FOLLOW, Writer, explore_bag, follow_bag, joint_names, robot};
 
 /// A message of `M`'s type cut after its first four bytes (a count of
 /// five, or a stamp's seconds): it does not decode as `M`.
@@ -81,11 +81,7 @@ fn bad_messages_of_an_explore_bag_are_named_or_skipped() {
     )
     .unwrap();
     let joints = |q0: f64| {
-        let names: Vec<String> = robot("denso-vm6083")
-            .joint_names()
-            .iter()
-            .map(|s| (*s).to_owned())
-            .collect();
+        let names = joint_names(&robot("denso-vm6083"));
         joint_state(5_500_000_000, &names, &[q0, -0.96, 2.88, 0.0, -1.92, 0.0])
     };
     let tf_with = |w: f64| {

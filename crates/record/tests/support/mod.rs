@@ -27,17 +27,27 @@ pub fn robot(name: &str) -> robot::Robot {
 /// Chunks of about this many bytes (uncompressed): several per bag.
 const CHUNK_BYTES: u64 = 1500;
 
+/// The robot's joint names, owned.
+pub fn joint_names(robot: &robot::Robot) -> Vec<String> {
+    robot
+        .joint_names()
+        .iter()
+        .map(|s| (*s).to_owned())
+        .collect()
+}
+
+/// A bag writer in chunks of [`CHUNK_BYTES`].
+fn writer() -> Writer {
+    BagWriter::with_chunk_size(Cursor::new(Vec::new()), Some(CHUNK_BYTES)).unwrap()
+}
+
 /// An explore run's bag: the arm moving through six joint states (0 to
 /// 5 s), a scan of 12 bearings every 0.25 s between them, a sweep cloud
 /// every 2 s; then what `more` writes.
 pub fn explore_bag(more: &dyn Fn(&mut Writer)) -> Vec<u8> {
     let robot = robot("denso-vm6083");
-    let names: Vec<String> = robot
-        .joint_names()
-        .iter()
-        .map(|s| (*s).to_owned())
-        .collect();
-    let mut w = BagWriter::with_chunk_size(Cursor::new(Vec::new()), Some(CHUNK_BYTES)).unwrap();
+    let names = joint_names(&robot);
+    let mut w = writer();
     let base = geom::Isometry3::translation(0.5, 0.0, 0.0);
     w.write(topics::TF_STATIC, 0, &static_frames(&robot, &base))
         .unwrap();
@@ -82,12 +92,8 @@ pub fn explore_bag(more: &dyn Fn(&mut Writer)) -> Vec<u8> {
 /// each; then what `more` writes.
 pub fn follow_bag(more: &dyn Fn(&mut Writer)) -> Vec<u8> {
     let robot = robot("point3");
-    let names: Vec<String> = robot
-        .joint_names()
-        .iter()
-        .map(|s| (*s).to_owned())
-        .collect();
-    let mut w = BagWriter::with_chunk_size(Cursor::new(Vec::new()), Some(CHUNK_BYTES)).unwrap();
+    let names = joint_names(&robot);
+    let mut w = writer();
     w.write(
         topics::TF_STATIC,
         0,
