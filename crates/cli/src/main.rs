@@ -35,11 +35,14 @@ macro_rules! note {
 
 mod commands;
 
-use clap::Parser;
+use clap::Parser as _;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    let cli = commands::Cli::parse();
+    let cli = match commands::Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return clap_exit(&e),
+    };
     match commands::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         // The reader of our output went away (`| head`): nothing left to say.
@@ -53,6 +56,21 @@ fn main() -> ExitCode {
             note!("error: {}", message(&e));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Print clap's help, version or usage error and end: `--help` into a full
+/// stdout fails with a message as every other write to it does (issue 48:
+/// exit 0), a closed one (`| head`) ends quietly.
+fn clap_exit(e: &clap::Error) -> ExitCode {
+    use std::io::Write as _;
+    let printed = e.print().and_then(|()| std::io::stdout().flush());
+    match printed {
+        Err(io) if !e.use_stderr() && io.kind() != std::io::ErrorKind::BrokenPipe => {
+            note!("error: writing to standard output: {io}");
+            ExitCode::FAILURE
+        }
+        _ => ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(1)),
     }
 }
 

@@ -215,6 +215,11 @@ impl Default for FollowConfig {
     }
 }
 
+/// Largest [`FollowConfig::max_step_m`], metres: ten times Pudney's 0.1 m,
+/// far past the few centimetres the range finders see (issue 48: 1e308
+/// was taken as it was).
+pub const MAX_STEP_M: Real = 1.0;
+
 impl FollowConfig {
     /// Check every field; the error names the field and what was expected.
     pub fn validate(&self) -> Result<(), FollowError> {
@@ -234,6 +239,13 @@ impl FollowConfig {
         };
         positive("desired_distance_m", self.desired_distance_m)?;
         positive("max_step_m", self.max_step_m)?;
+        if self.max_step_m > MAX_STEP_M {
+            return bad(
+                "max_step_m",
+                "a step of at most 1 m (MAX_STEP_M)",
+                format!("{:e}", self.max_step_m),
+            );
+        }
         positive("stray_m", self.stray_m)?;
         positive("ceiling_prismatic_m", self.ceiling_prismatic_m)?;
         positive("ceiling_revolute_deg", self.ceiling_revolute_deg)?;
@@ -344,8 +356,9 @@ mod tests {
     /// the value given.
     #[test]
     fn bad_fields_are_named() {
-        let cases: [Case; 6] = [
+        let cases: [Case; 7] = [
             (|c| c.max_step_m = -1.0, "max_step_m", "-1"),
+            (|c| c.max_step_m = 1e308, "max_step_m", "1e308"),
             (|c| c.alpha = Real::NAN, "alpha", "NaN"),
             (|c| c.link_margin_m = -0.5, "link_margin_m", "-0.5"),
             (|c| c.exponent = 65, "exponent", "65"),

@@ -12,7 +12,7 @@ pub mod path;
 pub mod query;
 pub mod reach;
 
-pub use config::{FollowConfig, GapTargetRule, Objective, SliceLineRule, SliceRule};
+pub use config::{FollowConfig, GapTargetRule, MAX_STEP_M, Objective, SliceLineRule, SliceRule};
 pub use episode::{Episode, EpisodeOptions, Judge, NoJudge, RunEnd, run_episode};
 pub use error::FollowError;
 pub use follower::{Follower, Mode, ModeCounts, Step, StepTimes, Termination};

@@ -60,6 +60,11 @@ use serde::{Deserialize, Serialize};
 /// A manipulator pose for a disc: six joint angles, radians.
 pub type JointPose = [Real; 6];
 
+/// Largest `τd` ([`SegmentConfig::tau_d_m`]), metres: fifty times Paul's
+/// 0.2 m; past it every pair of a structure's discs would be compared
+/// (issue 48: 1e308 was taken as it was).
+pub const MAX_TAU_D_M: Real = 10.0;
+
 /// Thresholds of the four binary graphs (Paul Table 5.2 / Table 6.1).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -88,7 +93,8 @@ impl Default for SegmentConfig {
 }
 
 impl SegmentConfig {
-    /// Check the fields: finite, `τθ ∈ [0, 180]`, `τd > 0`, `τp ≥ 0`, `τq ≥ 0`.
+    /// Check the fields: finite, `τθ ∈ [0, 180]`, `0 < τd ≤` [`MAX_TAU_D_M`],
+    /// `τp ≥ 0`, `τq ≥ 0`.
     pub fn validate(&self) -> Result<(), MapError> {
         let bad = |field, expected, got: Real| {
             Err(MapError::stage_config("segment", field, expected, got))
@@ -96,8 +102,12 @@ impl SegmentConfig {
         if !(self.tau_theta_deg.is_finite() && (0.0..=180.0).contains(&self.tau_theta_deg)) {
             return bad("tau_theta_deg", "an angle in [0, 180]", self.tau_theta_deg);
         }
-        if !(self.tau_d_m.is_finite() && self.tau_d_m > 0.0) {
-            return bad("tau_d_m", "a positive distance", self.tau_d_m);
+        if !(self.tau_d_m.is_finite() && self.tau_d_m > 0.0 && self.tau_d_m <= MAX_TAU_D_M) {
+            return bad(
+                "tau_d_m",
+                "a positive distance of at most 10 m (MAX_TAU_D_M)",
+                self.tau_d_m,
+            );
         }
         if !(self.tau_p_m.is_finite() && self.tau_p_m >= 0.0) {
             return bad("tau_p_m", "a non-negative distance", self.tau_p_m);

@@ -52,9 +52,13 @@ pub fn load_segments_json(path: &Path) -> Result<Vec<Vec<DiscId>>, MapError> {
 /// The header of pose files.
 pub const POSES_CSV_HEADER: [&str; 6] = ["q1", "q2", "q3", "q4", "q5", "q6"];
 
+/// Largest joint angle a poses CSV may hold, radians (4π: two turns either
+/// way, past any arm's joint range; issue 48: 1e308 was taken as it was).
+pub const MAX_POSE_ANGLE_RAD: Real = 4.0 * std::f64::consts::PI;
+
 /// Parse a poses CSV: header `q1,q2,q3,q4,q5,q6`, then one row of six joint
-/// angles in radians per disc (blank lines ignored). Errors name
-/// `source_name`, the line and the field.
+/// angles in radians per disc, each within [`MAX_POSE_ANGLE_RAD`] (blank
+/// lines ignored). Errors name `source_name`, the line and the field.
 pub fn parse_poses_csv(text: &str, source_name: &str) -> Result<Vec<JointPose>, MapError> {
     let err = |line: Option<usize>, message: String| MapError::parse(source_name, line, message);
     let mut lines = text
@@ -88,12 +92,12 @@ pub fn parse_poses_csv(text: &str, source_name: &str) -> Result<Vec<JointPose>, 
             q[k] = s
                 .parse::<Real>()
                 .ok()
-                .filter(|v| v.is_finite())
+                .filter(|v| v.is_finite() && v.abs() <= MAX_POSE_ANGLE_RAD)
                 .ok_or_else(|| {
                     err(
                         Some(i + 1),
                         format!(
-                            "field `q{}`: expected a finite angle in radians, found `{s}`",
+                            "field `q{}`: expected an angle in [−4π, 4π] radians, found `{s}`",
                             k + 1
                         ),
                     )

@@ -27,8 +27,8 @@ pub use error::PlanError;
 pub use interference::{Interference, interfering_voxels};
 pub use model::{CacheOutcome, CspaceModel, MAX_INTERFERENCE_PAIRS};
 pub use pose::{
-    Constraints, PlaneHit, PoseConfig, PoseEvaluation, PoseRun, PoseSelector, PoseSolution,
-    PoseTermination, Target, ViewGeometry, view_geometry,
+    Constraints, MAX_LM_ITERATIONS, MAX_STARTS, PlaneHit, PoseConfig, PoseEvaluation, PoseRun,
+    PoseSelector, PoseSolution, PoseTermination, Target, ViewGeometry, view_geometry,
 };
 pub use roadmap::{
     Edge, MemoChecker, MotionChecker, NodeId, Path, Roadmap, RoadmapParts, weighted_distance,

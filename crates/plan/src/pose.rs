@@ -261,6 +261,13 @@ pub struct PoseConfig {
     pub aim_backtracking: bool,
 }
 
+/// Most [`PoseConfig::starts`]: the given start and the nine aimed ones
+/// (more would run no more LM).
+pub const MAX_STARTS: usize = 10;
+/// Most [`PoseConfig::max_iterations`] (A Table 6.1: 50; each iteration
+/// costs a numerical Jacobian, about a millisecond on bridge1).
+pub const MAX_LM_ITERATIONS: usize = 10_000;
+
 /// The iteration from which [`PoseConfig::give_up_scales`] applies (ours:
 /// the first steps of a run from a start aimed elsewhere may swing the aim
 /// far before it settles).
@@ -347,11 +354,19 @@ impl PoseConfig {
                 self.tilt_room_deg,
             ));
         }
-        if self.starts == 0 {
-            return Err(PlanError::config("pose.starts", "at least 1", 0));
+        if !(1..=MAX_STARTS).contains(&self.starts) {
+            return Err(PlanError::config(
+                "pose.starts",
+                "from 1 to 10 (the given start and nine aimed ones)",
+                self.starts,
+            ));
         }
-        if self.max_iterations == 0 {
-            return Err(PlanError::config("pose.max_iterations", "at least 1", 0));
+        if !(1..=MAX_LM_ITERATIONS).contains(&self.max_iterations) {
+            return Err(PlanError::config(
+                "pose.max_iterations",
+                "from 1 to 10 000 (MAX_LM_ITERATIONS)",
+                self.max_iterations,
+            ));
         }
         if !(self.gradient_tolerance.is_finite() && self.gradient_tolerance >= 0.0) {
             return Err(PlanError::config(

@@ -151,6 +151,24 @@ fn type_name(obj: &Bound<'_, PyAny>) -> String {
 /// and finiteness are checked by the kinematics (a `ValueError` naming the
 /// joint).
 pub fn joint_values(obj: &Bound<'_, PyAny>, dof: usize) -> PyResult<Vec<f64>> {
+    // A complex array would be cast to its real part (issue 48).
+    let complex = |o: &Bound<'_, PyAny>| type_name(o).contains("complex");
+    let complex_dtype = obj
+        .getattr("dtype")
+        .and_then(|d| d.getattr("kind"))
+        .is_ok_and(|k| k.extract::<String>().is_ok_and(|k| k == "c"));
+    // (Sequences only: iterating a generator would use it up.)
+    let complex_item = obj.cast::<pyo3::types::PySequence>().is_ok_and(|seq| {
+        seq.try_iter()
+            .is_ok_and(|items| items.flatten().any(|item| complex(&item)))
+    });
+    if complex_dtype || complex_item || complex(obj) {
+        return Err(value_error(format!(
+            "q: complex values (a {}): expected {dof} real joint values (radians; metres for \
+             prismatic joints)",
+            type_name(obj)
+        )));
+    }
     obj.extract::<Vec<f64>>().map_err(|e| {
         value_error(format!(
             "q: expected a sequence of {dof} joint values (radians; metres for prismatic \

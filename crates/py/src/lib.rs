@@ -43,6 +43,7 @@ fn _surveyor(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyMapper>()?;
     m.add_class::<runs::PyRunFolder>()?;
     m.add_function(wrap_pyfunction!(runs::_explore, m)?)?;
+    m.add_function(wrap_pyfunction!(runs::_check_explore, m)?)?;
     m.add_function(wrap_pyfunction!(runs::_follow, m)?)?;
     m.add_function(wrap_pyfunction!(studies::scale_like_discs, m)?)?;
     m.add_function(wrap_pyfunction!(studies::candidate_coverage, m)?)?;

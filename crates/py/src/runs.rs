@@ -163,6 +163,42 @@ pub fn _explore(
     options: &str,
     overrides: &str,
 ) -> PyResult<()> {
+    let (loaded, kw, checked) = check_explore(scenario, options, overrides)?;
+    let options = ExploreOptions {
+        seed,
+        oracle: if kw.oracle.unwrap_or(true) {
+            OracleOption::On(Some(ExploreOptions::default_oracle_cache(&loaded)))
+        } else {
+            OracleOption::Off
+        },
+        cspace_cache: Some(
+            ExploreOptions::default_cspace_cache(&loaded).map_err(|e| job_error(&e, false))?,
+        ),
+        lrc_cache: Some(ExploreOptions::default_lrc_cache(seed)),
+        ..checked
+    };
+    let report = kw.report.unwrap_or(true);
+    py.detach(|| {
+        sim::explore_job::explore(
+            &loaded,
+            &options,
+            &out,
+            &mut |_| {},
+            &mut finish_explore(report),
+        )
+        .map(|_| ())
+        .map_err(|e| (e.to_string(), is_io(&e)))
+    })
+    .map_err(|(message, io)| job_error(&message, io))
+}
+
+/// What `_explore` checks before it runs: the options, the scenario with
+/// its overrides, the stages and the Stage One rule.
+fn check_explore(
+    scenario: &str,
+    options: &str,
+    overrides: &str,
+) -> PyResult<(LoadedScenario, ExploreKw, ExploreOptions)> {
     let kw: ExploreKw = parse("explore options", options)?;
     let loaded = scenario_with(scenario, overrides)?;
     let stage_two = match kw.stages.as_deref().unwrap_or("both") {
@@ -186,35 +222,22 @@ pub fn _explore(
         )));
     };
     let options = ExploreOptions {
-        seed,
         max_viewpoints: kw.max_viewpoints,
         config,
-        oracle: if kw.oracle.unwrap_or(true) {
-            OracleOption::On(Some(ExploreOptions::default_oracle_cache(&loaded)))
-        } else {
-            OracleOption::Off
-        },
-        cspace_cache: Some(
-            ExploreOptions::default_cspace_cache(&loaded).map_err(|e| job_error(&e, false))?,
-        ),
-        lrc_cache: Some(ExploreOptions::default_lrc_cache(seed)),
         timings: kw.timings.unwrap_or(false),
         stage_two,
         ..ExploreOptions::default()
     };
-    let report = kw.report.unwrap_or(true);
-    py.detach(|| {
-        sim::explore_job::explore(
-            &loaded,
-            &options,
-            &out,
-            &mut |_| {},
-            &mut finish_explore(report),
-        )
-        .map(|_| ())
-        .map_err(|e| (e.to_string(), is_io(&e)))
-    })
-    .map_err(|(message, io)| job_error(&message, io))
+    Ok((loaded, kw, options))
+}
+
+/// Check `surveyor.explore`'s arguments without running (a campaign checks
+/// every combination before Ray starts): a `ValueError` as `_explore`
+/// raises it.
+#[pyfunction]
+#[pyo3(signature = (scenario, options = "", overrides = ""))]
+pub fn _check_explore(scenario: &str, options: &str, overrides: &str) -> PyResult<()> {
+    check_explore(scenario, options, overrides).map(|_| ())
 }
 
 /// Run Pudney's surface following of `scenario` into the run folder `out`,

@@ -422,6 +422,10 @@ def test_bad_max_range_raises_value_error(cube, max_range):
         ("abcdef", r"q: expected a sequence of 6 joint values"),
         (np.zeros((2, 6)), r"q: expected a sequence of 6 joint values"),
         (None, r"q: expected a sequence of 6 joint values"),
+        # Issue 48: a complex array was cast to its real part.
+        (np.zeros(6, dtype=complex), r"q: complex values"),
+        ([0.0, 0, 0, np.complex128(1 + 2j), 0, 0], r"q: complex values"),
+        ([0.0, 0, 0, 0, 0, 1j], r"q: complex values"),
     ],
 )
 def test_bad_joints_raise_value_error(q, pattern):

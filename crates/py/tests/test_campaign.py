@@ -170,13 +170,15 @@ def test_a_failed_run_is_named_after_the_others_finish(campaign_a, local_ray, tm
     out = tmp_path / "out"
     done = folder_of("bridge1", 0)
     shutil.copytree(out_a / done, out / done)  # a finished run: skipped
-    bad = {**CONFIG, "stages": "two"}
-    with pytest.raises(campaign.CampaignError, match="stages") as info:
-        campaign.run("bridge1", [0, 1], [CONFIG, bad], out=out)
+    # Seed 2's run cannot make its folder (a file stands where it goes): it
+    # fails as it runs (a bad config is refused before Ray starts).
+    blocked = (out / folder_of("bridge1", 2)).parent
+    blocked.write_text("in the way")
+    with pytest.raises(campaign.CampaignError, match="bridge1 seed 2") as info:
+        campaign.run("bridge1", [0, 1, 2], [CONFIG], out=out)
     err = info.value
-    assert len(err.failures) == 2
-    assert all(c.config == bad for c, _ in err.failures)
-    assert '"stages":"two"' in str(err) and "bridge1 seed 1" in str(err)
+    assert len(err.failures) == 1
+    assert all(c.seed == 2 for c, _ in err.failures)
     # The good run finished; summary.csv holds the two finished rows.
     assert len(err.result.ran) == 1 and len(err.result.skipped) == 1
     rows = read_summary(out)
@@ -249,6 +251,18 @@ def test_bad_arguments_raise_before_running(tmp_path):
         campaign.run("bridge1", [0], {"seed": 3}, out=tmp_path / "a")
     with pytest.raises(ValueError, match="not JSON"):
         campaign.run("bridge1", [0], {"noise": float("nan")}, out=tmp_path / "a")
+    # Issue 48: raw TypeErrors, and a bad scenario or option found only
+    # after Ray had started.
+    with pytest.raises(ValueError, match="scenarios=5"):
+        campaign.run(5, [0], out=tmp_path / "a")
+    with pytest.raises(ValueError, match=r"scenarios=\[None\]"):
+        campaign.run([None], [0], out=tmp_path / "a")
+    with pytest.raises(ValueError, match="no_such_scene"):
+        campaign.run("no_such_scene", [0], out=tmp_path / "a")
+    with pytest.raises(ValueError, match="stages"):
+        campaign.run("bridge1", [0], [{}, {"stages": "two"}], out=tmp_path / "a")
+    with pytest.raises(ValueError, match="local_candidates"):
+        campaign.run("bridge1", [0], {"explore": {"local_candidates": -1}}, out=tmp_path / "a")
     assert not (tmp_path / "a").exists()
     bad = subprocess.run(
         [sys.executable, "-m", "surveyor.campaign", "--scenarios", "bridge1", "--seeds", "0",

@@ -103,6 +103,9 @@ def test_scenario_overrides_are_checked_by_the_scenario(tmp_path):
     (lambda d: surveyor.explore("bridge1", out=d, max_viewpoints=-1), ValueError, "max_viewpoints"),
     (lambda d: surveyor.explore("bridge1", seed=-1, out=d), ValueError, "seed"),
     (lambda d: surveyor.explore("bridge1", seed=1.5, out=d), ValueError, "seed"),
+    # Issue 48: the keyword was not named.
+    (lambda d: surveyor.explore("bridge1", out=d, oracle="yes"), ValueError, "oracle='yes'"),
+    (lambda d: surveyor.follow("block1", out=d, report=1), ValueError, "report=1"),
     (lambda d: surveyor.follow("block1", out=d, max_sets=0), ValueError, "max_sets"),
     (lambda d: surveyor.follow("block1", out=d, speed=2), ValueError, "speed"),
     (lambda d: surveyor.follow("block1", out=d, robot="elbow"), ValueError, "elbow"),
@@ -127,3 +130,21 @@ def test_a_run_folder_is_checked_when_loaded(tmp_path):
     # An output path that is a file: the job refuses it.
     with pytest.raises((ValueError, OSError)):
         surveyor.follow("block1", max_sets=5, out=tmp_path / "file")
+
+
+def test_a_damaged_table_is_named_by_file_and_line(tmp_path):
+    """Issue 48: a truncated, empty or binary steps.csv raised a raw
+    IndexError or UnicodeDecodeError."""
+    surveyor.follow("block1", max_sets=5, out=tmp_path / "run")
+    steps = tmp_path / "run" / "steps.csv"
+    text = steps.read_text()
+    lines = text.splitlines(keepends=True)
+    cut = "".join(lines[:2]) + lines[2][: lines[2].index(",") + 1]
+    for data, pattern in [
+        (b"", r"steps\.csv, line 1: empty"),
+        (b"\xff\xfe\x00\x81junk\n", r"steps\.csv: not UTF-8"),
+        (cut.encode(), r"steps\.csv, line 3: 2 fields, expected"),
+    ]:
+        steps.write_bytes(data)
+        with pytest.raises(ValueError, match=pattern):
+            surveyor.Run.load(tmp_path / "run")

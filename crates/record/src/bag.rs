@@ -37,13 +37,17 @@
 mod file;
 mod input;
 pub mod markers;
+mod mcap_read;
 pub mod msg;
 mod run;
 
-pub use file::{BagMessage, BagWriter, MAX_BAG_BYTES, decode, encode, read_bag};
+pub use file::{
+    BadMessages, BagContents, BagMessage, BagWriter, MAX_BAG_BYTES, Skipped, decode, encode,
+    read_bag, read_bag_with,
+};
 pub use input::{
-    BagSweeps, MAX_SCANS_PER_SWEEP, RangeSets, SWEEP_GAP_S, ScanTopics, sets_from_bag,
-    sweeps_from_bag,
+    BagSweeps, JOINT_LIMIT_SLACK, MAX_SCANS_PER_SWEEP, MAX_UNLIMITED_JOINT, RangeSets, SWEEP_GAP_S,
+    ScanTopics, sets_from_bag, sweeps_from_bag,
 };
 pub use run::{
     BagClock, BagConfig, ROOT_FRAME, RunBag, SCANNER_FRAME, joint_state, laser_scan, link_frames,
@@ -136,6 +140,17 @@ pub enum BagError {
     /// A bag's configuration is out of range.
     #[error("bag configuration: {0}")]
     Config(String),
+    /// A message of the bag is bad (does not decode, or holds values no
+    /// sensor gives).
+    #[error("{}: {at}: {message} (--skip-bad-messages skips such messages and counts them)", path.display())]
+    Message {
+        /// The bag.
+        path: PathBuf,
+        /// The message: topic, index and log time ([`BagMessage::name`]).
+        at: String,
+        /// What is wrong.
+        message: String,
+    },
     /// The file is not a readable MCAP bag of ROS 2 messages.
     #[error("{}: {message}", path.display())]
     Bag {

@@ -321,6 +321,24 @@ pub fn read_viewpoints(dir: &Path) -> Result<Vec<ViewpointRecord>, RecordError> 
             front: cfront[i] != 0,
         });
     }
+    // Every Stage One decision's candidates are there: a file cut at a line
+    // end would otherwise be drawn short without a word (issue 48).
+    for (i, r) in out.iter().enumerate() {
+        if r.stage == 1 && r.scored.len() < r.candidates {
+            return Err(RecordError::Field {
+                file: cands.source.clone(),
+                line: cands.len() + 1,
+                field: "k".into(),
+                message: format!(
+                    "viewpoint {} has {} candidate rows, but {VIEWPOINTS_CSV} line {} says its decision scored {} (is the file cut short?)",
+                    r.k,
+                    r.scored.len(),
+                    i + 2,
+                    r.candidates
+                ),
+            });
+        }
+    }
     let path = Table::read(&dir.join(PATH_CSV))?;
     let pk = path.indices("k")?;
     let pq = joint_columns(&path)?;

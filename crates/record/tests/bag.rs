@@ -256,7 +256,9 @@ fn a_bag_s_scans_are_placed_at_interpolated_joints() {
         ],
     );
     let defaults = record::bag::ScanTopics::default();
-    let got = record::bag::sweeps_from_bag(&good, &robot, &defaults).unwrap();
+    let got =
+        record::bag::sweeps_from_bag(&good, &robot, &defaults, record::bag::BadMessages::Refuse)
+            .unwrap();
     assert_eq!((got.scans, got.unplaced, got.sweeps.len()), (1, 1, 1));
     assert!(!got.base_from_bag);
     let mid: Vec<f64> = q0.iter().zip(&q1).map(|(a, b)| 0.5 * (a + b)).collect();
@@ -270,9 +272,10 @@ fn a_bag_s_scans_are_placed_at_interpolated_joints() {
     }
     assert_eq!(points[1].intensity, 3.0);
     let refused = |path: &std::path::Path, topics: &record::bag::ScanTopics, says: &str| {
-        let e = record::bag::sweeps_from_bag(path, &robot, topics)
-            .unwrap_err()
-            .to_string();
+        let e =
+            record::bag::sweeps_from_bag(path, &robot, topics, record::bag::BadMessages::Refuse)
+                .unwrap_err()
+                .to_string();
         assert!(
             e.contains(says) && e.contains(path.to_str().unwrap()),
             "{e}"
@@ -311,7 +314,7 @@ fn a_bag_s_scans_are_placed_at_interpolated_joints() {
         ..record::bag::ScanTopics::default()
     };
     assert_eq!(
-        record::bag::sweeps_from_bag(&elsewhere, &robot, &given)
+        record::bag::sweeps_from_bag(&elsewhere, &robot, &given, record::bag::BadMessages::Refuse)
             .unwrap()
             .scans,
         1

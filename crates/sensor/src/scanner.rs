@@ -173,9 +173,9 @@ impl ScannerConfig {
                 r.peak_intensity,
             ),
             (
-                r.diffuse_weight >= 0.0,
+                (0.0..=1.0).contains(&r.diffuse_weight),
                 "reflection.diffuse_weight",
-                "a finite weight >= 0",
+                "a weight in [0, 1] (the diffuse part no brighter than the specular lobe's peak)",
                 r.diffuse_weight,
             ),
             (
@@ -534,10 +534,12 @@ mod tests {
     #[test]
     fn reflection_settings_are_checked() {
         let base = ReflectionModel::default();
-        let cases: [(Spoil, &str); 9] = [
+        let cases: [(Spoil, &str); 10] = [
             (|r| r.peak_intensity = Real::NAN, "peak_intensity"),
             (|r| r.peak_intensity = -4000.0, "peak_intensity"),
             (|r| r.diffuse_weight = Real::NAN, "diffuse_weight"),
+            // Issue 48: 7.0 was taken as it was.
+            (|r| r.diffuse_weight = 7.0, "diffuse_weight"),
             (|r| r.lobe_min_rad = 0.0, "lobe_min_rad"),
             (
                 |r| r.lobe_per_roughness_rad = Real::INFINITY,

@@ -59,6 +59,15 @@ impl SweepConfig {
                 got: self.step_deg.to_string(),
             });
         }
+        // A step past the whole tilt leaves a sweep of one scan (issue 48:
+        // `step_deg = 1e308` did so without a word).
+        if self.tilt_deg > 0.0 && self.step_deg > self.tilt_deg {
+            return Err(SensorError::Config {
+                field: "step_deg",
+                expected: "a positive angle at most tilt_deg (a larger step sweeps one scan)",
+                got: self.step_deg.to_string(),
+            });
+        }
         if self.joint == 0 {
             return Err(SensorError::Config {
                 field: "joint",
@@ -572,6 +581,35 @@ mod tests {
             assert_eq!(*t.last().unwrap(), lim.1.min(t[0] + 60f64.to_radians()));
         }
         assert!(SweepConfig { step_deg: 0.0, ..s }.validate().is_err());
+    }
+
+    /// Issue 48: a step past the whole tilt swept one scan without a word.
+    #[test]
+    fn a_step_past_the_tilt_is_refused() {
+        for step_deg in [1e308, 60.5] {
+            let e = SweepConfig {
+                step_deg,
+                ..SweepConfig::default()
+            }
+            .validate()
+            .unwrap_err()
+            .to_string();
+            assert!(
+                e.contains("step_deg") && e.contains("at most tilt_deg"),
+                "{e}"
+            );
+        }
+        let whole = SweepConfig {
+            step_deg: 60.0,
+            ..SweepConfig::default()
+        };
+        assert_eq!(whole.validate().map(|()| whole.scan_count()).unwrap(), 2);
+        let still = SweepConfig {
+            tilt_deg: 0.0,
+            step_deg: 5.0,
+            ..SweepConfig::default()
+        };
+        assert!(still.validate().is_ok());
     }
 
     #[test]

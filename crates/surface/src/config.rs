@@ -17,6 +17,11 @@ pub const MAX_SET_POINTS_CEILING: usize = 16_384;
 /// robot follows, not of a landscape.
 pub const MAX_LAMBDA_M: Real = 10.0;
 
+/// Smallest λ accepted, metres: below a millimetre, under the range
+/// finders' noise, every reading stays a point segment of its own (issue 48:
+/// λ = 10⁻¹² gave 600 point segments without a word).
+pub const MIN_LAMBDA_M: Real = 1e-3;
+
 /// Parameters of the surface model. Defaults are Pudney's (P§4.3): λ = 0.05,
 /// μ = 10°, ψ = 20, φ = 0.05.
 ///
@@ -126,8 +131,8 @@ impl SurfaceConfig {
                 expected,
             })
         };
-        if !(self.lambda.is_finite() && self.lambda > 0.0 && self.lambda <= MAX_LAMBDA_M) {
-            return bad("lambda", self.lambda, "a length in (0, 10] metres");
+        if !(self.lambda.is_finite() && (MIN_LAMBDA_M..=MAX_LAMBDA_M).contains(&self.lambda)) {
+            return bad("lambda", self.lambda, "a length in [0.001, 10] metres");
         }
         if !(self.mu_deg.is_finite() && self.mu_deg > 0.0 && self.mu_deg < 90.0) {
             return bad("mu_deg", self.mu_deg, "an angle in (0, 90) degrees");
@@ -234,6 +239,13 @@ mod tests {
         assert_eq!((c.lambda, c.mu_deg, c.psi, c.phi), (0.05, 10.0, 20.0, 0.05));
         assert!(c.validate().is_ok());
         assert!(SurfaceConfig::with_lambda(-1.0).validate().is_err());
+        // Issue 48: a λ of 10⁻¹² was taken as it was.
+        let e = SurfaceConfig::with_lambda(1e-12)
+            .validate()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("lambda") && e.contains("[0.001, 10]"), "{e}");
+        assert!(SurfaceConfig::with_lambda(MIN_LAMBDA_M).validate().is_ok());
         let t: SurfaceConfig = serde_json::from_str(r#"{"lambda": 0.02}"#).unwrap();
         assert_eq!(t.lambda, 0.02);
         assert_eq!(t.psi, 20.0);

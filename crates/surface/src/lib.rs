@@ -23,7 +23,7 @@ pub mod testing;
 pub mod update;
 
 pub use changelog::{ChangeLog, Merger};
-pub use config::{DEFAULT_MAX_SET_POINTS, MergeOrder, SurfaceConfig};
+pub use config::{DEFAULT_MAX_SET_POINTS, MAX_LAMBDA_M, MIN_LAMBDA_M, MergeOrder, SurfaceConfig};
 pub use error::{InvariantViolation, SurfaceError};
 pub use export::{EdgeJson, ModelJson, ModelStats, SegmentJson, StatsJson, UpdateTimes};
 pub use fissure::FissureType;

@@ -197,6 +197,11 @@ pub struct MapArgs {
     /// With --bag: the JointState topic.
     #[arg(long, default_value = record::bag::topics::JOINT_STATES, requires = "bag")]
     joints_topic: String,
+    /// With --bag: skip a damaged chunk or a bad message (one that does not
+    /// decode or holds values no sensor gives) and say how many were lost,
+    /// instead of refusing the bag.
+    #[arg(long, requires = "bag")]
+    skip_bad_messages: bool,
     /// Scenario (built-in name or file) whose regions of interest A1 ⊂ A2 ⊂ A3
     /// bound the grid (default: the config's, which are the bridge scenarios').
     #[arg(long)]
@@ -221,6 +226,9 @@ pub fn map(a: &MapArgs) -> Result<()> {
     // each other and `--bag` conflicts with `--scans`): checked by hand.
     if a.robot.is_some() && a.bag.is_none() {
         bail!("--robot applies with --bag (the robot whose joint states place the bag's scans)");
+    }
+    if a.skip_bad_messages && a.bag.is_none() {
+        bail!("--skip-bad-messages applies with --bag");
     }
     let mut config: MapConfig = load_config(a.config.as_deref())?;
     if let Some(v) = a.voxel {
@@ -365,7 +373,13 @@ fn sweeps_of_bag(a: &MapArgs, path: &std::path::Path) -> Result<record::bag::Bag
         scanner_link: a.scanner_link.clone(),
     };
     let t0 = Instant::now();
-    let b = record::bag::sweeps_from_bag(path, &robot, &topics)?;
+    let b = record::bag::sweeps_from_bag(
+        path,
+        &robot,
+        &topics,
+        super::bad_messages(a.skip_bad_messages),
+    )?;
+    super::say_skipped(path, &b.skipped)?;
     say!(
         "{}: {} scans placed on link {} of {} in {} sweeps ({} outside the joint states' span){} in {:.1} ms",
         path.display(),

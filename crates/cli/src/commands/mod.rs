@@ -113,9 +113,6 @@ impl JointArgs {
             }
             return Ok(None);
         };
-        if !self.deg {
-            return Ok(Some(q.clone()));
-        }
         let robot = robot()?;
         let kinds: Vec<robot::JointKind> = robot
             .joints
@@ -123,17 +120,37 @@ impl JointArgs {
             .filter(|j| j.is_actuated())
             .map(|j| j.kind)
             .collect();
-        Ok(Some(
-            q.iter()
-                .enumerate()
-                .map(|(i, v)| match kinds.get(i) {
-                    Some(robot::JointKind::Prismatic) => *v,
-                    _ => v.to_radians(),
-                })
-                .collect(),
-        ))
+        let mut out = Vec::with_capacity(q.len());
+        for (i, v) in q.iter().enumerate() {
+            let prismatic = matches!(kinds.get(i), Some(robot::JointKind::Prismatic));
+            let value = if self.deg && !prismatic {
+                v.to_radians()
+            } else {
+                *v
+            };
+            // Issue 48: `fk --deg` took 1e308 as it was.
+            let (limit, what) = if prismatic {
+                (MAX_PRISMATIC_JOINT_M, "1000 m")
+            } else if self.deg {
+                (MAX_REVOLUTE_JOINT_RAD, "720° (two turns)")
+            } else {
+                (MAX_REVOLUTE_JOINT_RAD, "4π rad (two turns)")
+            };
+            // (Not finite: the robot's own check names the joint.)
+            if value.is_finite() && value.abs() > limit {
+                bail!("--joints value {} ({v}) is beyond ±{what}", i + 1);
+            }
+            out.push(value);
+        }
+        Ok(Some(out))
     }
 }
+
+/// Largest revolute joint value `--joints` takes, radians (two turns either
+/// way, past any arm's joint range).
+const MAX_REVOLUTE_JOINT_RAD: Real = 4.0 * std::f64::consts::PI;
+/// Largest prismatic joint value `--joints` takes, metres.
+const MAX_PRISMATIC_JOINT_M: Real = 1000.0;
 
 #[derive(Debug, Args)]
 struct FkArgs {
@@ -375,6 +392,38 @@ fn fk(a: &FkArgs) -> Result<()> {
         for v in &out.outside_limits {
             say!("warning: {}", v.message)?;
         }
+    }
+    Ok(())
+}
+
+/// `--skip-bad-messages` as the bag reader's choice.
+fn bad_messages(skip: bool) -> record::bag::BadMessages {
+    if skip {
+        record::bag::BadMessages::Skip
+    } else {
+        record::bag::BadMessages::Refuse
+    }
+}
+
+/// Skips [`say_skipped`] lists one by one; the rest are counted.
+const SHOWN: usize = 10;
+
+/// Say what reading the bag at `path` skipped (nothing when nothing was).
+fn say_skipped(path: &Path, skipped: &record::bag::Skipped) -> Result<()> {
+    if skipped.what.is_empty() {
+        return Ok(());
+    }
+    say!(
+        "{}: skipped {} messages ({} damaged chunks and bad messages):",
+        path.display(),
+        skipped.messages,
+        skipped.what.len()
+    )?;
+    for what in skipped.what.iter().take(SHOWN) {
+        say!("  {what}")?;
+    }
+    if skipped.what.len() > SHOWN {
+        say!("  and {} more", skipped.what.len() - SHOWN)?;
     }
     Ok(())
 }

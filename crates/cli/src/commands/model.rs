@@ -28,6 +28,11 @@ pub struct ModelArgs {
     /// topic of that type).
     #[arg(long, value_delimiter = ',', requires = "bag")]
     range_topics: Vec<String>,
+    /// With --bag: skip a damaged chunk or a bad message (one that does not
+    /// decode or holds values no sensor gives) and say how many were lost,
+    /// instead of refusing the bag.
+    #[arg(long, requires = "bag")]
+    skip_bad_messages: bool,
     /// The whole model configuration (TOML, fields of `SurfaceConfig`).
     #[arg(long)]
     config: Option<PathBuf>,
@@ -61,6 +66,16 @@ pub struct ModelArgs {
 }
 
 pub fn model(a: &ModelArgs) -> Result<()> {
+    // clap leaves `requires` unchecked beside `required_unless_present_any`:
+    // checked by hand.
+    if a.bag.is_none() {
+        if !a.range_topics.is_empty() {
+            bail!("--range-topics applies with --bag (the Range topics of the bag to read)");
+        }
+        if a.skip_bad_messages {
+            bail!("--skip-bad-messages applies with --bag");
+        }
+    }
     let mut config: SurfaceConfig = load_config(a.config.as_deref())?;
     for (flag, field) in [
         (a.lambda, &mut config.lambda),
@@ -82,7 +97,13 @@ pub fn model(a: &ModelArgs) -> Result<()> {
     config.validate()?;
     let (sets_path, sets) = match (&a.bag, &a.sets) {
         (Some(bag), _) => {
-            let read = record::bag::sets_from_bag(bag, &a.range_topics, config.max_set_points)?;
+            let read = record::bag::sets_from_bag(
+                bag,
+                &a.range_topics,
+                config.max_set_points,
+                super::bad_messages(a.skip_bad_messages),
+            )?;
+            super::say_skipped(bag, &read.skipped)?;
             say!(
                 "{}: {} sets from {} Range topics ({} readings with a return, {} without)",
                 bag.display(),

@@ -475,6 +475,25 @@ fn degrees_convert_revolute_joints_only() {
         x.abs() < 1e-9 && (y - 1.5).abs() < 1e-9,
         "tip at ({x}, {y})"
     );
+    // Issue 48: 1e308 (degrees or radians) was taken as it was.
+    for args in [
+        &["--deg", "--joints", "1e308,0,0,0,0,0"][..],
+        &["--joints", "0,0,0,0,0,13"],
+    ] {
+        let mut all = vec!["fk", "--robot", "denso-vm6083"];
+        all.extend(args);
+        let e = fails(&all);
+        assert!(
+            e.contains("--joints value") && e.contains("two turns"),
+            "{e}"
+        );
+        clean(&e);
+    }
+    let e = fails(&["fk", "--robot", "point3", "--joints", "0,0,1e308"]);
+    assert!(
+        e.contains("--joints value 3") && e.contains("1000 m"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -775,9 +794,38 @@ fn bad_bags_are_refused_by_name() {
     clean(&e);
     let e = fails(&["map", "--bag", &p("small.mcap"), "--out", &p("m")]);
     assert!(e.contains("--robot"), "{e}");
+    // Issue 48: bag flags without a bag, and a topic of another type given
+    // as a Range topic.
+    let sets = p("sets.jsonl");
+    std::fs::write(&sets, "{\"points\": [[0,0,0]], \"axes\": [[0,0,1]]}\n").unwrap();
+    let e = fails(&[
+        "model",
+        "--sets",
+        &sets,
+        "--range-topics",
+        "/range/a",
+        "--out",
+        &p("md"),
+    ]);
+    assert!(e.contains("--range-topics applies with --bag"), "{e}");
+    let e = fails(&[
+        "model",
+        "--sets",
+        &sets,
+        "--skip-bad-messages",
+        "--out",
+        &p("md"),
+    ]);
+    assert!(e.contains("--skip-bad-messages applies with --bag"), "{e}");
+    let e = model("small.mcap", &["--range-topics", "/joint_states"]);
+    assert!(
+        e.contains("/joint_states is not `sensor_msgs/msg/Range`"),
+        "{e}"
+    );
+    clean(&e);
     let left: Vec<_> = listing(dir.path())
         .into_iter()
-        .filter(|f| f.extension().is_none_or(|e| e != "mcap"))
+        .filter(|f| f.extension().is_none_or(|e| e != "mcap" && e != "jsonl"))
         .collect();
     assert!(left.is_empty(), "{left:?}");
 }

@@ -48,6 +48,10 @@ fn a_closed_pipe_ends_quietly_and_a_full_stdout_is_an_error() {
         vec!["map", "--print-config"],
         vec!["model", "--print-config"],
         vec!["report", run.to_str().unwrap()],
+        // Issue 48: help and version went into a full stdout with exit 0.
+        vec!["--help"],
+        vec!["model", "--help"],
+        vec!["--version"],
     ];
     for args in &commands {
         // A pipe whose reader is gone before the command writes a byte.

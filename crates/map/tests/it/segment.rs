@@ -458,6 +458,17 @@ fn files_round_trip_and_errors() {
     assert!(e.to_string().starts_with("p.csv:2"), "{e}");
     let e = parse_poses_csv("q1,q2,q3,q4,q5,q6\n0,0,0,nan,0,0\n", "p.csv").unwrap_err();
     assert!(e.to_string().contains("q4"), "{e}");
+    // Issue 48: 1e308 rad was taken as it was, in the first row or in the
+    // header's place.
+    let e = parse_poses_csv("q1,q2,q3,q4,q5,q6\n0,1e308,0,0,0,0\n", "p.csv").unwrap_err();
+    assert!(
+        e.to_string().starts_with("p.csv:2")
+            && e.to_string().contains("q2")
+            && e.to_string().contains("[−4π, 4π]"),
+        "{e}"
+    );
+    let e = parse_poses_csv("1e308,0,0,0,0,0\n0,0,0,0,0,0\n", "p.csv").unwrap_err();
+    assert!(e.to_string().contains("expected the header"), "{e}");
     let csv = dir.path().join("poses.csv");
     std::fs::write(&csv, "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n").unwrap();
     assert_eq!(load_poses_csv(&csv).unwrap(), vec![[0.0; 6]]);
@@ -502,6 +513,14 @@ fn bad_input_is_an_error() {
         (
             SegmentConfig {
                 tau_d_m: 0.0,
+                ..cfg
+            },
+            "tau_d_m",
+        ),
+        // Issue 48: no ceiling before.
+        (
+            SegmentConfig {
+                tau_d_m: 1e308,
                 ..cfg
             },
             "tau_d_m",

@@ -699,3 +699,33 @@ fn target_from_a_disc() {
     assert_eq!((t.centre, t.normal), (disc.centre, disc.normal));
     t.check().unwrap();
 }
+
+/// Issue 48: `starts` and `max_iterations` had no stated ceiling.
+#[test]
+fn pose_starts_and_iterations_have_ceilings() {
+    for (config, field) in [
+        (
+            PoseConfig {
+                starts: 1_000_000,
+                ..PoseConfig::default()
+            },
+            "pose.starts",
+        ),
+        (
+            PoseConfig {
+                max_iterations: 1_000_000_000,
+                ..PoseConfig::default()
+            },
+            "pose.max_iterations",
+        ),
+    ] {
+        let e = config.validate().unwrap_err().to_string();
+        assert!(e.contains(field), "{e}");
+    }
+    let most = PoseConfig {
+        starts: plan::MAX_STARTS,
+        max_iterations: plan::MAX_LM_ITERATIONS,
+        ..PoseConfig::default()
+    };
+    assert!(most.validate().is_ok());
+}

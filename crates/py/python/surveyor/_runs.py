@@ -53,13 +53,27 @@ def explore(scenario: str, seed: int = 0, out: Optional[PathLike] = None, **conf
     Runs with the GIL released. Raises ``ValueError`` for a bad option,
     scenario or override, ``OSError`` when the folder cannot be written.
     """
+    options, overrides = _explore_arguments(config)
+    folder, keep = _out_folder(out)
+    _surveyor._explore(str(scenario), _seed(seed), os.fspath(folder), options, overrides)
+    return Run.load(folder, _keep=keep)
+
+
+def _explore_arguments(config: dict):
+    """``explore``'s keywords as its options' and scenario overrides' JSON,
+    checked."""
     options = {k: v for k, v in config.items() if k in EXPLORE_OPTIONS}
     _count(options, "max_viewpoints")
+    _flags(options, "explore", ("oracle", "timings", "report"))
     overrides = {k: v for k, v in config.items() if k not in EXPLORE_OPTIONS}
-    folder, keep = _out_folder(out)
-    _surveyor._explore(str(scenario), _seed(seed), os.fspath(folder),
-                       _json(options, "explore options"), _json(overrides, "scenario overrides"))
-    return Run.load(folder, _keep=keep)
+    return _json(options, "explore options"), _json(overrides, "scenario overrides")
+
+
+def check_explore(scenario: str, **config: Any) -> None:
+    """Check ``explore(scenario, **config)``'s arguments without running
+    it: the ``ValueError`` ``explore`` would raise for a bad option,
+    scenario or override."""
+    _surveyor._check_explore(str(scenario), *_explore_arguments(config))
 
 
 def follow(scenario: str, seed: int = 0, out: Optional[PathLike] = None, **options: Any) -> "Run":
@@ -80,6 +94,7 @@ def follow(scenario: str, seed: int = 0, out: Optional[PathLike] = None, **optio
     if unknown:
         raise ValueError(f"follow: unknown option {unknown[0]!r} (options: {', '.join(FOLLOW_OPTIONS)})")
     _count(options, "max_sets")
+    _flags(options, "follow", ("timings", "report"))
     folder, keep = _out_folder(out)
     _surveyor._follow(str(scenario), _seed(seed), os.fspath(folder), _json(options, "follow options"))
     return Run.load(folder, _keep=keep)
@@ -99,6 +114,17 @@ def _count(options: dict, key: str) -> None:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise ValueError(f"{key}={value!r}: expected a whole number of at least 1")
     options[key] = int(value)
+
+
+def _flags(options: dict, what: str, keys) -> None:
+    """Each of ``keys`` in ``options``, when given, must be True or False:
+    a ``ValueError`` naming the keyword (``oracle='yes'`` is no flag)."""
+    for key in keys:
+        value = options.get(key)
+        if value is not None and not isinstance(value, (bool, np.bool_)):
+            raise ValueError(f"{what}: {key}={value!r}: expected True or False")
+        if value is not None:
+            options[key] = bool(value)
 
 
 def _json(values: dict, what: str) -> str:
@@ -125,10 +151,25 @@ def _column(values: list) -> np.ndarray:
 
 
 def _table(path: Path) -> np.ndarray:
-    """A run folder's CSV file as a NumPy structured array, one field per column."""
-    with open(path, newline="") as f:
-        rows = list(csv.reader(f))
+    """A run folder's CSV file as a NumPy structured array, one field per
+    column. An empty, binary or ragged file is a ``ValueError`` naming the
+    file and the line."""
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            rows = list(csv.reader(f))
+    except UnicodeDecodeError as e:
+        raise ValueError(f"{path}: not UTF-8 text (byte {e.start}): a binary or damaged file") from None
+    except csv.Error as e:
+        raise ValueError(f"{path}: not a CSV table: {e}") from None
+    if not rows or not rows[0]:
+        raise ValueError(f"{path}, line 1: empty, expected a header row")
     header, body = rows[0], rows[1:]
+    for line, row in enumerate(body, start=2):
+        if len(row) != len(header):
+            raise ValueError(
+                f"{path}, line {line}: {len(row)} fields, expected {len(header)} "
+                f"({','.join(header)}): is the file cut short?"
+            )
     columns = [_column([r[i] for r in body]) for i in range(len(header))]
     return np.rec.fromarrays(columns, names=header).view(np.ndarray) if body else np.zeros(
         0, dtype=[(h, np.float64) for h in header])

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Union
 
-from ._runs import PathLike, _seed
+from ._runs import PathLike, _seed, check_explore
 
 __all__ = ["run", "Combination", "CampaignResult", "CampaignError", "COLUMNS", "combinations",
            "canonical_json", "scene_folder_name", "parse_seeds", "run_one", "main"]
@@ -161,11 +161,18 @@ class CampaignError(RuntimeError):
 
 
 def _scenarios(scenarios: Union[str, Iterable[str]]) -> List[str]:
+    bad = ValueError(f"scenarios={scenarios!r}: expected one or more scenario names or files")
     if isinstance(scenarios, (str, os.PathLike)):
         scenarios = [scenarios]
-    names = [os.fspath(s) for s in scenarios]
-    if not names or any(not isinstance(s, str) or not s for s in names):
-        raise ValueError(f"scenarios={scenarios!r}: expected one or more scenario names or files")
+    try:
+        items = list(scenarios)
+    except TypeError:
+        raise bad from None
+    if not items or any(not isinstance(s, (str, os.PathLike)) for s in items):
+        raise bad
+    names = [os.fspath(s) for s in items]
+    if any(not isinstance(s, str) or not s for s in names):
+        raise bad
     return names
 
 
@@ -367,6 +374,14 @@ def run(
     if num_cpus is not None and (isinstance(num_cpus, bool) or not isinstance(num_cpus, int)
                                  or num_cpus < 1):
         raise ValueError(f"num_cpus={num_cpus!r}: expected a whole number of at least 1")
+    # Every scenario and config checked before Ray starts (a typo found
+    # after a cluster came up costs minutes).
+    for scenario in sorted({c.scenario for c in todo_all}):
+        for config_json in sorted({c.config_json for c in todo_all}):
+            try:
+                check_explore(scenario, **json.loads(config_json))
+            except ValueError as e:
+                raise ValueError(f"campaign: scenario {scenario!r} with config {config_json}: {e}") from None
     out = Path(out).absolute()
     if out.exists() and not out.is_dir():
         raise ValueError(f"out={os.fspath(out)!r}: exists and is not a folder")

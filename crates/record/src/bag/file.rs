@@ -70,11 +70,20 @@ impl<W: Write + Seek> std::fmt::Debug for BagWriter<W> {
 impl<W: Write + Seek> BagWriter<W> {
     /// A bag written into `w`.
     pub fn new(w: W) -> Result<Self, BagError> {
-        let mcap = mcap::WriteOptions::new()
+        Self::with_chunk_size(w, None)
+    }
+
+    /// A bag written into `w` in chunks of about `chunk_bytes` each
+    /// (uncompressed; `None`: the `mcap` crate's default).
+    pub fn with_chunk_size(w: W, chunk_bytes: Option<u64>) -> Result<Self, BagError> {
+        let mut options = mcap::WriteOptions::new()
             .profile("ros2")
             .library(concat!("surveyor ", env!("CARGO_PKG_VERSION")))
-            .compression(Some(mcap::Compression::Zstd))
-            .create(w)?;
+            .compression(Some(mcap::Compression::Zstd));
+        if chunk_bytes.is_some() {
+            options = options.chunk_size(chunk_bytes);
+        }
+        let mcap = options.create(w)?;
         Ok(Self {
             mcap,
             schemas: HashMap::new(),
@@ -152,6 +161,8 @@ pub struct BagMessage {
     pub topic: String,
     /// Its type (`package/msg/Type`, the channel's schema name).
     pub type_name: String,
+    /// Its place among its topic's messages in the file, from 0.
+    pub index: usize,
     /// When it was logged, nanoseconds.
     pub log_time_ns: u64,
     /// CDR bytes.
@@ -169,14 +180,76 @@ impl BagMessage {
         }
         decode(&self.data)
     }
+
+    /// The message in words: `/scan message 12 (logged at 3.250000000 s)`.
+    pub fn name(&self) -> String {
+        format!(
+            "{} message {} (logged at {}.{:09} s)",
+            self.topic,
+            self.index,
+            self.log_time_ns / 1_000_000_000,
+            self.log_time_ns % 1_000_000_000
+        )
+    }
 }
 
-/// Largest bag [`read_bag`] reads, bytes (it holds the whole file in memory).
+/// What reading a bag does with a damaged chunk or a bad message.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BadMessages {
+    /// Refuse the bag, naming the chunk or the message (the default: a
+    /// damaged bag never maps silently).
+    #[default]
+    Refuse,
+    /// Skip it and count it (`--skip-bad-messages`).
+    Skip,
+}
+
+/// What was skipped reading a bag with [`BadMessages::Skip`].
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Skipped {
+    /// Messages lost: those of damaged chunks (as their indexes count them)
+    /// and bad messages.
+    pub messages: usize,
+    /// Each damaged chunk and bad message in words.
+    pub what: Vec<String>,
+}
+
+impl Skipped {
+    /// Count `n` messages lost to `what`.
+    pub fn add(&mut self, n: usize, what: String) {
+        self.messages += n;
+        self.what.push(what);
+    }
+}
+
+/// The messages of a bag and what was skipped reading it.
+#[derive(Clone, Debug, Default)]
+pub struct BagContents {
+    /// The messages, in the file's order.
+    pub messages: Vec<BagMessage>,
+    /// Damaged chunks skipped ([`BadMessages::Skip`] only).
+    pub skipped: Skipped,
+}
+
+/// Largest bag [`read_bag`] reads, bytes (it holds the whole file in memory);
+/// also the most one chunk may declare uncompressed.
 pub const MAX_BAG_BYTES: u64 = 8 << 30;
 
 /// Every message of the MCAP file at `path` whose topic `wanted` accepts, in
-/// the file's order. Messages must carry CDR with a schema.
+/// the file's order; a damaged chunk refuses the bag, naming its offset and
+/// the topics it held. Messages must carry CDR with a schema.
 pub fn read_bag(path: &Path, wanted: &dyn Fn(&str) -> bool) -> Result<Vec<BagMessage>, BagError> {
+    read_bag_with(path, wanted, BadMessages::Refuse).map(|c| c.messages)
+}
+
+/// [`read_bag`], with damaged chunks refused or skipped as `bad` says.
+/// Every length in the file is checked against the bytes that hold it
+/// before anything is reserved; every chunk is checked against its CRC.
+pub fn read_bag_with(
+    path: &Path,
+    wanted: &dyn Fn(&str) -> bool,
+    bad_messages: BadMessages,
+) -> Result<BagContents, BagError> {
     let io = |e: std::io::Error| BagError::Io {
         path: path.to_owned(),
         source: e,
@@ -193,33 +266,53 @@ pub fn read_bag(path: &Path, wanted: &dyn Fn(&str) -> bool) -> Result<Vec<BagMes
         path: path.to_owned(),
         message,
     };
+    let contents = super::mcap_read::read(&bytes, bad_messages == BadMessages::Skip, MAX_BAG_BYTES)
+        .map_err(&bad)?;
+    let mut skipped = Skipped::default();
+    for b in &contents.bad_chunks {
+        let what = super::mcap_read::describe(b, &contents.channels);
+        match super::mcap_read::lost(b) {
+            Some(n) => skipped.add(n, what),
+            None => {
+                skipped.what.push(what);
+            }
+        }
+    }
+    if let Some(e) = contents.data_crc_mismatch {
+        skipped.what.push(e);
+    }
     let mut out = Vec::new();
-    for (k, message) in mcap::MessageStream::new(&bytes)
-        .map_err(|e| bad(e.to_string()))?
-        .enumerate()
-    {
-        let message = message.map_err(|e| bad(format!("message {k}: {e}")))?;
-        let channel = &message.channel;
+    let mut counts: HashMap<u16, usize> = HashMap::new();
+    for m in contents.messages {
+        let count = counts.entry(m.channel).or_default();
+        let index = *count;
+        *count += 1;
+        let Some(channel) = contents.channels.get(&m.channel) else {
+            continue;
+        };
         if !wanted(&channel.topic) {
             continue;
         }
-        if channel.message_encoding != "cdr" {
+        if channel.encoding != "cdr" {
             return Err(bad(format!(
                 "topic {} is encoded as `{}`, expected ROS 2 `cdr`",
-                channel.topic, channel.message_encoding
+                channel.topic, channel.encoding
             )));
         }
         let type_name = channel
             .schema
-            .as_ref()
-            .map(|s| s.name.clone())
+            .clone()
             .ok_or_else(|| bad(format!("topic {} has no schema", channel.topic)))?;
         out.push(BagMessage {
             topic: channel.topic.clone(),
             type_name,
-            log_time_ns: message.log_time,
-            data: message.data.into_owned(),
+            index,
+            log_time_ns: m.log_time_ns,
+            data: m.data,
         });
     }
-    Ok(out)
+    Ok(BagContents {
+        messages: out,
+        skipped,
+    })
 }

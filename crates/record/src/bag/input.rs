@@ -2,7 +2,10 @@
 //! joint states ([`sweeps_from_bag`], for `surveyor map --bag`).
 
 use super::msg::{JointState, LaserScan, PointCloud2, TfMessage, Transform};
-use super::{BagError, BagMessage, read_bag, scanner_from_laser, topics};
+use super::{
+    BadMessages, BagError, BagMessage, ROOT_FRAME, Skipped, read_bag_with, scanner_from_laser,
+    topics,
+};
 use geom::{Isometry3, Real};
 use robot::Robot;
 use sensor::{Sweep, SweepBuilder};
@@ -47,6 +50,8 @@ pub struct BagSweeps {
     pub scans: usize,
     /// Scans outside the joint states' time span (not placed).
     pub unplaced: usize,
+    /// Damaged chunks and bad messages skipped ([`BadMessages::Skip`]).
+    pub skipped: Skipped,
 }
 
 /// Largest number of scans in one sweep when the bag does not mark sweeps.
@@ -55,15 +60,120 @@ pub const MAX_SCANS_PER_SWEEP: usize = 10_000;
 /// does not mark sweeps, seconds.
 pub const SWEEP_GAP_S: Real = 1.0;
 
-/// The stamp of a message: its header's, or (a zero stamp) when logged.
-fn stamp_of(header: &super::msg::Header, log_time_ns: u64) -> u64 {
-    match header.stamp.to_nanos() {
+/// The stamp of a message: its header's, or (a zero or negative stamp)
+/// when logged. A `nanosec` of 10⁹ or more is refused, not taken as
+/// extra seconds.
+fn stamp_of(header: &super::msg::Header, log_time_ns: u64) -> Result<u64, String> {
+    if header.stamp.nanosec >= 1_000_000_000 {
+        return Err(format!(
+            "header stamp {} s {} ns: nanosec must be below 10⁹",
+            header.stamp.sec, header.stamp.nanosec
+        ));
+    }
+    Ok(match header.stamp.to_nanos() {
         Some(0) | None => log_time_ns,
         Some(t) => t,
+    })
+}
+
+/// Reads a bag's messages one by one: a bad one refuses the bag, naming
+/// it, or is skipped and counted ([`BadMessages`]).
+struct Gate<'a> {
+    path: &'a Path,
+    mode: BadMessages,
+    skipped: Skipped,
+}
+
+impl Gate<'_> {
+    /// `Ok(Some(value))` for a good message, `Ok(None)` for a bad one
+    /// skipped, or the error naming it.
+    fn check<T>(&mut self, m: &BagMessage, r: Result<T, String>) -> Result<Option<T>, BagError> {
+        match r {
+            Ok(v) => Ok(Some(v)),
+            Err(message) => match self.mode {
+                BadMessages::Refuse => Err(BagError::Message {
+                    path: self.path.to_owned(),
+                    at: m.name(),
+                    message,
+                }),
+                BadMessages::Skip => {
+                    self.skipped.add(1, format!("{}: {message}", m.name()));
+                    Ok(None)
+                }
+            },
+        }
     }
 }
 
+/// `m` decoded as `M`, the decoding error in words.
+fn decoded<M: super::msg::RosMessage + serde::de::DeserializeOwned>(
+    m: &BagMessage,
+) -> Result<M, String> {
+    m.decode::<M>().map_err(|e| e.to_string())
+}
+
+/// A laser scan's rays must be usable: some ranges, finite bearings, and
+/// no NaN intensity.
+fn check_scan(scan: &LaserScan) -> Result<(), String> {
+    if scan.ranges.is_empty() {
+        return Err("a LaserScan without ranges".into());
+    }
+    if !(scan.angle_min.is_finite() && scan.angle_increment.is_finite()) {
+        return Err(format!(
+            "bearings not finite (angle_min {}, angle_increment {})",
+            scan.angle_min, scan.angle_increment
+        ));
+    }
+    let last = f64::from(scan.angle_min)
+        + (scan.ranges.len() - 1) as f64 * f64::from(scan.angle_increment);
+    if last.abs() > 4.0 * std::f64::consts::PI
+        || f64::from(scan.angle_min).abs() > 4.0 * std::f64::consts::PI
+    {
+        return Err(format!(
+            "bearings from {} to {last} rad, beyond ±4π",
+            scan.angle_min
+        ));
+    }
+    if scan.range_min.is_nan() || scan.range_max.is_nan() {
+        return Err(format!(
+            "range_min {} and range_max {} must be numbers",
+            scan.range_min, scan.range_max
+        ));
+    }
+    if let Some(i) = scan.intensities.iter().position(|v| !v.is_finite()) {
+        return Err(format!("intensity {i} is {}", scan.intensities[i]));
+    }
+    Ok(())
+}
+
+/// A transform must be finite with a unit quaternion (within tf2's
+/// tolerance: its squared norm within 0.01 of 1).
+fn check_tf(tf: &TfMessage) -> Result<(), String> {
+    for t in &tf.transforms {
+        let (v, q) = (&t.transform.translation, &t.transform.rotation);
+        let name = format!(
+            "the transform of `{}` in `{}`",
+            t.child_frame_id, t.header.frame_id
+        );
+        if !(v.x.is_finite() && v.y.is_finite() && v.z.is_finite()) {
+            return Err(format!(
+                "{name}: translation ({}, {}, {}) not finite",
+                v.x, v.y, v.z
+            ));
+        }
+        let n2 = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w;
+        if !n2.is_finite() || (n2 - 1.0).abs() > 0.01 {
+            return Err(format!(
+                "{name}: quaternion ({}, {}, {}, {}) is not a unit quaternion",
+                q.x, q.y, q.z, q.w
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn isometry(t: &Transform) -> Isometry3 {
+    // `check_tf` has refused a quaternion far from unit length.
     let q = nalgebra::Quaternion::new(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z);
     Isometry3::from_parts(
         nalgebra::Translation3::new(t.translation.x, t.translation.y, t.translation.z),
@@ -79,11 +189,17 @@ fn isometry(t: &Transform) -> Isometry3 {
 /// scans. Ranges outside `[range_min, range_max]` or not finite are no
 /// return. Errors name the bag and what is wrong: a missing topic, a joint
 /// of the robot missing from the joint states, time going backwards, a
-/// scanner frame not on the robot.
+/// scanner frame not on the robot, a damaged chunk, and a bad message (one
+/// that does not decode, a stamp's nanosec of 10⁹ or more, a scan without
+/// ranges or with bearings or intensities not finite, a joint value not
+/// finite or more than [`JOINT_LIMIT_SLACK`] past its limits, a transform
+/// not finite or with no unit quaternion), naming its topic, index and log
+/// time; with [`BadMessages::Skip`] the bad ones are skipped and counted.
 pub fn sweeps_from_bag(
     path: &Path,
     robot: &Robot,
     topics_in: &ScanTopics,
+    bad_messages: BadMessages,
 ) -> Result<BagSweeps, BagError> {
     let bad = |message: String| BagError::Bag {
         path: path.to_owned(),
@@ -92,15 +208,34 @@ pub fn sweeps_from_bag(
     let wanted = |t: &str| {
         t == topics_in.scan || t == topics_in.joints || t == topics::TF_STATIC || t == topics::SWEEP
     };
-    let messages = read_bag(path, &wanted)?;
+    let contents = read_bag_with(path, &wanted, bad_messages)?;
+    let messages = contents.messages;
+    let mut gate = Gate {
+        path,
+        mode: bad_messages,
+        skipped: contents.skipped,
+    };
     let on = |t: &str| -> Vec<&BagMessage> { messages.iter().filter(|m| m.topic == t).collect() };
     let mut statics = FrameTree::default();
     for m in on(topics::TF_STATIC) {
-        statics.apply(m.decode::<TfMessage>()?);
+        let tf = decoded::<TfMessage>(m).and_then(|tf| check_tf(&tf).map(|()| tf));
+        if let Some(tf) = gate.check(m, tf)? {
+            statics.apply(tf);
+        }
     }
-    let states = joint_states(&on(&topics_in.joints), robot, &topics_in.joints).map_err(&bad)?;
-    let scans = on(&topics_in.scan);
-    let Some(first) = scans.first() else {
+    let states = joint_states(&on(&topics_in.joints), robot, &mut gate)?;
+    let mut scans = Vec::new();
+    for m in on(&topics_in.scan) {
+        let scan = decoded::<LaserScan>(m).and_then(|scan| {
+            check_scan(&scan)?;
+            let t = stamp_of(&scan.header, m.log_time_ns)?;
+            Ok((scan, t))
+        });
+        if let Some((scan, t)) = gate.check(m, scan)? {
+            scans.push((m, scan, t));
+        }
+    }
+    let Some((_, first, _)) = scans.first() else {
         return Err(bad(format!(
             "no `sensor_msgs/msg/LaserScan` on {}",
             topics_in.scan
@@ -112,45 +247,44 @@ pub fn sweeps_from_bag(
             topics_in.joints
         )));
     }
-    let frame = first.decode::<LaserScan>()?.header.frame_id;
+    let frame = first.header.frame_id.clone();
     let (link, link_from_laser, link_name) =
         scanner_on(robot, &statics, &frame, topics_in.scanner_link.as_deref()).map_err(&bad)?;
     let link_from_scanner = link_from_laser * scanner_from_laser().inverse();
     // The base in the world: up the static frames from the base link.
     let base = robot.links.first().map_or("", |l| l.name.as_str());
-    let placed_base = statics.root_from(base);
+    let placed_base = statics.root_from(base).ok();
     let base_from_bag = placed_base.is_some();
     let world_from_base = placed_base.unwrap_or_else(Isometry3::identity);
     // Sweep boundaries.
-    let marks: Vec<u64> = on(topics::SWEEP)
-        .into_iter()
-        .map(|m| {
-            m.decode::<PointCloud2>()
-                .map(|c| stamp_of(&c.header, m.log_time_ns))
-        })
-        .collect::<Result<_, _>>()?;
+    let mut marks = Vec::new();
+    for m in on(topics::SWEEP) {
+        let t = decoded::<PointCloud2>(m).and_then(|c| stamp_of(&c.header, m.log_time_ns));
+        if let Some(t) = gate.check(m, t)? {
+            marks.push(t);
+        }
+    }
     let mut sweeps = Vec::new();
     let mut builder: Option<(SweepBuilder, Vec<Real>)> = None;
     let mut last_t: Option<u64> = None;
     let mut mark = 0;
     let (mut placed, mut unplaced) = (0, 0);
     let mut frames = Vec::new();
-    for (k, m) in scans.iter().enumerate() {
-        let scan = m.decode::<LaserScan>()?;
-        let t = stamp_of(&scan.header, m.log_time_ns);
+    for (m, scan, t) in &scans {
+        let t = *t;
         if let Some(prev) = last_t
             && t < prev
         {
             return Err(bad(format!(
-                "{} message {k}: time goes backwards ({t} ns after {prev} ns)",
-                topics_in.scan
+                "{}: time goes backwards ({t} ns after {prev} ns)",
+                m.name()
             )));
         }
         let Some(q) = joints_at(&states, t) else {
             unplaced += 1;
             continue;
         };
-        let (bearings, ranges, intensities) = super::scan_rays(&scan);
+        let (bearings, ranges, intensities) = super::scan_rays(scan);
         // A new sweep at a mark, a pause, a change of bearings or the cap.
         let past_mark = if marks.is_empty() {
             last_t.is_some_and(|p| (t - p) as Real * 1e-9 > SWEEP_GAP_S)
@@ -194,45 +328,102 @@ pub fn sweeps_from_bag(
         scanner_link: link_name,
         scans: placed,
         unplaced,
+        skipped: gate.skipped,
     })
 }
 
-/// The joint states of `messages` (on `topic`) as `(stamp, q)` in the
-/// robot's joint order; an error message for a missing joint, a length
-/// mismatch or time going backwards.
+/// `v` in a message: in exponent form when it is huge or tiny.
+fn short(v: Real) -> String {
+    if v.is_finite() && v != 0.0 && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// How far a joint state may pass its joint's limits, radians or metres
+/// (encoders read a little past a limit); a value further out, or not
+/// finite, is a bad message. Joints without limits may read up to
+/// [`MAX_UNLIMITED_JOINT`].
+pub const JOINT_LIMIT_SLACK: Real = 0.1;
+/// Largest magnitude a joint without limits may read, radians or metres.
+pub const MAX_UNLIMITED_JOINT: Real = 1e3;
+
+/// The joint states of `messages` as `(stamp, q)` in the
+/// robot's joint order; an error for a missing joint, a length mismatch or
+/// time going backwards; a bad message (see [`sweeps_from_bag`]) through
+/// `gate`.
 fn joint_states(
     messages: &[&BagMessage],
     robot: &Robot,
-    topic: &str,
-) -> Result<Vec<(u64, Vec<Real>)>, String> {
+    gate: &mut Gate<'_>,
+) -> Result<Vec<(u64, Vec<Real>)>, BagError> {
+    let bad = |message: String| BagError::Bag {
+        path: gate.path.to_owned(),
+        message,
+    };
     let names = robot.joint_names();
+    let limits: Vec<_> = robot.actuated().map(|j| j.limits).collect();
     let mut states: Vec<(u64, Vec<Real>)> = Vec::with_capacity(messages.len());
-    for (k, m) in messages.iter().enumerate() {
-        let js = m.decode::<JointState>().map_err(|e| e.to_string())?;
+    for m in messages {
+        let Some(js) = gate.check(m, decoded::<JointState>(m))? else {
+            continue;
+        };
         if js.position.len() != js.name.len() {
-            return Err(format!(
-                "{topic} message {k}: {} names but {} positions",
+            return Err(bad(format!(
+                "{}: {} names but {} positions",
+                m.name(),
                 js.name.len(),
                 js.position.len()
-            ));
+            )));
         }
         let mut q = Vec::with_capacity(names.len());
         for n in &names {
             let i = js.name.iter().position(|x| x == n).ok_or_else(|| {
-                format!(
-                    "{topic} message {k} has no joint `{n}` of robot {} (it names {:?})",
-                    robot.name, js.name
-                )
+                bad(format!(
+                    "{} has no joint `{n}` of robot {} (it names {:?})",
+                    m.name(),
+                    robot.name,
+                    js.name
+                ))
             })?;
             q.push(js.position[i]);
         }
-        let t = stamp_of(&js.header, m.log_time_ns);
+        let checked = stamp_of(&js.header, m.log_time_ns).and_then(|t| {
+            for ((n, v), l) in names.iter().zip(&q).zip(&limits) {
+                let ok = match l {
+                    Some(l) => {
+                        *v >= l.min - JOINT_LIMIT_SLACK && *v <= l.max + JOINT_LIMIT_SLACK
+                    }
+                    None => v.abs() <= MAX_UNLIMITED_JOINT,
+                };
+                if !ok {
+                    return Err(match l {
+                        Some(l) => format!(
+                            "joint `{n}` at {}, beyond its limits [{}, {}] by more than {JOINT_LIMIT_SLACK}",
+                            short(*v),
+                            l.min,
+                            l.max
+                        ),
+                        None => format!(
+                            "joint `{n}` at {}, beyond ±{MAX_UNLIMITED_JOINT}",
+                            short(*v)
+                        ),
+                    });
+                }
+            }
+            Ok(t)
+        });
+        let Some(t) = gate.check(m, checked)? else {
+            continue;
+        };
         if let Some((last, _)) = states.last()
             && t < *last
         {
-            return Err(format!(
-                "{topic} message {k}: time goes backwards ({t} ns after {last} ns)"
-            ));
+            return Err(bad(format!(
+                "{}: time goes backwards ({t} ns after {last} ns)",
+                m.name()
+            )));
         }
         states.push((t, q));
     }
@@ -296,6 +487,8 @@ pub struct RangeSets {
     pub points: usize,
     /// Readings without one (`+inf`, or outside `[min_range, max_range]`).
     pub misses: usize,
+    /// Damaged chunks and bad messages skipped ([`BadMessages::Skip`]).
+    pub skipped: Skipped,
 }
 
 /// The frames of `/tf_static` and `/tf` as they stand at some moment:
@@ -313,41 +506,73 @@ impl FrameTree {
         }
     }
 
-    /// `root_from_frame` up the tree (`None` for an unknown frame or a cycle).
-    fn root_from(&self, frame: &str) -> Option<Isometry3> {
+    /// `map_from_frame` ([`ROOT_FRAME`]) up the tree; an error saying where
+    /// the chain stops short of the root (an unknown frame, a frame no
+    /// transform places, a cycle).
+    fn root_from(&self, frame: &str) -> Result<Isometry3, String> {
         let mut pose = Isometry3::identity();
         let mut at = frame;
         let mut hops = 0;
-        while let Some((parent, t)) = self.0.get(at) {
+        while at != ROOT_FRAME {
+            let Some((parent, t)) = self.0.get(at) else {
+                return Err(if hops == 0 {
+                    format!("frame `{frame}` is not placed by any transform")
+                } else {
+                    format!(
+                        "frame `{frame}` is placed up to `{at}`, which no transform places in `{ROOT_FRAME}`"
+                    )
+                });
+            };
             pose = t * pose;
             at = parent;
             hops += 1;
             if hops > self.0.len() {
-                return None;
+                return Err(format!("frame `{frame}`'s transforms form a cycle"));
             }
         }
-        (hops > 0).then_some(pose)
+        Ok(pose)
     }
 }
 
 /// The `sensor_msgs/Range` readings of the bag at `path` (on `topics_in`,
 /// or every topic of that type when empty) as sensor sets: the readings of
 /// one stamp form a set, each point `range` along its frame's x axis
-/// (ROS's convention), placed by `/tf_static` and the `/tf` in force at its
-/// stamp; a set holds at most `max_set_points` points. Errors name the bag
-/// and what is wrong (no Range topic, a frame that no transform places,
-/// time going backwards).
+/// (ROS's convention), placed in [`ROOT_FRAME`] by `/tf_static` and the
+/// `/tf` in force at its stamp; a set holds at most `max_set_points`
+/// points. Errors name the bag and what is wrong (no Range topic, a given
+/// topic of another type, a frame that no transform places in
+/// [`ROOT_FRAME`], time going backwards, a damaged chunk, and a bad
+/// message as [`sweeps_from_bag`] says, naming its topic, index and log
+/// time; with [`BadMessages::Skip`] the bad ones are skipped and counted).
 pub fn sets_from_bag(
     path: &Path,
     topics_in: &[String],
     max_set_points: usize,
+    bad_messages: BadMessages,
 ) -> Result<RangeSets, BagError> {
     let bad = |message: String| BagError::Bag {
         path: path.to_owned(),
         message,
     };
-    let messages = read_bag(path, &|_| true)?;
+    let contents = read_bag_with(path, &|_| true, bad_messages)?;
+    let messages = contents.messages;
+    let mut gate = Gate {
+        path,
+        mode: bad_messages,
+        skipped: contents.skipped,
+    };
     let range_type = <super::msg::Range as super::msg::RosMessage>::TYPE;
+    for t in topics_in {
+        if let Some(m) = messages
+            .iter()
+            .find(|m| m.topic == *t && m.type_name != range_type)
+        {
+            return Err(bad(format!(
+                "{t} is not `{range_type}` (it carries `{}`)",
+                m.type_name
+            )));
+        }
+    }
     let is_range = |m: &BagMessage| {
         if topics_in.is_empty() {
             m.type_name == range_type
@@ -393,17 +618,25 @@ pub fn sets_from_bag(
     };
     for m in order {
         if m.topic == topics::TF || m.topic == topics::TF_STATIC {
-            tree.apply(m.decode::<TfMessage>()?);
+            let tf = decoded::<TfMessage>(m).and_then(|tf| check_tf(&tf).map(|()| tf));
+            if let Some(tf) = gate.check(m, tf)? {
+                tree.apply(tf);
+            }
             continue;
         }
-        let r = m.decode::<super::msg::Range>()?;
-        let t = stamp_of(&r.header, m.log_time_ns);
+        let r = decoded::<super::msg::Range>(m).and_then(|r| {
+            let t = stamp_of(&r.header, m.log_time_ns)?;
+            Ok((r, t))
+        });
+        let Some((r, t)) = gate.check(m, r)? else {
+            continue;
+        };
         match &current {
             Some((ct, _, _)) if *ct == t => {}
             Some((ct, _, _)) if t < *ct => {
                 return Err(bad(format!(
                     "{}: time goes backwards ({t} ns after {ct} ns)",
-                    m.topic
+                    m.name()
                 )));
             }
             _ => {
@@ -419,11 +652,10 @@ pub fn sets_from_bag(
             misses += 1;
             continue;
         }
-        let pose = tree.root_from(&r.header.frame_id).ok_or_else(|| {
+        let pose = tree.root_from(&r.header.frame_id).map_err(|e| {
             bad(format!(
-                "{}: frame `{}` is not placed by {} or {} at {t} ns",
-                m.topic,
-                r.header.frame_id,
+                "{}: {e} (by {} or {}) at {t} ns",
+                m.name(),
                 topics::TF_STATIC,
                 topics::TF
             ))
@@ -447,5 +679,6 @@ pub fn sets_from_bag(
         topics,
         points,
         misses,
+        skipped: gate.skipped,
     })
 }

@@ -627,9 +627,19 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, SceneError> {
         let words: Vec<&str> = text.split_whitespace().collect();
         match words.as_slice() {
             [] | ["comment" | "obj_info", ..] => {}
-            ["format", kind, _version] => {
+            ["format", kind, version] => {
                 if encoding.is_some() {
                     return Err(err(line_no, "a second 'format' line".into()));
+                }
+                // PLY has one version (issue 48: `format ascii 7.5` was read).
+                if version.parse::<f64>() != Ok(1.0) {
+                    return Err(err(
+                        line_no,
+                        format!(
+                            "PLY format version '{}', expected 1.0 (the only one)",
+                            shorten(version)
+                        ),
+                    ));
                 }
                 encoding = Some(match *kind {
                     "ascii" => Encoding::Ascii,

@@ -493,3 +493,43 @@ fn huge_declared_counts_in_small_files() {
         ],
     );
 }
+
+/// Issue 48: an ASCII PLY whose `format` line names another version was
+/// read; a face of 255 vertices (the most a `uchar` count holds) is meant:
+/// faces of up to `MAX_FACE_VERTICES` are read and fan-triangulated, and
+/// the vertex tables `sld` reads check the face section whole.
+#[test]
+fn ply_format_versions_and_large_faces() {
+    let dir = tempfile::tempdir().unwrap();
+    for version in ["7.5", "banana", "2"] {
+        let path = write(
+            dir.path(),
+            &format!("v{version}.ply"),
+            format!(
+                "ply\nformat ascii {version}\nelement vertex 3\nproperty float x\n\
+                 property float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
+            )
+            .as_bytes(),
+        );
+        every_ply_reader_refuses(&path, &[&format!("v{version}.ply:2"), "expected 1.0"]);
+    }
+    let mut text = String::from(
+        "ply\nformat ascii 1.0\nelement vertex 255\nproperty float x\nproperty float y\n\
+         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n",
+    );
+    for i in 0..255 {
+        let a = f64::from(i) * std::f64::consts::TAU / 255.0;
+        writeln!(text, "{} {} 0", a.cos(), a.sin()).unwrap();
+    }
+    text.push_str("255");
+    for i in 0..255 {
+        write!(text, " {i}").unwrap();
+    }
+    text.push('\n');
+    let path = write(dir.path(), "fan.ply", text.as_bytes());
+    assert_eq!(io::read_ply_vertices(&path).unwrap().len(), 255);
+    // One value short of the 255 declared: refused by line.
+    let short = text.replace(" 254\n", "\n");
+    let path = write(dir.path(), "short.ply", short.as_bytes());
+    every_ply_reader_refuses(&path, &["short.ply", "declares 255 items"]);
+}

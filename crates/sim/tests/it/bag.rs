@@ -43,7 +43,9 @@ fn range_readings_in_the_bag_are_the_rig_s_sensor_points() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("run.mcap");
         std::fs::write(&path, bytes).unwrap();
-        let read = record::bag::sets_from_bag(&path, &[], usize::MAX).unwrap();
+        let read =
+            record::bag::sets_from_bag(&path, &[], usize::MAX, record::bag::BadMessages::Refuse)
+                .unwrap();
         assert_eq!(read.topics.len(), model.range_finders.len());
         let reported: Vec<Vec<sensor::SensorPoint>> = script
             .events
