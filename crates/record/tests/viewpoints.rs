@@ -17,6 +17,7 @@ fn a_candidates_table_cut_short_is_refused() {
         f: (k > 0).then_some([1.0, 2.0, 3.0, 4.0]),
         target_disc: None,
         h3: None,
+        discs_identified: None,
         h1: 1.0,
         h1_weighted: 1.0,
         h2: 1.0,
