@@ -87,14 +87,7 @@ pub fn explore(run: &Value) -> Vec<Card> {
                 .into(),
             Some("plot-view3d"),
         ),
-        Card::of(
-            run,
-            "min_clearance_m",
-            "Smallest clearance",
-            mm,
-            "smallest true distance between the robot and the structure over the run".into(),
-            Some("plot-view3d"),
-        ),
+        clearance(run, "plot-view3d"),
         Card::of(
             run,
             &format!("{mi}.identified"),
@@ -175,6 +168,18 @@ pub fn explore(run: &Value) -> Vec<Card> {
     cards.into_iter().flatten().collect()
 }
 
+/// The smallest true clearance of the run, linked to `link`.
+fn clearance(run: &Value, link: &str) -> Option<Card> {
+    Card::of(
+        run,
+        "min_clearance_m",
+        "Smallest clearance",
+        mm,
+        "smallest true distance between the robot and the structure over the run".into(),
+        Some(link),
+    )
+}
+
 /// Seconds of the run at `key`, one decimal.
 fn seconds(run: &Value, key: &str) -> String {
     num(run, key).map_or_else(|| "?".into(), |s| format!("{s:.1}"))
@@ -221,14 +226,7 @@ pub fn follow(run: &Value) -> Vec<Card> {
             "steps in which any link touched the structure; any but 0 is a failed run".into(),
             Some("plot-sensing"),
         ),
-        Card::of(
-            run,
-            "min_clearance_m",
-            "Smallest clearance",
-            mm,
-            "smallest true distance between the robot and the structure over the run".into(),
-            Some("plot-sensing"),
-        ),
+        clearance(run, "plot-sensing"),
         Card::of(
             run,
             "sets_per_m2",
