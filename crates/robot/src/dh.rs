@@ -108,6 +108,7 @@ impl Robot {
                 post,
                 offset: r.offset,
                 limits: r.limits,
+                max_velocity: None,
             });
             // The physical link runs from the previous frame's origin along z by d,
             // then along x by a, to this frame's origin; in this frame's coordinates:

@@ -8,6 +8,7 @@
 //! | [`posture`] | [`Posture`]: joints and link frames kept in step |
 //! | [`dh`] | [`DhRow`], [`Robot::from_dh`] (standard DH, Corke convention; Paul Table C.1) |
 //! | [`urdf`] | [`Robot::from_urdf_file`], [`Robot::from_urdf_str`] |
+//! | [`timing`] | [`timing::MotionLimits`], [`timing::Profile`]: how long a motion takes within the joints' velocity and acceleration limits (the robot clock) |
 //! | [`mod@builtin`] | [`builtin()`], [`builtin_names`]: `denso-vm6083`, `point3`, `arm4` |
 //! | [`linalg`] | [`pseudo_inverse`], [`damped_pseudo_inverse`], [`null_space_projector`] (Pudney eq. 3, P§3.3) |
 //! | [`bounds`] | [`bounds::enclosing_capsule`], [`bounds::enclosing_ellipsoid`] (Khachiyan MVEE; A§3.2.1.4) |
@@ -26,6 +27,7 @@ pub mod mesh;
 pub mod model;
 pub mod posture;
 pub mod reach;
+pub mod timing;
 pub mod urdf;
 
 pub use builtin::{builtin, builtin_names};

@@ -103,6 +103,11 @@ pub struct Joint {
     pub offset: Real,
     /// Allowed range of the joint value `q` (before `offset`), if limited.
     pub limits: Option<JointLimits>,
+    /// The fastest the joint may move, rad/s (m/s for a prismatic joint):
+    /// the URDF's `<limit velocity>`, a built-in robot's published figure;
+    /// `None` where none is known ([`crate::timing`] then takes a stated
+    /// conservative value).
+    pub max_velocity: Option<Real>,
 }
 
 impl Joint {
@@ -116,6 +121,7 @@ impl Joint {
             post: Isometry3::identity(),
             offset: 0.0,
             limits: None,
+            max_velocity: None,
         }
     }
 

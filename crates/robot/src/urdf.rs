@@ -5,7 +5,8 @@
 //! `capsule` extension, and `mesh` with `filename` and optional `scale`), and
 //! `<joint>` of type `fixed`, `revolute`, `continuous` (revolute without limits) and
 //! `prismatic` with `<origin xyz rpy>` (fixed-axis roll, pitch, yaw), `<axis xyz>`
-//! (default `1 0 0`) and `<limit lower upper>`. `floating` and `planar` joints are
+//! (default `1 0 0`) and `<limit lower upper velocity>` (the velocity bounds
+//! the robot clock's motions, [`crate::timing`]). `floating` and `planar` joints are
 //! rejected when they lie on the chain; a `<mimic>` joint is kept as an independent
 //! joint, with a warning. Other elements (`visual`, `inertial`, `gazebo`,
 //! `transmission`…) are ignored.
@@ -555,10 +556,41 @@ impl<'a, 'input> Parser<'a, 'input> {
                 }
             }
         };
-        Ok(match kind {
+        let max_velocity = self.max_velocity(node, raw.name)?;
+        let joint = match kind {
             JointKind::Prismatic => Joint::prismatic(raw.name, origin, axis, limits),
             _ => Joint::revolute(raw.name, origin, axis, limits),
+        };
+        Ok(Joint {
+            max_velocity,
+            ..joint
         })
+    }
+
+    /// A joint's `<limit velocity>`: `None` when absent, or 0 (which some
+    /// URDFs write for "not given"; a warning says so); an error when
+    /// negative or not a number.
+    fn max_velocity(
+        &mut self,
+        node: Node<'a, 'input>,
+        joint: &str,
+    ) -> Result<Option<Real>, RobotError> {
+        let Some(l) = child(node, "limit").filter(|l| l.has_attribute("velocity")) else {
+            return Ok(None);
+        };
+        let v = self.real(l, "velocity", None)?;
+        if v < 0.0 {
+            return Err(self.bad_value(l, "velocity", &v.to_string(), "a speed of at least 0"));
+        }
+        if v == 0.0 {
+            self.warnings.push(format!(
+                "{}:{}: joint '{joint}' has <limit velocity=\"0\">; taken as not given",
+                self.file,
+                self.line(l)
+            ));
+            return Ok(None);
+        }
+        Ok(Some(v))
     }
 
     fn link(

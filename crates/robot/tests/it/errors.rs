@@ -340,3 +340,30 @@ fn origins_beyond_the_coordinate_limit_are_errors() {
     let xml = one_joint("fixed", r#"    <origin xyz="1e7 0 0"/>"#);
     assert!(parse(&xml, None).is_ok());
 }
+
+/// `<limit velocity>`: a negative speed names the file, line, element and
+/// attribute; 0 is "not given" with a warning; a positive one is kept.
+#[test]
+fn joint_velocity_limits() {
+    let xml = one_joint(
+        "revolute",
+        r#"    <limit lower="-1" upper="1" velocity="-2"/>"#,
+    );
+    assert_contains(
+        &err(&xml, None),
+        &["test.urdf:7", "<limit velocity=\"-2\">", "at least 0"],
+    );
+    let xml = one_joint(
+        "revolute",
+        r#"    <limit lower="-1" upper="1" velocity="0"/>"#,
+    );
+    let robot = parse(&xml, None).unwrap();
+    assert_eq!(robot.joints[0].max_velocity, None);
+    assert!(
+        robot.warnings.iter().any(|w| w.contains("velocity=\"0\"")),
+        "{:?}",
+        robot.warnings
+    );
+    let xml = one_joint("continuous", r#"    <limit effort="1" velocity="2.5"/>"#);
+    assert_eq!(parse(&xml, None).unwrap().joints[0].max_velocity, Some(2.5));
+}

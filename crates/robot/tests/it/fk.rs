@@ -272,6 +272,12 @@ fn ur5_matches_hand_written_urdf_chain() {
                 "wrist_3_joint"
             ]
         );
+        // The clock's limits: each joint's <limit velocity> as typed in
+        // the file (3.15 rad/s for the first three, 3.2 for the wrists).
+        assert_eq!(
+            robot::timing::MotionLimits::of(&robot).velocity,
+            [3.15, 3.15, 3.15, 3.2, 3.2, 3.2]
+        );
         assert_eq!(robot.tool.0, robot::LinkId(8));
         for _ in 0..200 {
             let q = random_q(&robot, &mut rng);
