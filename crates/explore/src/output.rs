@@ -57,6 +57,7 @@ impl ExploreRun {
             decision_ms: times(&|r| r.f.is_some()),
             stage_two_decision_ms: times(&|r| r.stage == 2),
             wall_s: self.wall_s,
+            robot_time_s: record::explore::RobotTimeSummary::of(&self.viewpoints),
             timings: self.timings,
         }
     }

@@ -28,6 +28,7 @@ use crate::setup::Setup;
 use crate::stage_one::path_via_visited;
 use crate::{Choice, ExploreConfig, ExploreError, StageOne, StageTwoChoice, Termination};
 use geom::{Isometry3, Real, TriMesh};
+use hw::clock::{Activity, RobotClock, RobotTime};
 use hw::{Arm, LineScanner, tilt_sweep, tilt_sweep_through};
 use map::{IntegrationStats, TsdfConfig, TsdfMap};
 use plan::{ClearanceChecker, PlanConfig, PointClearance, Safety};
@@ -69,7 +70,17 @@ pub struct RunOptions {
     pub stage_two: bool,
     /// Which run this is (kept in the checkpoint).
     pub identity: RunIdentity,
+    /// The robot clock the hardware runs on (`hw::clock::Timed`): the loop
+    /// says what the robot is doing, counts its decisions on it, and reads
+    /// each viewpoint's robot time from it.
+    pub clock: RobotClock,
 }
+
+/// Robot time a decision counts when timings are off (wall time would make
+/// the outputs differ run to run), seconds: the README run's decisions,
+/// integration included, take 0.9 s (Stage One) and 1.5 s (Stage Two) at
+/// the median on a laptop core.
+pub const UNTIMED_DECISION_S: Real = 1.0;
 
 impl Default for RunOptions {
     fn default() -> Self {
@@ -81,6 +92,7 @@ impl Default for RunOptions {
             resume: false,
             stage_two: true,
             identity: RunIdentity::default(),
+            clock: RobotClock::default(),
         }
     }
 }
@@ -225,6 +237,8 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
         }
     }
     phases.lrc_s = lap();
+    // The map products between the stages are made while the arm stands.
+    episode.decided(phases.discs_s + phases.lrc_s);
     let mut stage_two_termination = None;
     if let (true, Some(m)) = (options.stage_two, materials.as_mut()) {
         let map_world = match built_world {
@@ -334,6 +348,8 @@ struct Episode<'a, H: ?Sized> {
     q: Vec<Real>,
     /// Every point measured, for Stage One's clearance.
     points: PointClearance,
+    /// The robot clock when the last viewpoint's record was made.
+    recorded_at: RobotTime,
 }
 
 impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
@@ -369,6 +385,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             unsafe_configurations: Vec::new(),
             q,
             points: PointClearance::new(),
+            recorded_at: RobotTime::default(),
         })
     }
 
@@ -387,6 +404,36 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         } else {
             0.0
         }
+    }
+
+    /// The robot stood still for `wall_s` seconds of decision (integrating
+    /// and deciding): counted on the robot clock, or [`UNTIMED_DECISION_S`]
+    /// when timings are off.
+    fn decided(&self, wall_s: Real) {
+        let s = if self.options.timings {
+            wall_s
+        } else {
+            UNTIMED_DECISION_S
+        };
+        self.options.clock.stand(Activity::Deciding, s);
+    }
+
+    /// Viewpoint `record` is complete: a new one gets the robot time since
+    /// the last record (a replayed one keeps its own), then it is shown
+    /// to `progress` and kept.
+    fn push_record(
+        &mut self,
+        mut record: ViewpointRecord,
+        replayed: bool,
+        progress: &mut dyn FnMut(&ViewpointRecord),
+    ) {
+        let now = self.options.clock.spent();
+        if !replayed {
+            record.robot_time = now.since(&self.recorded_at);
+        }
+        self.recorded_at = now;
+        progress(&record);
+        self.viewpoints.push(record);
     }
 
     /// The checkpoint of the run so far.
@@ -495,11 +542,16 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
 
     /// Move along `waypoints` to viewpoint `k`, each motion audited first.
     fn move_along(&mut self, k: usize, waypoints: &[Vec<Real>]) -> Result<(), ExploreError> {
+        self.options.clock.set_activity(Activity::Moving);
         for w in waypoints.windows(2) {
             self.audit(k, &w[0], &w[1])?;
             self.hw.move_to(&w[1])?;
         }
-        self.q = self.hw.joints();
+        // Plans start where the arm was sent, not where it reports within
+        // its tolerance: joints a motion does not move never drift.
+        if let Some(last) = waypoints.last() {
+            self.q.clone_from(last);
+        }
         Ok(())
     }
 
@@ -526,6 +578,9 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         }
         self.hw
             .seed_noise(viewpoint_seed(self.options.seed, k) ^ MOTION_NOISE_SALT);
+        self.options
+            .clock
+            .set_activity(Activity::MovingWhileScanning);
         let mut builder = sensor::SweepBuilder::new(self.hw.bearings_rad())?;
         if let Some(first) = waypoints.first()
             && replayed
@@ -557,7 +612,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                 &mut *self.hw,
                 &s.robot,
                 &s.world_from_base,
-                &w[1],
+                (&w[0], &w[1]),
                 step,
                 &mut builder,
                 &mut |at, next, b| {
@@ -614,8 +669,14 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                 break;
             }
         }
-        self.q = self.hw.joints();
+        // Where the arm was sent (as in `move_along`), or where the guard
+        // stopped it.
+        self.q = match waypoints.last() {
+            Some(last) if completed => last.clone(),
+            _ => self.hw.joints(),
+        };
         if builder.scan_count() > 0 {
+            let t = Instant::now();
             let sweep = builder.finish()?;
             self.setup.stage.integrate_motion(&sweep);
             self.tsdf.integrate_sweep(&sweep);
@@ -623,6 +684,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             // builder's points in order): the same index, without looking
             // each up again.
             self.add_points(k, &sweep, kept);
+            self.decided(t.elapsed().as_secs_f64());
         }
         Ok(completed)
     }
@@ -662,10 +724,12 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         self.hw.seed_noise(viewpoint_seed(self.options.seed, k));
         let t = Instant::now();
         let s = &self.setup;
+        self.options.clock.set_activity(Activity::StandingToSweep);
         let sweep = tilt_sweep_through(
             &mut *self.hw,
             &s.robot,
             &s.world_from_base,
+            &q,
             s.stage.tilt_joint(),
             &tilts,
             &mut |_, _| {},
@@ -678,6 +742,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             m.observe(discs, &sweep)?;
         }
         let integrate_ms = self.timed(t);
+        self.decided(t.elapsed().as_secs_f64());
         self.add_points(k, &sweep, 0);
         Ok((
             sweep,
@@ -785,6 +850,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             plan_ms: 0.0,
             sweep_ms: taken.sweep_ms,
             integrate_ms: taken.integrate_ms,
+            robot_time: RobotTime::default(),
         }
     }
 
@@ -850,8 +916,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             } else {
                 self.stage_one_record(k, &taken, pending.take())
             };
-            progress(&record);
-            self.viewpoints.push(record);
+            self.push_record(record, was_replayed, progress);
             if !replay.is_empty() {
                 continue;
             }
@@ -874,6 +939,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                 .collect();
             let decision = self.stage().decide(&self.q, Some(&self.points), &visited)?;
             let decision_ms = self.timed(t);
+            self.decided(t.elapsed().as_secs_f64());
             let plan_ms = if self.options.timings {
                 decision.plan_ms
             } else {
@@ -947,6 +1013,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                         .map(|(t, p, r)| (t, p, r, Vec::new()))
                 };
                 let decision_ms = self.timed(t);
+                self.decided(t.elapsed().as_secs_f64());
                 let Some((target, path, ranked, usable)) = found else {
                     return Ok("no_targetable_disc");
                 };
@@ -968,6 +1035,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                     tried[j] = true;
                 }
             }
+            let was_replayed = replayed.is_some();
             let record = match (replayed, aim) {
                 (Some(r), _) => r,
                 (None, None) => {
@@ -988,8 +1056,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                     ..self.record(k, 2, &taken)
                 },
             };
-            progress(&record);
-            self.viewpoints.push(record);
+            self.push_record(record, was_replayed, progress);
             if replay.is_empty() {
                 let tried: Vec<usize> = (0..tried.len()).filter(|&i| tried[i]).collect();
                 self.save(&tried)?;

@@ -7,6 +7,7 @@
 use crate::guard::GuardCounts;
 use crate::{FollowError, Follower, Termination};
 use geom::{Point3, Real};
+use hw::clock::{Activity, RobotClock};
 use hw::{Arm, RangeSensors};
 use record::StepRow;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -75,14 +76,23 @@ pub struct Episode {
 }
 
 /// How [`run_episode`] runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug)]
 pub struct EpisodeOptions {
     /// Most sensor sets to take (one per step).
     pub max_sets: u64,
     /// Keep the steps' wall times in the rows (off: `None`, so the rows are
     /// the same for the same inputs).
     pub timings: bool,
+    /// The robot clock the hardware runs on (`hw::clock::Timed`): each
+    /// step's decision is counted on it, and each row gets the step's
+    /// robot time.
+    pub clock: RobotClock,
 }
+
+/// Robot time a step's decision counts when timings are off, seconds (a
+/// step takes 0.05–0.3 ms of wall time here; Pudney's took 75–280 ms,
+/// P Table 1).
+pub const UNTIMED_STEP_DECISION_S: Real = 0.001;
 
 /// Drive `follower` through the hardware until it terminates,
 /// `options.max_sets` sensor sets have been taken, or `stop` is raised
@@ -97,7 +107,7 @@ pub fn run_episode<H: Arm + RangeSensors + ?Sized>(
     hw: &mut H,
     follower: &mut Follower,
     judge: &mut dyn Judge,
-    options: EpisodeOptions,
+    options: &EpisodeOptions,
     stop: &AtomicBool,
     progress: &mut dyn FnMut(&StepRow, &Follower),
 ) -> Result<Episode, FollowError> {
@@ -105,6 +115,7 @@ pub fn run_episode<H: Arm + RangeSensors + ?Sized>(
     follower.robot().check_joints(&q)?;
     judge.pose(None, &q)?;
     let mut rows = Vec::new();
+    let clock = &options.clock;
     let end = loop {
         if stop.load(Ordering::Relaxed) {
             break RunEnd::Interrupted;
@@ -112,6 +123,8 @@ pub fn run_episode<H: Arm + RangeSensors + ?Sized>(
         if rows.len() as u64 >= options.max_sets {
             break RunEnd::MaxSets;
         }
+        let began = clock.now_ns();
+        clock.set_activity(Activity::StandingToSweep);
         let readings = match hw.read_all() {
             Ok(r) => r,
             Err(e) => break RunEnd::Error(e.to_string()),
@@ -121,7 +134,14 @@ pub fn run_episode<H: Arm + RangeSensors + ?Sized>(
             Ok(s) => s,
             Err(e) => break RunEnd::Error(e.to_string()),
         };
+        let decided_s = if options.timings {
+            step.times.total_us() * 1e-6
+        } else {
+            UNTIMED_STEP_DECISION_S
+        };
+        clock.stand(Activity::Deciding, decided_s);
         let n = rows.len() as u64;
+        let step_time = |r: &mut StepRow| r.robot_time_s = (clock.now_ns() - began) as Real * 1e-9;
         rows.push(StepRow {
             step: n,
             mode: step.mode.name().to_owned(),
@@ -132,9 +152,11 @@ pub fn run_episode<H: Arm + RangeSensors + ?Sized>(
             link_clearance_m: step.link_clearance,
             current_segment: step.current_segment,
             current_edge: step.current_edge,
+            robot_time_s: 0.0,
         });
         if let Some(t) = step.termination {
-            if let Some(r) = rows.last() {
+            if let Some(r) = rows.last_mut() {
+                step_time(r);
                 progress(r, follower);
             }
             break RunEnd::Follower(t);
@@ -143,7 +165,12 @@ pub fn run_episode<H: Arm + RangeSensors + ?Sized>(
         if let Err(e) = judge.motion(n, &q, &next) {
             break RunEnd::Error(e.to_string());
         }
-        if let Err(e) = hw.move_to(&next) {
+        clock.set_activity(Activity::Moving);
+        let moved = hw.move_to(&next);
+        if let Some(r) = rows.last_mut() {
+            step_time(r);
+        }
+        if let Err(e) = moved {
             break RunEnd::Error(format!("step {n}: moving to the next pose: {e}"));
         }
         q = hw.joints();

@@ -29,7 +29,7 @@ pub fn tilt_sweep<R: Arm + LineScanner + ?Sized>(
         .flatten()
         .map(|l| (l.min, l.max));
     let tilts = cfg.tilt_values(q0[j], limits);
-    tilt_sweep_through(rig, robot, world_from_base, j, &tilts, progress)
+    tilt_sweep_through(rig, robot, world_from_base, &q0, j, &tilts, progress)
 }
 
 /// The 0-based index of `cfg`'s tilt joint on an arm of `dof` joints.
@@ -45,17 +45,19 @@ pub fn tilt_joint(cfg: &SweepConfig, dof: usize) -> Result<usize, HwError> {
 }
 
 /// Sweep the scanner through the given values of joint `j` (0-based),
-/// scanning at each, and return the arm to where it started; each scan is
-/// placed as in [`tilt_sweep`]. `tilts` is not empty.
+/// scanning at each, and return the arm to `q0`, where it was sent last
+/// (the commands are made from it, not from the joints the arm reports
+/// within its tolerance, so that joints the sweep does not move never
+/// drift); each scan is placed as in [`tilt_sweep`]. `tilts` is not empty.
 pub fn tilt_sweep_through<R: Arm + LineScanner + ?Sized>(
     rig: &mut R,
     robot: &Robot,
     world_from_base: &Isometry3,
+    q0: &[geom::Real],
     j: usize,
     tilts: &[geom::Real],
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Sweep, HwError> {
-    let q0 = rig.joints();
     if j >= q0.len() {
         return Err(HwError::TiltJoint {
             joint: j + 1,
@@ -63,14 +65,14 @@ pub fn tilt_sweep_through<R: Arm + LineScanner + ?Sized>(
         });
     }
     let mut builder = SweepBuilder::new(rig.bearings_rad())?;
-    let mut q = q0.clone();
+    let mut q = q0.to_vec();
     for (k, &t) in tilts.iter().enumerate() {
         q[j] = t;
         rig.move_to(&q)?;
         scan_into(rig, robot, world_from_base, &mut builder)?;
         progress(k + 1, tilts.len());
     }
-    rig.move_to(&q0)?;
+    rig.move_to(q0)?;
     Ok(builder.finish()?)
 }
 
@@ -111,8 +113,8 @@ pub struct ScannedMotion {
 /// `false` keeps the arm where it is.
 pub type StepGuard<'a> = dyn FnMut(&[geom::Real], &[geom::Real], &SweepBuilder) -> bool + 'a;
 
-/// Scan while moving: take the arm from where it stands to `to` in equal
-/// steps of at most `step_rad` on every joint, scanning after each step (a
+/// Scan while moving: take the arm along `(from, to)`, from where it was
+/// sent last to `to`, in equal steps of at most `step_rad` on every joint, scanning after each step (a
 /// line scanner keeps scanning while the arm moves; the Hokuyo of A§5.1
 /// delivers a scan every 100 ms), each scan added to `builder` at the
 /// scanner pose of the joints the arm reports. Before each step,
@@ -122,12 +124,11 @@ pub fn scan_motion<R: Arm + LineScanner + ?Sized>(
     rig: &mut R,
     robot: &Robot,
     world_from_base: &Isometry3,
-    to: &[geom::Real],
+    (from, to): (&[geom::Real], &[geom::Real]),
     step_rad: geom::Real,
     builder: &mut SweepBuilder,
     guard: &mut StepGuard<'_>,
 ) -> Result<ScannedMotion, HwError> {
-    let from = rig.joints();
     let span = from
         .iter()
         .zip(to)
@@ -145,7 +146,13 @@ pub fn scan_motion<R: Arm + LineScanner + ?Sized>(
         } else {
             from.iter().zip(to).map(|(a, b)| a + (b - a) * t).collect()
         };
-        if !guard(&rig.joints(), &q, builder) {
+        let at: Vec<geom::Real> = if s == 1 {
+            from.to_vec()
+        } else {
+            let t = (s - 1) as geom::Real / steps as geom::Real;
+            from.iter().zip(to).map(|(a, b)| a + (b - a) * t).collect()
+        };
+        if !guard(&at, &q, builder) {
             return Ok(ScannedMotion {
                 steps: s - 1,
                 completed: false,
@@ -219,7 +226,7 @@ mod tests {
             &mut rig,
             &robot,
             &world,
-            &to,
+            (&from, &to),
             0.1,
             &mut builder,
             &mut |at, _, b| {
@@ -264,7 +271,7 @@ mod tests {
                 &mut rig,
                 &robot,
                 &world,
-                &to,
+                (&to, &to),
                 0.1,
                 &mut builder,
                 &mut |_, _, _| true
@@ -285,7 +292,7 @@ mod tests {
             &mut rig,
             &robot,
             &world,
-            &to,
+            (&from, &to),
             0.1,
             &mut builder,
             &mut |_, _, b| b.scan_count() < 2,

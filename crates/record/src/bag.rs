@@ -14,17 +14,17 @@
 //! |---|---|
 //! | [`msg`] | the ROS 2 message types (serde, in the field order of ROS 2 Humble's `.msg` files) and their `ros2msg` definitions |
 //! | [`BagWriter`], [`read_bag`], [`BagMessage`] | MCAP files of CDR messages, written and read |
-//! | [`RunBag`] | a run's bag written as its hardware acts (fed from `hw::script::Tap`), on its own clock |
+//! | [`RunBag`] | a run's bag written as its hardware acts (fed from `hw::script::Tap`), stamped on the robot clock |
 //! | [`sweeps_from_bag`] | a robot's bag as sweeps: laser scans placed at the interpolated joint states (`surveyor map --bag`) |
 //! | [`sets_from_bag`] | a robot's bag as Pudney's sensor sets: range readings placed by its frames (`surveyor model --bag`) |
 //! | [`markers`] | marker arrays of viewpoints, discs and the surface model |
 //! | [`topics`] | the topic names a run's bag uses |
 //!
-//! **Time.** A [`RunBag`] keeps its own clock: a motion lasts its largest
-//! joint change at [`BagConfig::joint_speed`] (1 rad/s by default), a scan
-//! [`BagConfig::scan_period_s`] (0.1 s, the Hokuyo's period in A§5.1). A
-//! simulated run's bag is therefore the same for the same seed; the clock
-//! starts at 0.
+//! **Time.** A [`RunBag`]'s stamps are the robot clock's
+//! (`hw::clock::RobotClock`): a motion lasts its profile within the joints'
+//! velocity and acceleration limits, a scan the scanner's `scan_time` (0.1 s
+//! for the Hokuyo of A§5.1). A simulated run's bag is therefore the same for
+//! the same seed; the clock starts at 0.
 //!
 //! **Frames.** Everything is placed in [`ROOT_FRAME`] (`map`, the scenario's
 //! world frame); `/tf_static` places the robot's base link there, the
@@ -50,7 +50,7 @@ pub use input::{
     ScanTopics, sets_from_bag, sweeps_from_bag,
 };
 pub use run::{
-    BagClock, BagConfig, ROOT_FRAME, RunBag, SCANNER_FRAME, joint_state, laser_scan, link_frames,
+    BagConfig, ROOT_FRAME, RunBag, SCANNER_FRAME, joint_state, laser_scan, link_frames,
     point_cloud, range, range_frame, scan_rays, scanner_from_laser, static_frames,
 };
 

@@ -6,7 +6,7 @@
 use crate::RecordError;
 use crate::coverage::CoverageReport;
 use crate::table::Table;
-use crate::viewpoints::UnsafeConfiguration;
+use crate::viewpoints::{UnsafeConfiguration, ViewpointRecord};
 use geom::{Point3, Real, TriMesh, UnitVector3, Vector3};
 use sensor::SweepPoint;
 use serde::{Deserialize, Serialize};
@@ -83,10 +83,82 @@ pub struct ExploreSummary {
     pub stage_two_decision_ms: Spread,
     /// Wall time of the whole run, seconds (0 when timings are off).
     pub wall_s: Real,
+    /// The time a real arm with the scenario's joint limits would need
+    /// (the robot clock, `hw::clock`): in all, per stage and per activity.
+    #[serde(default)]
+    pub robot_time_s: RobotTimeSummary,
     /// Where the job's wall time went, per phase (absent when timings are
     /// off, so such files stay the same byte for byte).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub timings: Option<PhaseTimings>,
+}
+
+/// `run.json`'s `robot_time_s`: a run's robot time in seconds, in all, per
+/// stage, and per activity of the robot clock; the sum of its viewpoints'
+/// (`viewpoints.csv`'s `robot_*` columns).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotTimeSummary {
+    /// All of it.
+    pub total: Real,
+    /// Stage One's viewpoints.
+    pub stage_one: Real,
+    /// Stage Two's viewpoints (the map products between the stages
+    /// included).
+    pub stage_two: Real,
+    /// Moving with the scanner scanning.
+    pub moving_while_scanning: Real,
+    /// Moving without scanning.
+    pub moving: Real,
+    /// Sweeping the scanner at viewpoints.
+    pub standing_to_sweep: Real,
+    /// Standing still while the loop integrates and decides (wall time,
+    /// or a stated figure per decision with timings off).
+    pub deciding: Real,
+}
+
+impl RobotTimeSummary {
+    /// The summary of `viewpoints`' robot times.
+    pub fn of(viewpoints: &[ViewpointRecord]) -> Self {
+        let mut all = robot::timing::RobotTime::default();
+        let mut out = Self::default();
+        for v in viewpoints {
+            all.add(&v.robot_time);
+            let t = v.robot_time.total_s();
+            if v.stage == 1 {
+                out.stage_one += t;
+            } else {
+                out.stage_two += t;
+            }
+        }
+        Self {
+            total: all.total_s(),
+            moving_while_scanning: all.moving_while_scanning_s,
+            moving: all.moving_s,
+            standing_to_sweep: all.standing_to_sweep_s,
+            deciding: all.deciding_s,
+            ..out
+        }
+    }
+}
+
+impl std::fmt::Display for RobotTimeSummary {
+    /// `6230 s in all, Stage One 5118 s, Stage Two 1111 s; moving while
+    /// scanning …`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:.0} s in all, Stage One {:.0} s, Stage Two {:.0} s; moving while scanning {:.0} s, \
+             moving {:.0} s, standing to sweep {:.0} s, deciding {:.0} s",
+            self.total,
+            self.stage_one,
+            self.stage_two,
+            self.moving_while_scanning,
+            self.moving,
+            self.standing_to_sweep,
+            self.deciding
+        )
+    }
 }
 
 /// Where the wall time of a `surveyor explore` job went, seconds per phase
@@ -842,6 +914,7 @@ mod tests {
             decision_ms: Spread::of(vec![3.0, 1.0, 2.0]),
             stage_two_decision_ms: Spread::default(),
             wall_s: 0.0,
+            robot_time_s: RobotTimeSummary::default(),
             timings: None,
         }
     }

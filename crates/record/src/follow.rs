@@ -40,6 +40,46 @@ impl StepTimes {
     }
 }
 
+/// `run.json`'s `robot_time_s` of a surface-following run, seconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FollowRobotTime {
+    /// All of it: the steps' robot times added up.
+    pub total: Real,
+    /// Moving between the steps' poses.
+    pub moving: Real,
+    /// Standing to read the range finders.
+    pub sensing: Real,
+    /// Standing while the follower decides (wall time, or a stated figure
+    /// per step with timings off).
+    pub deciding: Real,
+}
+
+impl FollowRobotTime {
+    /// The summary of a robot clock's split (`hw::clock::RobotClock`,
+    /// read with `robot::timing::RobotTime`): a follower reads its sensors
+    /// standing, as a sweep does.
+    pub fn of(spent: &robot::timing::RobotTime) -> Self {
+        Self {
+            total: spent.total_s(),
+            moving: spent.moving_s + spent.moving_while_scanning_s,
+            sensing: spent.standing_to_sweep_s,
+            deciding: spent.deciding_s,
+        }
+    }
+}
+
+impl std::fmt::Display for FollowRobotTime {
+    /// `1907 s (moving 1839 s, sensing 65 s, deciding 3 s)`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:.0} s (moving {:.0} s, sensing {:.0} s, deciding {:.0} s)",
+            self.total, self.moving, self.sensing, self.deciding
+        )
+    }
+}
+
 /// One step of a run (a row of `steps.csv`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StepRow {
@@ -63,10 +103,14 @@ pub struct StepRow {
     pub current_segment: Option<SegmentId>,
     /// The current edge.
     pub current_edge: Option<EdgeKey>,
+    /// The step's robot time (the reading, the decision, the motion), by
+    /// the robot clock (`hw::clock`), seconds.
+    #[serde(default)]
+    pub robot_time_s: Real,
 }
 
 /// `steps.csv`: `step,mode,x,y,z,q1..q{dof},set_size,update_us,direction_us,
-/// kinematics_us,link_clearance_m,current_segment,current_edge`; empty
+/// kinematics_us,link_clearance_m,current_segment,current_edge,robot_time_s`; empty
 /// fields for no value (the times when they were not recorded).
 pub fn steps_csv(rows: &[StepRow], dof: usize) -> String {
     let mut out = String::from("step,mode,x,y,z");
@@ -74,7 +118,8 @@ pub fn steps_csv(rows: &[StepRow], dof: usize) -> String {
         let _ = write!(out, ",q{i}");
     }
     out.push_str(
-        ",set_size,update_us,direction_us,kinematics_us,link_clearance_m,current_segment,current_edge\n",
+        ",set_size,update_us,direction_us,kinematics_us,link_clearance_m,current_segment,current_edge,\
+         robot_time_s\n",
     );
     let opt = |v: Option<String>| v.unwrap_or_default();
     for r in rows {
@@ -96,10 +141,11 @@ pub fn steps_csv(rows: &[StepRow], dof: usize) -> String {
         }
         let _ = writeln!(
             out,
-            ",{},{},{}",
+            ",{},{},{},{}",
             opt(r.link_clearance_m.map(|v| v.to_string())),
             opt(r.current_segment.map(|s| s.0.to_string())),
-            opt(r.current_edge.map(|e| e.0.to_string()))
+            opt(r.current_edge.map(|e| e.0.to_string())),
+            r.robot_time_s
         );
     }
     out
@@ -121,6 +167,12 @@ pub fn read_steps(path: &Path) -> Result<Vec<StepRow>, RecordError> {
     let clearance = t.optional("link_clearance_m")?;
     let segment = t.optional_indices("current_segment")?;
     let edge = t.optional_indices("current_edge")?;
+    // Runs written before the robot clock have no robot time.
+    let robot_time = if t.has("robot_time_s") {
+        t.numbers("robot_time_s")?
+    } else {
+        vec![0.0; t.len()]
+    };
     let id = |v: Option<usize>, what: &str, line: usize| -> Result<Option<u32>, RecordError> {
         v.map(|v| {
             u32::try_from(v).map_err(|_| RecordError::Field {
@@ -152,6 +204,7 @@ pub fn read_steps(path: &Path) -> Result<Vec<StepRow>, RecordError> {
                 link_clearance_m: clearance[i],
                 current_segment: id(segment[i], "current_segment", i + 2)?.map(SegmentId),
                 current_edge: id(edge[i], "current_edge", i + 2)?.map(EdgeKey),
+                robot_time_s: robot_time[i],
             })
         })
         .collect()
@@ -300,6 +353,10 @@ pub struct FollowSummary<O = serde_json::Value, S = serde_json::Value, M = serde
     pub sets_per_m2: Option<Real>,
     /// Wall time per step (update + direction + kinematics), µs.
     pub step_us: StepTimeStats,
+    /// The robot time of the run (the steps' sum; the robot clock,
+    /// `hw::clock`): in all and per activity, seconds.
+    #[serde(default)]
+    pub robot_time_s: FollowRobotTime,
     /// Mean time of each part of a step, µs.
     pub part_mean_us: StepTimes,
     /// Steps per mode.

@@ -5,6 +5,7 @@
 use crate::RecordError;
 use crate::table::Table;
 use geom::Real;
+use robot::timing::RobotTime;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -71,6 +72,12 @@ pub struct ViewpointRecord {
     pub sweep_ms: Real,
     /// Integration into the planning grid and the TSDF, ms.
     pub integrate_ms: Real,
+    /// The robot time since the previous viewpoint (its decision, the
+    /// motion here and the sweep; the first viewpoint's from the start),
+    /// by the robot clock (`hw::clock`); the rows add up to `run.json`'s
+    /// `robot_time_s`.
+    #[serde(default)]
+    pub robot_time: RobotTime,
 }
 
 /// One candidate of a Stage One decision, as scored.
@@ -104,7 +111,9 @@ pub const PATH_CSV: &str = "path.csv";
 /// h1_weighted, h2, h3, predicted_h1_weighted, actual_h1_weighted,
 /// candidates, front, unreachable, predicted_revealed, revealed,
 /// coverage_a1, joint_travel, waypoints, decision_ms, plan_ms, sweep_ms,
-/// integrate_ms, target_disc, discs_identified`); empty cells for no value.
+/// integrate_ms, target_disc, discs_identified, robot_time_s,
+/// robot_moving_while_scanning_s, robot_moving_s, robot_standing_to_sweep_s,
+/// robot_deciding_s`); empty cells for no value.
 pub fn viewpoints_csv(viewpoints: &[ViewpointRecord]) -> String {
     let dof = viewpoints.first().map_or(0, |r| r.joints.len());
     let mut out = String::from("k,stage");
@@ -114,7 +123,8 @@ pub fn viewpoints_csv(viewpoints: &[ViewpointRecord]) -> String {
     out.push_str(
         ",f1,f2,f3,f4,h1,h1_weighted,h2,h3,predicted_h1_weighted,actual_h1_weighted,\
          candidates,front,unreachable,predicted_revealed,revealed,coverage_a1,joint_travel,waypoints,\
-         decision_ms,plan_ms,sweep_ms,integrate_ms,target_disc,discs_identified\n",
+         decision_ms,plan_ms,sweep_ms,integrate_ms,target_disc,discs_identified,robot_time_s,\
+         robot_moving_while_scanning_s,robot_moving_s,robot_standing_to_sweep_s,robot_deciding_s\n",
     );
     let opt = |v: Option<Real>| v.map_or(String::new(), |x| format!("{x}"));
     for r in viewpoints {
@@ -128,7 +138,7 @@ pub fn viewpoints_csv(viewpoints: &[ViewpointRecord]) -> String {
         }
         let _ = writeln!(
             out,
-            ",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{}",
+            ",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{},{:.6},{:.6},{:.6},{:.6},{:.6}",
             r.h1,
             r.h1_weighted,
             r.h2,
@@ -148,7 +158,12 @@ pub fn viewpoints_csv(viewpoints: &[ViewpointRecord]) -> String {
             r.sweep_ms,
             r.integrate_ms,
             r.target_disc.map_or(String::new(), |t| t.to_string()),
-            r.discs_identified.map_or(String::new(), |t| t.to_string())
+            r.discs_identified.map_or(String::new(), |t| t.to_string()),
+            r.robot_time.total_s(),
+            r.robot_time.moving_while_scanning_s,
+            r.robot_time.moving_s,
+            r.robot_time.standing_to_sweep_s,
+            r.robot_time.deciding_s,
         );
     }
     out
@@ -216,8 +231,9 @@ pub fn joint_columns(table: &Table) -> Result<Vec<Vec<Real>>, RecordError> {
 }
 
 /// Read the viewpoints back from `viewpoints.csv`, `candidates.csv` and
-/// `path.csv` in `dir`. The times come back as written (to the
-/// microsecond); everything else as recorded.
+/// `path.csv` in `dir`. The wall times come back as written (to the
+/// microsecond), the robot times to the microsecond; everything else as
+/// recorded.
 pub fn read_viewpoints(dir: &Path) -> Result<Vec<ViewpointRecord>, RecordError> {
     let vp = Table::read(&dir.join(VIEWPOINTS_CSV))?;
     let k = vp.indices("k")?;
@@ -250,6 +266,17 @@ pub fn read_viewpoints(dir: &Path) -> Result<Vec<ViewpointRecord>, RecordError> 
         vp.optional_indices("discs_identified")?
     } else {
         vec![None; vp.len()]
+    };
+    // Runs written before the robot clock have no robot time.
+    let robot_time = if vp.has("robot_time_s") {
+        [
+            num("robot_moving_while_scanning_s")?,
+            num("robot_moving_s")?,
+            num("robot_standing_to_sweep_s")?,
+            num("robot_deciding_s")?,
+        ]
+    } else {
+        std::array::from_fn(|_| vec![0.0; vp.len()])
     };
     let mut out = Vec::with_capacity(vp.len());
     for i in 0..vp.len() {
@@ -292,6 +319,12 @@ pub fn read_viewpoints(dir: &Path) -> Result<Vec<ViewpointRecord>, RecordError> 
             plan_ms: times[1][i],
             sweep_ms: times[2][i],
             integrate_ms: times[3][i],
+            robot_time: RobotTime {
+                moving_while_scanning_s: robot_time[0][i],
+                moving_s: robot_time[1][i],
+                standing_to_sweep_s: robot_time[2][i],
+                deciding_s: robot_time[3][i],
+            },
         });
     }
     let position: std::collections::HashMap<usize, usize> =

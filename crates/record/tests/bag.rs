@@ -109,36 +109,32 @@ fn broken_files_get_clear_errors() {
     assert!(record::bag::decode::<JointState>(&[9, 9, 9, 9, 0, 0]).is_err());
 }
 
-/// The DENSO arm with its scanner, fed a move, a scan and a move back: a
-/// joint state and TF per move (with the start, and where the second move
-/// began after the scan), one scan message, and the clock advanced by each
-/// motion at the joint speed and by the scan period.
+/// The DENSO arm with its scanner, fed a move, a scan and a move back at
+/// the stamps the robot clock gave them: a joint state and TF per move
+/// (with the start, and where the second move began after the scan), and
+/// one scan message with its scan time.
 #[test]
-fn a_run_bag_logs_moves_and_scans_on_its_clock() {
+fn a_run_bag_logs_moves_and_scans_at_their_stamps() {
     let robot = robot::builtin("denso-vm6083").unwrap();
     let q0 = vec![0.0, -0.96, 2.88, 0.0, -1.92, 0.0];
     let mut q1 = q0.clone();
     q1[4] += 0.5;
-    let config = BagConfig {
-        joint_speed: 0.25,
-        scan_period_s: 0.1,
-        ..BagConfig::default()
-    };
     let mut bag = RunBag::new(
         &robot,
         &geom::Isometry3::translation(1.0, 0.0, 0.0),
         &q0,
         &[-0.1, 0.0, 0.1],
-        config,
+        BagConfig::default(),
     )
     .unwrap();
-    let clock = bag.clock();
-    bag.moved(&q1);
-    assert_eq!(clock.now_ns(), 2_000_000_000);
-    bag.scanned(&[Some(1.0), None, Some(2.0)], &[1.0, 0.0, 2.0]);
-    assert_eq!(clock.now_ns(), 2_100_000_000);
-    bag.moved(&q0);
-    assert_eq!(clock.now_ns(), 4_100_000_000);
+    bag.moved(0, 2_000_000_000, &q1);
+    bag.scanned(
+        2_000_000_000,
+        0.1,
+        &[Some(1.0), None, Some(2.0)],
+        &[1.0, 0.0, 2.0],
+    );
+    bag.moved(2_100_000_000, 4_100_000_000, &q0);
     bag.write(topics::DISCS, 3, &MarkerArray::default())
         .unwrap();
     let bytes = bag.finish().unwrap();
@@ -177,6 +173,8 @@ fn a_run_bag_logs_moves_and_scans_on_its_clock() {
     let s = scans[0].decode::<LaserScan>().unwrap();
     assert_eq!(s.ranges, vec![1.0, f32::INFINITY, 2.0]);
     assert!((s.angle_increment - 0.1).abs() < 1e-7);
+    assert!((s.scan_time - 0.1).abs() < 1e-7);
+    assert_eq!(s.header.stamp.to_nanos(), Some(2_000_000_000));
     assert_eq!(s.header.frame_id, record::bag::SCANNER_FRAME);
     let statics = on(topics::TF_STATIC)[0].decode::<TfMessage>().unwrap();
     assert_eq!(
@@ -327,21 +325,19 @@ fn a_bag_s_scans_are_placed_at_interpolated_joints() {
 }
 
 #[test]
-fn a_run_bag_refuses_a_clock_it_cannot_keep() {
+fn a_run_bag_refuses_a_range_slack_it_cannot_state() {
     let robot = robot::builtin("point3").unwrap();
-    for config in [
-        BagConfig {
-            joint_speed: 0.0,
+    for slack in [-1.0, f64::NAN] {
+        let config = BagConfig {
+            finder_range_slack_m: slack,
             ..BagConfig::default()
-        },
-        BagConfig {
-            scan_period_s: f64::NAN,
-            ..BagConfig::default()
-        },
-    ] {
+        };
         let e = RunBag::new(&robot, &geom::Isometry3::identity(), &[0.0; 3], &[], config)
             .unwrap_err()
             .to_string();
-        assert!(e.contains("bag configuration"), "{e}");
+        assert!(
+            e.contains("bag configuration") && e.contains("finder_range_slack_m"),
+            "{e}"
+        );
     }
 }

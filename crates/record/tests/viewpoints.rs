@@ -41,6 +41,13 @@ fn a_candidates_table_cut_short_is_refused() {
         plan_ms: 0.0,
         sweep_ms: 0.0,
         integrate_ms: 0.0,
+        // Robot time in whole microseconds comes back as written.
+        robot_time: robot::timing::RobotTime {
+            moving_while_scanning_s: 1.25 * k as f64,
+            moving_s: 0.5,
+            standing_to_sweep_s: 15.125,
+            deciding_s: 0.001,
+        },
     };
     let records = vec![viewpoint(0, 0), viewpoint(1, 3), viewpoint(2, 4)];
     let dir = tempfile::tempdir().unwrap();

@@ -39,7 +39,7 @@ fn text(run: &Value, key: &str) -> String {
 }
 
 /// The cards of an explore run: coverage against the coverage oracle,
-/// safety, materials against the material oracle, viewpoints, wall time.
+/// safety, materials against the material oracle, viewpoints, robot time, wall time.
 pub fn explore(run: &Value) -> Vec<Card> {
     let oracle_n = text(run, "coverage.oracle.stage_one_viewpoints");
     let oracle_a1 = num(run, "coverage.oracle.A1_after_stage_one_viewpoints")
@@ -152,6 +152,24 @@ pub fn explore(run: &Value) -> Vec<Card> {
         ),
         Card::of(
             run,
+            "robot_time_s.total",
+            "Robot time",
+            minutes,
+            format!(
+                "what a real arm within the scenario's joint limits would take: Stage One {} s, \
+                 Stage Two {} s; moving while scanning {} s, moving {} s, standing to sweep {} s, \
+                 deciding {} s",
+                seconds(run, "robot_time_s.stage_one"),
+                seconds(run, "robot_time_s.stage_two"),
+                seconds(run, "robot_time_s.moving_while_scanning"),
+                seconds(run, "robot_time_s.moving"),
+                seconds(run, "robot_time_s.standing_to_sweep"),
+                seconds(run, "robot_time_s.deciding")
+            ),
+            Some("plot-timings"),
+        ),
+        Card::of(
+            run,
             "timings.total_s",
             "Wall time",
             |v| v.as_f64().map(|s| format!("{s:.1} s")),
@@ -180,13 +198,23 @@ fn clearance(run: &Value, link: &str) -> Option<Card> {
     )
 }
 
+/// Seconds as minutes and seconds (`38 min 30 s`).
+fn minutes(v: &Value) -> Option<String> {
+    let s = v.as_f64()?.round();
+    Some(if s >= 60.0 {
+        format!("{:.0} min {:.0} s", (s / 60.0).floor(), s % 60.0)
+    } else {
+        format!("{s:.0} s")
+    })
+}
+
 /// Seconds of the run at `key`, one decimal.
 fn seconds(run: &Value, key: &str) -> String {
     num(run, key).map_or_else(|| "?".into(), |s| format!("{s:.1}"))
 }
 
 /// The cards of a follow run: faces, edges, corners, contacts, clearance,
-/// sets per m², termination, step time.
+/// sets per m², termination, robot time, step time.
 pub fn follow(run: &Value) -> Vec<Card> {
     let lambda = num(run, "score.config.lambda_m")
         .map_or_else(|| "λ".into(), |l| format!("λ = {:.0} mm", 1000.0 * l));
@@ -245,6 +273,20 @@ pub fn follow(run: &Value) -> Vec<Card> {
             plain,
             format!("the follower's own end, after {} steps", text(run, "steps")),
             Some("plot-modes"),
+        ),
+        Card::of(
+            run,
+            "robot_time_s.total",
+            "Robot time",
+            minutes,
+            format!(
+                "what a real arm within the joint limits would take: moving {} s, reading the \
+                 sensors {} s, deciding {} s",
+                seconds(run, "robot_time_s.moving"),
+                seconds(run, "robot_time_s.sensing"),
+                seconds(run, "robot_time_s.deciding")
+            ),
+            Some("plot-times"),
         ),
         Card::of(
             run,

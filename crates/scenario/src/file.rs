@@ -72,6 +72,66 @@ pub struct RobotSpec {
     pub base_pose: PoseSpec,
     /// Start joint values, radians (metres for prismatic joints).
     pub start_joints: Vec<Real>,
+    /// The robot clock's figures where they differ from the robot's own
+    /// (`[robot.timing]`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timing: Option<TimingSpec>,
+}
+
+/// `[robot.timing]`: the robot clock's figures for this robot. Each one
+/// left out is the robot's own: a URDF's `<limit velocity>` per joint, and
+/// otherwise the stated conservative values of `robot::timing` (1 rad/s,
+/// 2 rad/s²; 0.25 m/s, 1 m/s² for prismatic joints) and a settling
+/// allowance of 0.05 s per stop.
+///
+/// ```toml
+/// [robot.timing]
+/// velocity = [3.15, 3.15, 3.15, 3.2, 3.2, 3.2]    # rad/s per joint
+/// acceleration = [2.0, 2.0, 2.0, 4.0, 4.0, 4.0]   # rad/s² per joint
+/// settle_s = 0.05
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct TimingSpec {
+    /// Largest speed per joint, rad/s (m/s for prismatic joints).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<Vec<Real>>,
+    /// Largest acceleration per joint, rad/s² (m/s²).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub acceleration: Option<Vec<Real>>,
+    /// Seconds the arm takes to settle after each motion.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settle_s: Option<Real>,
+}
+
+impl RobotSpec {
+    /// The robot clock's figures for `robot` (loaded from this spec) with
+    /// a scanner taking `scan_time_s` a scan and range finders read every
+    /// `reading_period_s`: the robot's own, overridden by `[robot.timing]`;
+    /// an error names the field and what was expected.
+    pub fn timing(
+        &self,
+        robot: &robot::Robot,
+        scan_time_s: Real,
+        reading_period_s: Real,
+    ) -> Result<hw::clock::RobotTiming, String> {
+        let mut timing = hw::clock::RobotTiming::of(robot, scan_time_s, reading_period_s);
+        if let Some(spec) = &self.timing {
+            if let Some(v) = &spec.velocity {
+                timing.limits.velocity.clone_from(v);
+            }
+            if let Some(a) = &spec.acceleration {
+                timing.limits.acceleration.clone_from(a);
+            }
+            if let Some(s) = spec.settle_s {
+                timing.settle_s = s;
+            }
+        }
+        timing
+            .check(robot.dof())
+            .map_err(|e| format!("robot.timing: {e}"))?;
+        Ok(timing)
+    }
 }
 
 /// The tilting scanner of an AXBAM scenario.
@@ -176,6 +236,26 @@ impl Scenario {
             if !j.is_finite() {
                 return Err(fail(format!(
                     "robot.start_joints[{i}]: expected a finite joint value, got {j}"
+                )));
+            }
+        }
+        if let Some(t) = &self.robot.timing {
+            let figures = t.velocity.iter().chain(&t.acceleration).flatten();
+            if let Some(v) = figures
+                .copied()
+                .find(|v| !(v.is_finite() && *v > 0.0 && *v <= robot::timing::MAX_LIMIT))
+            {
+                return Err(fail(format!(
+                    "robot.timing: a velocity or acceleration of {v}: expected more than 0 and at most {}",
+                    robot::timing::MAX_LIMIT
+                )));
+            }
+            if let Some(s) = t.settle_s
+                && !(s.is_finite() && (0.0..=hw::clock::MAX_PERIOD_S).contains(&s))
+            {
+                return Err(fail(format!(
+                    "robot.timing.settle_s = {s}: expected seconds from 0 to {}",
+                    hw::clock::MAX_PERIOD_S
                 )));
             }
         }
@@ -358,5 +438,79 @@ impl LoadedScenario {
                 message: format!("robot.start_joints: {e}"),
             })?;
         Ok(robot)
+    }
+
+    /// The robot clock's figures for `robot` (as [`Self::build_robot`]
+    /// built it): its joints' limits with `[robot.timing]`, the scanner's
+    /// `scan_time_s` (the URG-04LX's 0.1 s without a scanner section) and
+    /// the range finders' [`hw::clock::DEFAULT_READING_PERIOD_S`].
+    pub fn robot_timing(&self, robot: &Robot) -> Result<hw::clock::RobotTiming, ScenarioError> {
+        let scan_time_s = self.scenario.scanner.as_ref().map_or_else(
+            || ScannerConfig::default().scan_time_s,
+            |s| s.config.scan_time_s,
+        );
+        self.scenario
+            .robot
+            .timing(robot, scan_time_s, hw::clock::DEFAULT_READING_PERIOD_S)
+            .map_err(|message| ScenarioError::Scenario {
+                source_name: self.scenario.name.clone(),
+                message,
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    /// `[robot.timing]` overrides the robot's own figures; left out, the
+    /// DENSO's are the stated conservative ones and the scanner's scan
+    /// time the URG-04LX's. Bad figures are refused naming the field.
+    #[test]
+    fn robot_timing_overrides_and_refusals() {
+        let bridge = Scenario::load("bridge1").unwrap();
+        let robot = bridge.build_robot().unwrap();
+        let own = bridge.robot_timing(&robot).unwrap();
+        assert_eq!(own.limits.velocity, vec![1.0; 6]);
+        assert_eq!(own.limits.acceleration, vec![2.0; 6]);
+        assert_eq!((own.settle_s, own.scan_time_s), (0.05, 0.1));
+        let text = bridge.scenario.to_toml().unwrap().replace(
+            "[robot.base_pose]",
+            "[robot.timing]\nvelocity = [3.0, 3.0, 3.0, 5.0, 5.0, 6.0]\nsettle_s = 0.02\n\n[robot.base_pose]",
+        );
+        let loaded = LoadedScenario {
+            scenario: Scenario::from_toml(&text, "timed.toml").unwrap(),
+            base_dir: bridge.base_dir.clone(),
+        };
+        let t = loaded.robot_timing(&robot).unwrap();
+        assert_eq!(t.limits.velocity, vec![3.0, 3.0, 3.0, 5.0, 5.0, 6.0]);
+        assert_eq!((t.limits.acceleration[0], t.settle_s), (2.0, 0.02));
+        // A velocity per joint, positive: five of six, a zero, a NaN.
+        let short = text
+            .replace("6.0]\nsettle_s", "]\nsettle_s")
+            .replace(", 5.0]", "]");
+        let loaded = LoadedScenario {
+            scenario: Scenario::from_toml(&short, "short.toml").unwrap(),
+            base_dir: bridge.base_dir.clone(),
+        };
+        let e = loaded.robot_timing(&robot).unwrap_err().to_string();
+        assert!(
+            e.contains("robot.timing") && e.contains("one per joint"),
+            "{e}"
+        );
+        for bad in ["velocity = [0.0, 3.0", "velocity = [nan, 3.0"] {
+            let e = Scenario::from_toml(&text.replace("velocity = [3.0, 3.0", bad), "bad.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("bad.toml") && e.contains("robot.timing"), "{e}");
+        }
+        let e = Scenario::from_toml(
+            &text.replace("settle_s = 0.02", "settle_s = -1"),
+            "bad.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("robot.timing.settle_s = -1"), "{e}");
     }
 }

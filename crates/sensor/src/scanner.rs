@@ -77,6 +77,10 @@ pub struct ScannerConfig {
     pub reflection: ReflectionModel,
     /// Apply the material-dependent range bias of the reflection model.
     pub material_range_bias: bool,
+    /// Seconds one scan takes (`sensor_msgs/LaserScan.scan_time`; the
+    /// URG-04LX of A§5.1 scans at 10 Hz: 0.1 s). The robot clock counts it
+    /// per scan.
+    pub scan_time_s: Real,
 }
 
 impl Default for ScannerConfig {
@@ -89,6 +93,7 @@ impl Default for ScannerConfig {
             noise: RangeNoise::default(),
             reflection: ReflectionModel::default(),
             material_range_bias: true,
+            scan_time_s: 0.1,
         }
     }
 }
@@ -120,6 +125,12 @@ impl ScannerConfig {
             "angular_step_deg",
             "a positive angle",
             self.angular_step_deg,
+        )?;
+        check(
+            self.scan_time_s.is_finite() && self.scan_time_s > 0.0 && self.scan_time_s <= 10.0,
+            "scan_time_s",
+            "seconds in (0, 10]",
+            self.scan_time_s,
         )?;
         check(
             self.half_fov_deg.is_finite() && (0.0..=120.0).contains(&self.half_fov_deg),

@@ -418,6 +418,7 @@ impl SimExplore {
                 scenario: loaded.scenario.name.clone(),
                 scenario_toml: loaded.standalone().to_toml()?,
             },
+            clock: hw::clock::RobotClock::default(),
         })
     }
 
@@ -502,7 +503,8 @@ impl SimExplore {
         // scenario and the setup only): the run waits for it at the end.
         // A failed run does not wait (the oracle's thread is left to end
         // with the process; its cache file is written whole or not at all).
-        let (mut run, bag) = run_loop(setup, rig, &mut judge, bag, &run_options, progress)?;
+        let (mut run, bag) =
+            run_loop(&loaded, setup, rig, &mut judge, bag, &run_options, progress)?;
         let t = Instant::now();
         let oracle = pending.map(crate::oracle::OracleJob::finish).transpose()?;
         let material_identification = match materials {
@@ -529,9 +531,11 @@ impl SimExplore {
     }
 }
 
-/// The loop of `setup` on `hw` (tapped into `bag`) under `judge`: the run
+/// The loop of `setup` on `hw`, timed by `loaded`'s robot clock figures
+/// on `run_options.clock` and tapped into `bag`, under `judge`: the run
 /// and its finished bag.
 fn run_loop<H: Arm + LineScanner>(
+    loaded: &LoadedScenario,
     setup: Setup,
     hw: H,
     judge: &mut dyn Judge,
@@ -541,16 +545,19 @@ fn run_loop<H: Arm + LineScanner>(
 ) -> Result<(ExploreRun, Vec<u8>), SimError> {
     let robot = setup.robot.clone();
     let world_from_base = setup.world_from_base;
+    let timing = loaded.robot_timing(&robot)?;
     // When each viewpoint's record came: its sweep cloud's stamp.
-    let clock = bag.clock();
+    let clock = run_options.clock.clone();
     let mut stamps = Vec::new();
     let mut progress = |v: &record::ViewpointRecord| {
         stamps.push(clock.now_ns());
         progress(v);
     };
-    let mut tapped = Tap::with_sink(hw, |e: &Event| bag_event(&mut bag, e));
+    let timed = hw::clock::Timed::new(hw, timing, clock.clone());
+    let mut tapped = Tap::with_sink(timed, |e: &Event| bag_event(&mut bag, &clock, e));
     let run = explore::run(setup, &mut tapped, judge, run_options, &mut progress)?;
-    let bag = finish_bag(bag, &run, &robot, &world_from_base, &stamps)?;
+    let end = clock.now_ns();
+    let bag = finish_bag(bag, end, &run, &robot, &world_from_base, &stamps)?;
     Ok((run, bag))
 }
 
@@ -643,7 +650,15 @@ impl<H: Arm + LineScanner> HardwareExplore<H> {
                 ..defaults
             },
         )?;
-        let (run, bag) = run_loop(setup, hw, judge.as_mut(), bag, &run_options, progress)?;
+        let (run, bag) = run_loop(
+            &loaded,
+            setup,
+            hw,
+            judge.as_mut(),
+            bag,
+            &run_options,
+            progress,
+        )?;
         Ok(ExploreOutcome {
             bag,
             coverage: None,
@@ -683,12 +698,12 @@ pub struct ExploreOutcome {
 /// arrays of the viewpoints' scanner poses and of the discs by material.
 fn finish_bag(
     mut recorder: RunBag,
+    end: u64,
     run: &ExploreRun,
     robot: &robot::Robot,
     world_from_base: &geom::Isometry3,
     stamps: &[u64],
 ) -> Result<Vec<u8>, SimError> {
-    let end = recorder.clock().now_ns();
     let mut per_viewpoint: Vec<Vec<&sensor::SweepPoint>> = vec![Vec::new(); run.viewpoints.len()];
     for (p, &k) in run.cloud.iter().zip(&run.cloud_viewpoint) {
         if let Some(points) = per_viewpoint.get_mut(k) {

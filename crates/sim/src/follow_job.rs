@@ -231,6 +231,19 @@ pub struct FollowSetup {
     pub a_priori_faces: Vec<AprioriFace>,
     /// The options.
     pub options: FollowRunOptions,
+    /// The robot clock's figures (`[robot.timing]` of the scenario's own
+    /// robot; another robot's, or a scene file's, are the robot's own).
+    pub timing: hw::clock::RobotTiming,
+}
+
+/// The robot clock's figures of `robot` without a scenario's: its own
+/// limits, the range finders' default period.
+fn own_timing(robot: &Robot) -> hw::clock::RobotTiming {
+    hw::clock::RobotTiming::of(
+        robot,
+        sensor::ScannerConfig::default().scan_time_s,
+        hw::clock::DEFAULT_READING_PERIOD_S,
+    )
 }
 
 /// The robots `follow` runs: `point3`, `arm4` (the built-ins with range
@@ -377,6 +390,14 @@ impl FollowSetup {
                 .is_some_and(|u| loaded.base_dir.join(u) == Path::new(name)),
             Some(name) => s.robot.preset.as_deref() == Some(name),
         };
+        let timing = if same_robot {
+            loaded.robot_timing(&own)?
+        } else {
+            own_timing(&override_robot(
+                options.robot.as_deref().unwrap_or_default(),
+                Some(loaded),
+            )?)
+        };
         let (robot, world_from_base) = if same_robot {
             (own.clone(), s.world_from_base())
         } else {
@@ -460,6 +481,7 @@ impl FollowSetup {
             support_z: 0.0,
             a_priori_faces,
             options: options.clone(),
+            timing,
         };
         // The initial segments are checked now, not when the run starts.
         setup.follower()?;
@@ -543,6 +565,7 @@ impl FollowSetup {
             options.seed,
         )?;
         rig.set_range_noise_sigma_m(options.noise_sigma_m.unwrap_or(0.0))?;
+        let timing = own_timing(rig.robot());
         let setup = Self {
             source: path.display().to_string(),
             rig,
@@ -551,6 +574,7 @@ impl FollowSetup {
             support_z: bounds.min.z,
             a_priori_faces: Vec::new(),
             options: options.clone(),
+            timing,
         };
         setup.follower()?;
         Ok(setup)
@@ -640,14 +664,17 @@ impl FollowSetup {
             Some((judge, _)) => judge,
             None => &mut no_judge,
         };
-        let mut tapped = Tap::with_sink(hw, |e: &Event| bag_event(&mut bag, e));
+        let clock = hw::clock::RobotClock::default();
+        let timed = hw::clock::Timed::new(hw, self.timing.clone(), clock.clone());
+        let mut tapped = Tap::with_sink(timed, |e: &Event| bag_event(&mut bag, &clock, e));
         let episode = follow::run_episode(
             &mut tapped,
             &mut follower,
             judge,
-            EpisodeOptions {
+            &EpisodeOptions {
                 max_sets: self.options.max_sets,
                 timings: self.options.timings,
+                clock: clock.clone(),
             },
             stop,
             &mut |row, f| {
@@ -656,7 +683,8 @@ impl FollowSetup {
             },
         )?;
         snapshots.finish(episode.rows.len() as u64, follower.model());
-        let end = bag.clock().now_ns();
+        let end = clock.now_ns();
+        let robot_time = clock.spent();
         let model_markers =
             record::bag::markers::surface_model(end, &follower.model().to_model_json());
         bag.write(record::bag::topics::SURFACE_MODEL, end, &model_markers)
@@ -684,6 +712,7 @@ impl FollowSetup {
             score,
             scan_score,
             a_priori_faces: self.a_priori_faces,
+            robot_time,
             bag,
         })
     }
@@ -1018,6 +1047,8 @@ pub struct FollowRun {
     /// `run.mcap`: the joint states, frames and range readings of every
     /// step, and the surface model's markers ([`record::bag::RunBag`]).
     pub bag: Vec<u8>,
+    /// The robot time of the run, per activity of the robot clock.
+    pub robot_time: hw::clock::RobotTime,
 }
 
 /// `run.json` of a simulated surface-following run.
@@ -1092,6 +1123,7 @@ impl FollowRun {
                 .filter(|s| s.modelled_m2 > 0.0)
                 .map(|s| rows.len() as Real / s.modelled_m2),
             step_us: StepTimeStats::from_micros(&self.step_micros()),
+            robot_time_s: record::follow::FollowRobotTime::of(&self.robot_time),
             part_mean_us: parts,
             modes,
             start_joints: self.start_joints.clone(),

@@ -231,11 +231,11 @@ impl SimRig {
     /// range finders that report up to their range plus 10σ of the rig's
     /// range noise (a simulated reading can lie that far past it).
     pub fn run_bag(&self) -> Result<record::bag::RunBag, SimError> {
-        let defaults = record::bag::BagConfig::default();
         let config = record::bag::BagConfig {
-            scan_range_m: self.scan_range_m().unwrap_or(defaults.scan_range_m),
+            scan_range_m: self
+                .scan_range_m()
+                .unwrap_or(record::bag::BagConfig::default().scan_range_m),
             finder_range_slack_m: 10.0 * self.range_noise_sigma_m,
-            ..defaults
         };
         Ok(record::bag::RunBag::new(
             &self.robot,
@@ -261,15 +261,27 @@ pub(crate) fn check_stands_at(q: &[Real], start: &[Real], tolerance: Real) -> Re
     }
 }
 
-/// Hand one event of tapped hardware (`hw::script::Tap`) to a run's bag.
-pub fn bag_event(bag: &mut record::bag::RunBag, event: &hw::script::Event) {
+/// Hand one event of tapped hardware (`hw::script::Tap` around a
+/// `hw::clock::Timed`) to a run's bag, stamped by the robot clock the
+/// hardware runs on: the event's interval is the clock's last.
+pub fn bag_event(
+    bag: &mut record::bag::RunBag,
+    clock: &hw::clock::RobotClock,
+    event: &hw::script::Event,
+) {
     use hw::script::Event;
+    let (start, end) = clock.last_interval();
     match event {
-        Event::Moved { reached, .. } => bag.moved(reached),
-        Event::Scanned(s) => bag.scanned(&s.ranges_m, &s.intensities),
+        Event::Moved { reached, .. } => bag.moved(start, end, reached),
+        Event::Scanned(s) => bag.scanned(
+            start,
+            end.saturating_sub(start) as Real * 1e-9,
+            &s.ranges_m,
+            &s.intensities,
+        ),
         Event::Read(readings) => {
             let d: Vec<Option<Real>> = readings.iter().map(|r| r.map(|p| p.distance_m)).collect();
-            bag.read(&d);
+            bag.read(start, &d);
         }
         Event::Seeded(_) => {}
     }

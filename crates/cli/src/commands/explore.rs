@@ -247,6 +247,10 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         t.elapsed().as_secs_f64(),
         args.out.display()
     )?;
+    say!(
+        "robot time (run.json's robot_time_s): {}",
+        record::explore::RobotTimeSummary::of(&run.viewpoints)
+    )?;
     if let Some(timings) = &run.timings {
         say!(
             "where the time went (run.json's timings):\n{}",

@@ -312,18 +312,12 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     let collisions = summary
         .collisions
         .map_or_else(|| "no ground truth for".to_owned(), |n| n.to_string());
-    let times = if a.no_timings {
-        "step times not recorded (--no-timings)".to_owned()
-    } else {
-        format!(
-            "mean step {:.1} µs (median {:.1}, 95th percentile {:.1})",
-            summary.step_us.mean, summary.step_us.median, summary.step_us.p95
-        )
-    };
+    let times = step_times(&summary.step_us, a.no_timings);
     say!(
-        "{} sets, termination {}, {collisions} collisions, {times} → {}",
+        "{} sets, termination {}, {collisions} collisions, {times}; robot time {} → {}",
         summary.sets,
         summary.termination,
+        summary.robot_time_s,
         out.display()
     )?;
     if let Some(score) = &run.score {
@@ -369,4 +363,16 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The run's step times as the summary line says them.
+fn step_times(step_us: &record::follow::StepTimeStats, no_timings: bool) -> String {
+    if no_timings {
+        "step times not recorded (--no-timings)".to_owned()
+    } else {
+        format!(
+            "mean step {:.1} µs (median {:.1}, 95th percentile {:.1})",
+            step_us.mean, step_us.median, step_us.p95
+        )
+    }
 }

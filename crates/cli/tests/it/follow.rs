@@ -37,6 +37,7 @@ fn rows(dir: &Path, dof: usize) -> Vec<Vec<String>> {
             "link_clearance_m",
             "current_segment",
             "current_edge",
+            "robot_time_s",
         ]
         .map(String::from),
     );

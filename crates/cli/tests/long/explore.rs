@@ -697,7 +697,12 @@ fn the_report_opens_with_the_run_s_final_figures() {
     for (run, must) in [
         (
             timed.as_path(),
-            &["timings.total_s", "collisions", "coverage.A1"][..],
+            &[
+                "timings.total_s",
+                "robot_time_s.total",
+                "collisions",
+                "coverage.A1",
+            ][..],
         ),
         (
             stage_two_run().whole.as_path(),

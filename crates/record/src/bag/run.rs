@@ -5,9 +5,9 @@
 //! sensing took time since the last state, so that states interpolated to a
 //! reading's stamp give the pose it was taken at); every scan a
 //! `sensor_msgs/LaserScan` on `/scan`; every reading of the range finders a
-//! `sensor_msgs/Range` per finder. Time is the bag's own clock, advanced by
-//! each motion at a stated joint speed and by each scan's period, so a
-//! simulated run's bag is the same for the same seed.
+//! `sensor_msgs/Range` per finder. Every event comes with its stamp on the
+//! robot clock (`hw::clock::RobotClock`, which times the hardware the
+//! recorder taps), so a simulated run's bag is the same for the same seed.
 
 use super::file::BagWriter;
 use super::msg::{
@@ -19,8 +19,6 @@ use geom::{Isometry3, Real};
 use robot::Robot;
 use sensor::SweepPoint;
 use std::io::Cursor;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The frame everything is placed in (the scenario's world frame).
 pub const ROOT_FRAME: &str = "map";
@@ -28,33 +26,9 @@ pub const ROOT_FRAME: &str = "map";
 /// plane, bearing 0 along x.
 pub const SCANNER_FRAME: &str = "scanner";
 
-/// A recorder's clock, shareable with code that cannot reach the
-/// recorder while a loop holds it (such as a loop's progress callback).
-#[derive(Clone, Debug, Default)]
-pub struct BagClock(Arc<AtomicU64>);
-
-impl BagClock {
-    /// Nanoseconds since the recording began.
-    pub fn now_ns(&self) -> u64 {
-        self.0.load(Ordering::Relaxed)
-    }
-
-    fn advance(&self, seconds: Real) -> u64 {
-        let ns = (seconds.max(0.0) * 1e9).round() as u64;
-        self.0.fetch_add(ns, Ordering::Relaxed) + ns
-    }
-}
-
-/// How a [`RunBag`] keeps time and describes its sensors.
+/// How a [`RunBag`] describes its sensors.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BagConfig {
-    /// Speed of the fastest joint in every motion, rad/s (m/s for prismatic
-    /// joints): a motion lasts its largest joint change over this.
-    pub joint_speed: Real,
-    /// Time one scan takes, seconds (the Hokuyo of A§5.1: 0.1 s).
-    pub scan_period_s: Real,
-    /// Time one reading of the range finders takes, seconds.
-    pub reading_period_s: Real,
     /// Shortest and longest range the scanner reports, metres.
     pub scan_range_m: (Real, Real),
     /// How far past its nominal range a range finder may report, metres:
@@ -67,9 +41,6 @@ pub struct BagConfig {
 impl Default for BagConfig {
     fn default() -> Self {
         Self {
-            joint_speed: 1.0,
-            scan_period_s: 0.1,
-            reading_period_s: 0.01,
             scan_range_m: (0.02, 5.6),
             finder_range_slack_m: 0.0,
         }
@@ -83,7 +54,6 @@ pub struct RunBag {
     robot: Robot,
     config: BagConfig,
     bag: BagWriter<Cursor<Vec<u8>>>,
-    clock: BagClock,
     joint_names: Vec<String>,
     /// Where the arm is.
     q: Vec<Real>,
@@ -98,7 +68,7 @@ impl std::fmt::Debug for RunBag {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("RunBag")
             .field("bag", &self.bag)
-            .field("now_ns", &self.clock.now_ns())
+            .field("last_state_ns", &self.last_state_ns)
             .finish_non_exhaustive()
     }
 }
@@ -114,24 +84,16 @@ impl RunBag {
         bearings: &[Real],
         config: BagConfig,
     ) -> Result<Self, BagError> {
-        for (name, v) in [
-            ("joint_speed", config.joint_speed),
-            ("scan_period_s", config.scan_period_s),
-            ("reading_period_s", config.reading_period_s),
-            ("finder_range_slack_m", config.finder_range_slack_m),
-        ] {
-            let ok = v.is_finite() && v >= 0.0 && (name != "joint_speed" || v > 0.0);
-            if !ok {
-                return Err(BagError::Config(format!(
-                    "{name} = {v}: expected a finite value, at least 0 (joint_speed more than 0)"
-                )));
-            }
+        let slack = config.finder_range_slack_m;
+        if !(slack.is_finite() && slack >= 0.0) {
+            return Err(BagError::Config(format!(
+                "finder_range_slack_m = {slack}: expected a finite value, at least 0"
+            )));
         }
         let mut bag = Self {
             robot: robot.clone(),
             config,
             bag: BagWriter::new(Cursor::new(Vec::new()))?,
-            clock: BagClock::default(),
             joint_names: robot.joint_names().iter().map(|&s| s.to_owned()).collect(),
             q: q.to_vec(),
             bearings: bearings.to_vec(),
@@ -139,13 +101,8 @@ impl RunBag {
             error: None,
         };
         bag.write_static(world_from_base)?;
-        bag.write_joints(q)?;
+        bag.write_joints(0, q)?;
         Ok(bag)
-    }
-
-    /// The bag's clock.
-    pub fn clock(&self) -> BagClock {
-        self.clock.clone()
     }
 
     /// Keep the first failure.
@@ -157,60 +114,57 @@ impl RunBag {
         }
     }
 
-    /// The arm moved and reports `reached`: the motion takes its largest
-    /// joint change at the joint speed.
-    pub fn moved(&mut self, reached: &[Real]) {
-        if self.clock.now_ns() > self.last_state_ns {
+    /// The arm moved from `start_ns` to `end_ns` and reports `reached`:
+    /// the joints where it stood at the start (when time passed since the
+    /// last state written), then where it ended.
+    pub fn moved(&mut self, start_ns: u64, end_ns: u64, reached: &[Real]) {
+        if start_ns > self.last_state_ns {
             let from = self.q.clone();
-            let r = self.write_joints(&from);
+            let r = self.write_joints(start_ns, &from);
             self.keep(r);
         }
-        let travel = self
-            .q
-            .iter()
-            .zip(reached)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, Real::max);
-        self.clock.advance(travel / self.config.joint_speed);
         self.q = reached.to_vec();
-        let r = self.write_joints(reached);
+        let r = self.write_joints(end_ns.max(start_ns), reached);
         self.keep(r);
     }
 
-    /// A scan was taken: ranges (`None`: no return) and intensities per
-    /// bearing. It takes the scan period.
-    pub fn scanned(&mut self, ranges_m: &[Option<Real>], intensities: &[Real]) {
-        let period = self.config.scan_period_s;
-        let now = self.clock.now_ns();
+    /// A scan began at `start_ns` and took `scan_time_s`: ranges (`None`:
+    /// no return) and intensities per bearing.
+    pub fn scanned(
+        &mut self,
+        start_ns: u64,
+        scan_time_s: Real,
+        ranges_m: &[Option<Real>],
+        intensities: &[Real],
+    ) {
         let msg = laser_scan(
-            now,
+            start_ns,
             &self.bearings,
             ranges_m,
             intensities,
             self.config.scan_range_m,
-            period,
+            scan_time_s,
         );
-        let r = self.bag.write(topics::SCAN, now, &msg);
+        let r = self.bag.write(topics::SCAN, start_ns, &msg);
         self.keep(r);
-        self.clock.advance(period);
     }
 
-    /// Every range finder was read: the distance per finder (`None`:
-    /// nothing in range). It takes the reading period.
-    pub fn read(&mut self, distances_m: &[Option<Real>]) {
-        let now = self.clock.now_ns();
+    /// Every range finder was read at `stamp_ns`: the distance per finder
+    /// (`None`: nothing in range).
+    pub fn read(&mut self, stamp_ns: u64, distances_m: &[Option<Real>]) {
         for (k, reading) in distances_m.iter().enumerate() {
             let max = self
                 .robot
                 .range_finders
                 .get(k)
                 .map_or(0.0, |f| f.max_range_m + self.config.finder_range_slack_m);
-            let r = self
-                .bag
-                .write(&topics::range_finder(k), now, &range(now, k, max, *reading));
+            let r = self.bag.write(
+                &topics::range_finder(k),
+                stamp_ns,
+                &range(stamp_ns, k, max, *reading),
+            );
             self.keep(r);
         }
-        self.clock.advance(self.config.reading_period_s);
     }
 
     /// `/tf_static`: [`static_frames`].
@@ -222,9 +176,8 @@ impl RunBag {
         )
     }
 
-    /// `/joint_states` and `/tf` at `q`, now.
-    fn write_joints(&mut self, q: &[Real]) -> Result<(), BagError> {
-        let now = self.clock.now_ns();
+    /// `/joint_states` and `/tf` at `q`, stamped `now`.
+    fn write_joints(&mut self, now: u64, q: &[Real]) -> Result<(), BagError> {
         self.last_state_ns = now;
         self.bag.write(
             topics::JOINT_STATES,

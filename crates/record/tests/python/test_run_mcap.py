@@ -143,6 +143,25 @@ def test_joint_states_replay_the_executed_motions(run_dir, decoded):
     passes_through(q, wanted)
 
 
+def test_the_bag_s_clock_spans_the_run_s_robot_time(run_dir, follow_dir, decoded):
+    """run.mcap is stamped on the robot clock: its messages span run.json's
+    robot_time_s (within 1 %), which is the sum of the viewpoints' (or the
+    steps') robot times; a scan lasts its scan_time."""
+    for folder, rows, msgs in [
+        (run_dir, read_rows(run_dir / "viewpoints.csv"), decoded),
+        (follow_dir, read_rows(follow_dir / "steps.csv"), decode_all(follow_dir / "run.mcap")),
+    ]:
+        total = json.load(open(folder / "run.json"))["robot_time_s"]["total"]
+        assert total > 0, folder
+        assert abs(sum(float(r["robot_time_s"]) for r in rows) - total) <= 1e-5 * len(rows), folder
+        span = (max(t for (_, t, _) in msgs) - min(t for (_, t, _) in msgs)) * 1e-9
+        assert abs(span - total) <= 0.01 * total, (folder, span, total)
+    scans = topic(decoded, "/scan")
+    assert all(abs(m.scan_time - 0.1) < 1e-6 for (_, m) in scans)
+    times = [t for (t, _) in scans]
+    assert all(b - a >= 0.1e9 - 1 for a, b in zip(times, times[1:]))
+
+
 def rotation(qx, qy, qz, qw):
     return np.array([
         [1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],

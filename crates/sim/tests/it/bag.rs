@@ -23,8 +23,10 @@ fn range_readings_in_the_bag_are_the_rig_s_sensor_points() {
         let model = setup.rig.robot().clone();
         let start = setup.start_joints.clone();
         let mut bag = setup.rig.run_bag().unwrap();
-        let mut rec = Tap::with_sink(Recorder::new(&mut setup.rig, Vec::new()), |e: &Event| {
-            sim::rig::bag_event(&mut bag, e);
+        let clock = hw::clock::RobotClock::default();
+        let timed = hw::clock::Timed::new(&mut setup.rig, setup.timing.clone(), clock.clone());
+        let mut rec = Tap::with_sink(Recorder::new(timed, Vec::new()), |e: &Event| {
+            sim::rig::bag_event(&mut bag, &clock, e);
         });
         // Wander around the start, reading at every pose.
         for k in 0..40 {

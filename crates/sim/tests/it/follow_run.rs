@@ -79,11 +79,47 @@ fn a_budgeted_cube_run_records_every_step_and_writes_every_output() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "step,mode,x,y,z,q1,q2,q3,set_size,update_us,direction_us,kinematics_us,link_clearance_m,current_segment,current_edge"
+        "step,mode,x,y,z,q1,q2,q3,set_size,update_us,direction_us,kinematics_us,link_clearance_m,current_segment,current_edge,robot_time_s"
     );
+    // Each step's robot time by hand: a reading (0.01 s), the decision's
+    // wall time, and point3's motion to the next step's joints at 0.25 m/s
+    // and 1 m/s² (a triangle below 6.25 cm) plus 0.05 s to settle.
+    let motion = |a: &[Real], b: &[Real]| {
+        let d = a
+            .iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, Real::max);
+        let (v, acc) = (0.25, 1.0);
+        if d == 0.0 {
+            0.0
+        } else if d >= v * v / acc {
+            d / v + v / acc + 0.05
+        } else {
+            2.0 * (d / acc).sqrt() + 0.05
+        }
+    };
+    for (i, r) in rows.iter().enumerate().take(rows.len() - 1) {
+        let by_hand =
+            0.01 + r.times.unwrap().total_us() * 1e-6 + motion(&r.joints, &rows[i + 1].joints);
+        assert!(
+            (r.robot_time_s - by_hand).abs() < 1e-6,
+            "step {i}: {} against {by_hand}",
+            r.robot_time_s
+        );
+    }
+    // The steps' robot times add up to the run's (run.json's `robot_time_s`).
+    let sum: Real = rows.iter().map(|r| r.robot_time_s).sum();
+    assert!(
+        (sum - run.robot_time.total_s()).abs() < 1e-6,
+        "{sum} against {:?}",
+        run.robot_time
+    );
+    assert!(run.robot_time.moving_s > 0.0 && run.robot_time.deciding_s > 0.0);
     for (line, r) in lines.zip(rows) {
         let f: Vec<&str> = line.split(',').collect();
-        assert_eq!(f.len(), 15, "{line}");
+        assert_eq!(f.len(), 16, "{line}");
+        assert_eq!(f[15].parse::<Real>().unwrap(), r.robot_time_s);
         assert_eq!(f[1], r.mode);
         assert_eq!(f[2].parse::<Real>().unwrap(), r.control_point.x);
         assert_eq!(f[8].parse::<usize>().unwrap(), r.set_size);

@@ -30,6 +30,7 @@ fn surface_following_on_a_replayed_session_repeats_the_simulated_run() {
     let episode = EpisodeOptions {
         max_sets: 300,
         timings: false,
+        clock: hw::clock::RobotClock::default(),
     };
     let stop = AtomicBool::new(false);
     let mut recorder = Recorder::new(setup.rig.clone(), Vec::new());
@@ -38,7 +39,7 @@ fn surface_following_on_a_replayed_session_repeats_the_simulated_run() {
         &mut recorder,
         &mut on_sim,
         &mut NoJudge,
-        episode,
+        &episode,
         &stop,
         &mut |_, _| {},
     )
@@ -58,7 +59,7 @@ fn surface_following_on_a_replayed_session_repeats_the_simulated_run() {
         &mut replay,
         &mut on_replay,
         &mut NoJudge,
-        episode,
+        &episode,
         &stop,
         &mut |_, _| {},
     )
@@ -79,7 +80,7 @@ fn surface_following_on_a_replayed_session_repeats_the_simulated_run() {
         &mut replay,
         &mut setup.follower().unwrap(),
         &mut NoJudge,
-        episode,
+        &episode,
         &stop,
         &mut |_, _| {},
     )

@@ -138,7 +138,7 @@ fn predicted_gain_ranks_candidates_like_the_gain_their_sweeps_bring() {
                     &mut other,
                     &robot,
                     &wfb,
-                    &c.q,
+                    (&q, &c.q),
                     step,
                     &mut on_the_way,
                     &mut |_, _, _| true,
