@@ -28,7 +28,7 @@ use crate::setup::Setup;
 use crate::stage_one::path_via_visited;
 use crate::{Choice, ExploreConfig, ExploreError, StageOne, StageTwoChoice, Termination};
 use geom::{Isometry3, Real, TriMesh};
-use hw::clock::{Activity, RobotClock, RobotTime};
+use hw::clock::{Activity, ClockMark, RobotClock, RobotTime};
 use hw::{Arm, LineScanner, tilt_sweep, tilt_sweep_through};
 use map::{IntegrationStats, TsdfConfig, TsdfMap};
 use plan::{ClearanceChecker, PlanConfig, PointClearance, Safety};
@@ -348,8 +348,9 @@ struct Episode<'a, H: ?Sized> {
     q: Vec<Real>,
     /// Every point measured, for Stage One's clearance.
     points: PointClearance,
-    /// The robot clock when the last viewpoint's record was made.
-    recorded_at: RobotTime,
+    /// The robot clock when the last viewpoint's record was made (at
+    /// first, when the run began: a clock may have run before).
+    recorded_at: ClockMark,
 }
 
 impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
@@ -385,7 +386,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             unsafe_configurations: Vec::new(),
             q,
             points: PointClearance::new(),
-            recorded_at: RobotTime::default(),
+            recorded_at: options.clock.mark(),
         })
     }
 
@@ -427,11 +428,10 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         replayed: bool,
         progress: &mut dyn FnMut(&ViewpointRecord),
     ) {
-        let now = self.options.clock.spent();
         if !replayed {
-            record.robot_time = now.since(&self.recorded_at);
+            record.robot_time = self.options.clock.since(&self.recorded_at);
         }
-        self.recorded_at = now;
+        self.recorded_at = self.options.clock.mark();
         progress(&record);
         self.viewpoints.push(record);
     }

@@ -138,6 +138,10 @@ struct ClockState {
     last: (u64, u64),
 }
 
+/// The robot clock at one moment ([`RobotClock::mark`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ClockMark([u64; 4]);
+
 /// A shared robot clock: every handle sees and advances the same time.
 #[derive(Clone, Debug, Default)]
 pub struct RobotClock(Arc<Mutex<ClockState>>);
@@ -213,6 +217,26 @@ impl RobotClock {
                 deciding_s: d,
             }
         })
+    }
+
+    /// A mark of the clock now, for [`RobotClock::since`].
+    pub fn mark(&self) -> ClockMark {
+        ClockMark(self.with(|s| s.spent_ns))
+    }
+
+    /// The robot time since `mark`, per activity. It is counted in whole
+    /// nanoseconds, so it is the same whatever the clock read at the mark
+    /// (a resumed run's clock, which ran through the replay, gives each
+    /// new viewpoint the time the uninterrupted run gave it).
+    pub fn since(&self, mark: &ClockMark) -> RobotTime {
+        let now = self.with(|s| s.spent_ns);
+        let d: [Real; 4] = std::array::from_fn(|i| now[i].saturating_sub(mark.0[i]) as Real * 1e-9);
+        RobotTime {
+            moving_while_scanning_s: d[0],
+            moving_s: d[1],
+            standing_to_sweep_s: d[2],
+            deciding_s: d[3],
+        }
     }
 
     /// Set the clock to `spent` (a resumed run's time at its checkpoint);
@@ -378,6 +402,16 @@ mod tests {
         );
         still.move_to(&[0.0, 0.04]).unwrap();
         assert_eq!(clock.now_ns(), before);
+        // Time since a mark is whole nanoseconds: the same on a clock that
+        // read otherwise at the mark.
+        let (a, b) = (RobotClock::default(), RobotClock::default());
+        b.pass(1234.567_890_123);
+        let (ma, mb) = (a.mark(), b.mark());
+        for c in [&a, &b] {
+            c.pass(0.1);
+            c.pass(0.123_456_789);
+        }
+        assert_eq!(a.since(&ma), b.since(&mb));
         // Restored to a checkpoint's time.
         let other = RobotClock::default();
         other.restore(&spent);
