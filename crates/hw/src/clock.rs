@@ -405,7 +405,7 @@ mod tests {
         // Time since a mark is whole nanoseconds: the same on a clock that
         // read otherwise at the mark.
         let (a, b) = (RobotClock::default(), RobotClock::default());
-        b.pass(1234.567_890_123);
+        b.pass(1_234.567_890_123);
         let (ma, mb) = (a.mark(), b.mark());
         for c in [&a, &b] {
             c.pass(0.1);
