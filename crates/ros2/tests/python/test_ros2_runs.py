@@ -93,9 +93,12 @@ def test_explore_over_ros2_is_the_in_process_run(tmp_path_factory):
     ref = in_process(tmp_path_factory, "SURVEYOR_EXPLORE_RUN", "bridge1", EXPLORE)
     out = tmp_path_factory.mktemp("ros2") / "bridge1"
     served = over_ros2(out, ["--scenario", "bridge1"], EXPLORE)
-    # Ground truth (coverage_a1) and wall-clock times (*_ms) aside.
+    # Ground truth (coverage_a1) and wall-clock times (*_ms, and the robot
+    # time's deciding, which is wall time when the reference run is timed)
+    # aside: the robot clock's motions and sweeps are the in-process run's.
     same_rows(out / "viewpoints.csv", ref / "viewpoints.csv",
-              lambda k: k == "coverage_a1" or k.endswith("_ms"))
+              lambda k: k == "coverage_a1" or k.endswith("_ms")
+              or k in ("robot_time_s", "robot_deciding_s"))
     same_rows(out / "discs.csv", ref / "discs.csv", lambda k: k == "true_material")
     # No ground truth over ROS 2: no coverage, no true materials.
     assert {r["coverage_a1"] for r in rows(out / "viewpoints.csv")} == {""}
@@ -111,7 +114,9 @@ def test_follow_over_ros2_is_the_in_process_run(tmp_path_factory):
     ref = in_process(tmp_path_factory, "SURVEYOR_FOLLOW_RUN", "block1", FOLLOW)
     out = tmp_path_factory.mktemp("ros2") / "block1"
     served = over_ros2(out, ["--scenario", "block1", "--robot", "arm4"], FOLLOW)
-    same_rows(out / "steps.csv", ref / "steps.csv", lambda k: k.endswith("_us"))
+    # The step's robot time holds its decision's wall time in a timed run.
+    same_rows(out / "steps.csv", ref / "steps.csv",
+              lambda k: k.endswith("_us") or k == "robot_time_s")
     model = "surface_model.json"
     assert (out / model).read_bytes() == (ref / model).read_bytes()
     # One reading of the 133 finders per step, asked for over DDS.
