@@ -238,22 +238,6 @@ impl RobotClock {
             deciding_s: d[3],
         }
     }
-
-    /// Set the clock to `spent` (a resumed run's time at its checkpoint);
-    /// the current activity is kept.
-    pub fn restore(&self, spent: &RobotTime) {
-        self.with(|s| {
-            s.spent_ns = [
-                spent.moving_while_scanning_s,
-                spent.moving_s,
-                spent.standing_to_sweep_s,
-                spent.deciding_s,
-            ]
-            .map(ns);
-            s.now_ns = s.spent_ns.iter().sum();
-            s.last = (s.now_ns, s.now_ns);
-        });
-    }
 }
 
 /// Any hardware on a [`RobotClock`] (see the module docs); it answers as
@@ -412,10 +396,6 @@ mod tests {
             c.pass(0.123_456_789);
         }
         assert_eq!(a.since(&ma), b.since(&mb));
-        // Restored to a checkpoint's time.
-        let other = RobotClock::default();
-        other.restore(&spent);
-        assert_eq!(other.spent(), clock.spent());
     }
 
     #[test]

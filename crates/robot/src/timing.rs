@@ -229,17 +229,6 @@ impl RobotTime {
         self.standing_to_sweep_s += other.standing_to_sweep_s;
         self.deciding_s += other.deciding_s;
     }
-
-    /// The time from `earlier` to `self`, activity by activity.
-    #[must_use]
-    pub fn since(&self, earlier: &Self) -> Self {
-        Self {
-            moving_while_scanning_s: self.moving_while_scanning_s - earlier.moving_while_scanning_s,
-            moving_s: self.moving_s - earlier.moving_s,
-            standing_to_sweep_s: self.standing_to_sweep_s - earlier.standing_to_sweep_s,
-            deciding_s: self.deciding_s - earlier.deciding_s,
-        }
-    }
 }
 
 #[cfg(test)]
