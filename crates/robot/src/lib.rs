@@ -9,6 +9,7 @@
 //! | [`dh`] | [`DhRow`], [`Robot::from_dh`] (standard DH, Corke convention; Paul Table C.1) |
 //! | [`urdf`] | [`Robot::from_urdf_file`], [`Robot::from_urdf_str`] |
 //! | [`timing`] | [`timing::MotionLimits`], [`timing::Profile`]: how long a motion takes within the joints' velocity and acceleration limits (the robot clock) |
+//! | [`moving`] | [`moving::JointSample`], [`moving::beam_poses`]: where each beam of a scan taken while the arm moved was measured from |
 //! | [`mod@builtin`] | [`builtin()`], [`builtin_names`]: `denso-vm6083`, `point3`, `arm4` |
 //! | [`linalg`] | [`pseudo_inverse`], [`damped_pseudo_inverse`], [`null_space_projector`] (Pudney eq. 3, P§3.3) |
 //! | [`bounds`] | [`bounds::enclosing_capsule`], [`bounds::enclosing_ellipsoid`] (Khachiyan MVEE; A§3.2.1.4) |
@@ -25,6 +26,7 @@ pub mod error;
 pub mod linalg;
 pub mod mesh;
 pub mod model;
+pub mod moving;
 pub mod posture;
 pub mod reach;
 pub mod timing;

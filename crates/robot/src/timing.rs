@@ -47,43 +47,94 @@ pub struct MotionLimits {
     pub acceleration: Vec<Real>,
 }
 
-/// A timed straight-line motion: `s(t)` from 0 to 1 (see the module docs).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A timed straight-line motion: `s(t)` from 0 to its end (1 unless the
+/// motion was [braked](Profile::braked)); see the module docs.
+///
+/// `s` speeds up at `s̈` until `t_up`, cruises at `s̈·t_up` until
+/// `t_down`, and slows down at `s̈` to rest at `t_down + t_up`. A full
+/// motion has `t_up = ṡ_max/s̈` and `t_down = 1/ṡ_max` (a triangle:
+/// both `1/√s̈`), so it ends at `s̈·t_up·t_down = 1`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Profile {
     /// Seconds the motion takes.
     pub duration_s: Real,
-    /// Peak `ṡ`, per second.
-    speed: Real,
     /// `s̈` while speeding up and slowing down, per second².
     accel: Real,
+    /// When speeding up ends, seconds.
+    t_up: Real,
+    /// When slowing down begins, seconds.
+    t_down: Real,
+    /// `s` at rest at the end: 1, or less once braked.
+    end: Real,
 }
 
 impl Profile {
     /// A motion that does not move.
     pub const STILL: Self = Self {
         duration_s: 0.0,
-        speed: 0.0,
         accel: 0.0,
+        t_up: 0.0,
+        t_down: 0.0,
+        end: 1.0,
     };
 
+    fn new(accel: Real, t_up: Real, t_down: Real, end: Real) -> Self {
+        Self {
+            duration_s: t_down + t_up,
+            accel,
+            t_up,
+            t_down,
+            end,
+        }
+    }
+
     /// The fraction `s(t)` of the motion done `t` seconds after it began
-    /// (0 before, 1 after).
+    /// (0 before, [`Profile::end`] after).
     pub fn fraction(&self, t: Real) -> Real {
         if self.duration_s <= 0.0 || t >= self.duration_s {
-            return 1.0;
+            return self.end;
         }
         if t <= 0.0 {
             return 0.0;
         }
-        let ramp = self.speed / self.accel;
-        let t_end = self.duration_s - t;
-        if t < ramp {
-            0.5 * self.accel * t * t
-        } else if t_end < ramp {
-            1.0 - 0.5 * self.accel * t_end * t_end
+        let a = self.accel;
+        if t < self.t_up {
+            0.5 * a * t * t
+        } else if t < self.t_down {
+            0.5 * a * self.t_up * self.t_up + a * self.t_up * (t - self.t_up)
         } else {
-            0.5 * self.accel * ramp * ramp + self.speed * (t - ramp)
+            let left = self.duration_s - t;
+            self.end - 0.5 * a * left * left
         }
+    }
+
+    /// `ṡ(t)`, per second.
+    pub fn speed(&self, t: Real) -> Real {
+        if self.duration_s <= 0.0 || t <= 0.0 || t >= self.duration_s {
+            return 0.0;
+        }
+        self.accel * t.min(self.t_up).min(self.duration_s - t)
+    }
+
+    /// Where the motion comes to rest: 1 for a whole motion, less once
+    /// braked.
+    pub fn end(&self) -> Real {
+        self.end
+    }
+
+    /// The motion braked at `t`: from then on it slows down at its
+    /// acceleration limit to rest (unchanged when it is slowing down
+    /// already, or has ended, at `t`).
+    #[must_use]
+    pub fn braked(&self, t: Real) -> Self {
+        if self.duration_s <= 0.0 || t >= self.t_down {
+            return *self;
+        }
+        let t = t.max(0.0);
+        let t_up = self.t_up.min(t);
+        // Slowing down from ṡ = s̈·t_up takes t_up and covers ½·s̈·t_up².
+        let end = self.fraction(t) + 0.5 * self.accel * t_up * t_up;
+        Self::new(self.accel, t_up, t, end.min(self.end))
     }
 }
 
@@ -180,19 +231,22 @@ impl MotionLimits {
         }
         // Cruising needs 1/2·ṡ²/s̈ to speed up and as much to slow down.
         if speed * speed / accel < 1.0 {
-            Profile {
-                duration_s: 1.0 / speed + speed / accel,
-                speed,
-                accel,
-            }
+            Profile::new(accel, speed / accel, 1.0 / speed, 1.0)
         } else {
             // A triangle: the peak speed is √s̈.
-            let peak = accel.sqrt();
-            Profile {
-                duration_s: 2.0 / peak,
-                speed: peak,
-                accel,
-            }
+            let t = 1.0 / accel.sqrt();
+            Profile::new(accel, t, t, 1.0)
+        }
+    }
+
+    /// These limits with every joint's speed at most `speed` (rad/s, m/s
+    /// prismatic): a motion that must go slower than the arm can, such as
+    /// a sweep that scans at a given spacing.
+    #[must_use]
+    pub fn capped(&self, speed: Real) -> Self {
+        Self {
+            velocity: self.velocity.iter().map(|v| v.min(speed)).collect(),
+            acceleration: self.acceleration.clone(),
         }
     }
 
@@ -272,6 +326,45 @@ mod tests {
 
     /// Sampled along the profile, no joint ever exceeds its speed or
     /// acceleration, and the motion is continuous from 0 to 1.
+    /// Braked at any moment, a motion is the same until then, keeps its
+    /// speed continuous and within its limits after, and rests where its
+    /// fraction ends; braking while slowing down changes nothing.
+    #[test]
+    fn a_braked_motion_keeps_its_past_and_its_limits() {
+        let limits = MotionLimits::uniform(2, 1.0, 2.0);
+        for (to, brakes) in [
+            ([2.0, 1.0], [0.1, 0.5, 0.9, 1.7, 2.2, 2.4]),
+            ([0.1, 0.0], [0.05, 0.2, 0.22, 0.3, 0.4, 0.5]),
+        ] {
+            let p = limits.profile(&[0.0, 0.0], &to);
+            let peak = (0..=1000)
+                .map(|k| p.speed(k as Real * p.duration_s / 1000.0))
+                .fold(0.0, Real::max);
+            for tb in brakes {
+                let b = p.braked(tb);
+                if tb >= p.t_down {
+                    assert_eq!(b, p);
+                    continue;
+                }
+                assert!(b.duration_s <= p.duration_s + 1e-12);
+                assert!((b.fraction(b.duration_s) - b.end()).abs() < 1e-12);
+                assert!(b.end() < 1.0);
+                let dt = 1e-4;
+                let mut t = 0.0;
+                while t < b.duration_s {
+                    if t <= tb {
+                        assert!((b.fraction(t) - p.fraction(t)).abs() < 1e-12);
+                    }
+                    let v = b.speed(t);
+                    assert!(v <= peak + 1e-12);
+                    let a = (b.speed(t + dt) - v).abs() / dt;
+                    assert!(a <= p.accel * (1.0 + 1e-6), "{a} at {t}");
+                    t += dt;
+                }
+            }
+        }
+    }
+
     #[test]
     fn sampled_motion_keeps_every_limit() {
         let limits = MotionLimits {
