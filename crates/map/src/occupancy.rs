@@ -1318,50 +1318,24 @@ fn decode(bits: u64) -> VoxelState {
     }
 }
 
+/// The rays of a gridded sweep that returned nothing, as (origin, point
+/// `range_m` along the ray). Empty for a sweep without its grid (a list,
+/// or a file).
+fn miss_rays(sweep: &Sweep, range_m: Real) -> Vec<(Point3, Point3)> {
+    if sweep.grid_shape().is_none() {
+        return Vec::new();
+    }
+    sweep
+        .misses()
+        .iter()
+        .map(|(o, d)| (*o, o + d * range_m))
+        .collect()
+}
+
 /// The C-space information of one unknown voxel with interference probability
 /// `p = P(x_c)` (A eq. 4.14): the binary entropy of the one-sided probability
 /// `q = p / 2`,
 ///
-/// The rays of a gridded sweep that returned nothing, as (origin, point
-/// `range_m` along the ray). Empty for a sweep without its grid, scanner poses
-/// or bearings (a list, or a file).
-fn miss_rays(sweep: &Sweep, range_m: Real) -> Vec<(Point3, Point3)> {
-    let (Some(shape), poses, bearings) = (
-        sweep.grid_shape(),
-        sweep.scanner_poses(),
-        sweep.bearings_rad(),
-    ) else {
-        return Vec::new();
-    };
-    let (scans, rays) = (shape.scans as usize, shape.rays_per_scan as usize);
-    if poses.len() != scans || bearings.len() != rays {
-        return Vec::new();
-    }
-    let mut returned = vec![false; scans * rays];
-    for p in sweep.points() {
-        if let Some(c) = p.cell
-            && (c.scan as usize) < scans
-            && (c.ray as usize) < rays
-        {
-            returned[c.scan as usize * rays + c.ray as usize] = true;
-        }
-    }
-    let dirs: Vec<geom::Vector3> = bearings
-        .iter()
-        .map(|b| sensor::beam_direction(*b))
-        .collect();
-    let mut out = Vec::new();
-    for (s, pose) in poses.iter().enumerate() {
-        let o = Point3::from(pose.translation.vector);
-        for (r, d) in dirs.iter().enumerate() {
-            if !returned[s * rays + r] {
-                out.push((o, o + pose.rotation * d * range_m));
-            }
-        }
-    }
-    out
-}
-
 /// `h(p) = −q ln q − (1 − q) ln(1 − q)`, `0 ln 0 = 0`,
 ///
 /// which is 0 for `p = 0` (a voxel no pose interferes with) and rises to its

@@ -405,8 +405,46 @@ impl Scanner {
         world_from_scanner: &Isometry3,
         rng: &mut R,
     ) -> Scan {
-        let rays = self.rays(world_from_scanner);
-        let hits = world.cast_rays(&rays, self.config.max_range_m);
+        self.scan_rays(
+            world,
+            world_from_scanner,
+            &self.rays(world_from_scanner),
+            rng,
+        )
+    }
+
+    /// Scan the world while the scanner moves: beam `i` from
+    /// `world_from_scanner[i]` (one pose per bearing, the pose of the
+    /// beam's own moment; a missing pose takes the last one given). The
+    /// scan's pose is its first beam's. Noise as in [`Scanner::scan`].
+    pub fn scan_posed<W: RayCast + ?Sized, R: Rng + ?Sized>(
+        &self,
+        world: &W,
+        world_from_scanner: &[Isometry3],
+        rng: &mut R,
+    ) -> Scan {
+        let first = world_from_scanner.first().copied().unwrap_or_default();
+        let last = world_from_scanner.last().copied().unwrap_or_default();
+        let rays: Vec<Ray> = self
+            .dirs
+            .iter()
+            .enumerate()
+            .map(|(i, d)| {
+                let pose = world_from_scanner.get(i).unwrap_or(&last);
+                Ray::new(Point3::from(pose.translation.vector), pose.rotation * *d)
+            })
+            .collect();
+        self.scan_rays(world, &first, &rays, rng)
+    }
+
+    fn scan_rays<W: RayCast + ?Sized, R: Rng + ?Sized>(
+        &self,
+        world: &W,
+        world_from_scanner: &Isometry3,
+        rays: &[Ray],
+        rng: &mut R,
+    ) -> Scan {
+        let hits = world.cast_rays(rays, self.config.max_range_m);
         let model = &self.config.reflection;
         let returns = rays
             .iter()

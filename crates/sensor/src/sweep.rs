@@ -187,6 +187,7 @@ pub struct Sweep {
     shape: Option<GridShape>,
     scanner_poses: Vec<Isometry3>,
     bearings_rad: Vec<Real>,
+    misses: Vec<(Point3, Vector3)>,
 }
 
 /// The size of a sweep's grid.
@@ -271,6 +272,7 @@ impl Sweep {
             shape,
             scanner_poses: Vec::new(),
             bearings_rad: Vec::new(),
+            misses: Vec::new(),
         })
     }
 
@@ -332,6 +334,14 @@ impl Sweep {
         &self.bearings_rad
     }
 
+    /// Every beam of a scanner's sweep that returned nothing, as its origin
+    /// and unit direction in the world, in (scan, ray) order (empty for
+    /// sweeps read from files). A scan taken while the arm moved measured
+    /// each beam from a pose of its own ([`SweepBuilder::push_scan_posed`]).
+    pub fn misses(&self) -> &[(Point3, Vector3)] {
+        &self.misses
+    }
+
     /// The same returns as a plain list: no grid cells, scanner poses or
     /// bearings (what a foreign cloud with ray origins gives).
     pub fn without_grid(&self) -> Self {
@@ -344,6 +354,7 @@ impl Sweep {
             shape: None,
             scanner_poses: Vec::new(),
             bearings_rad: Vec::new(),
+            misses: Vec::new(),
         }
     }
 
@@ -408,6 +419,7 @@ pub struct SweepBuilder {
     dirs: Vec<Vector3>,
     points: Vec<SweepPoint>,
     poses: Vec<Isometry3>,
+    misses: Vec<(Point3, Vector3)>,
 }
 
 impl SweepBuilder {
@@ -425,6 +437,7 @@ impl SweepBuilder {
             dirs: bearings_rad.iter().map(|b| beam_direction(*b)).collect(),
             points: Vec::new(),
             poses: Vec::new(),
+            misses: Vec::new(),
         })
     }
 
@@ -435,6 +448,45 @@ impl SweepBuilder {
     pub fn push_scan(
         &mut self,
         world_from_scanner: &Isometry3,
+        ranges_m: &[Option<Real>],
+        intensities: &[Real],
+        materials: Option<&[Option<MaterialId>]>,
+    ) -> Result<(), SensorError> {
+        self.push(
+            std::slice::from_ref(world_from_scanner),
+            ranges_m,
+            intensities,
+            materials,
+        )
+    }
+
+    /// Add the next scan, taken while the scanner moved: beam `i` measured
+    /// from `world_from_scanner[i]` (one pose per bearing; the scan's pose
+    /// in [`Sweep::scanner_poses`] is its first beam's). Otherwise as
+    /// [`SweepBuilder::push_scan`].
+    pub fn push_scan_posed(
+        &mut self,
+        world_from_scanner: &[Isometry3],
+        ranges_m: &[Option<Real>],
+        intensities: &[Real],
+        materials: Option<&[Option<MaterialId>]>,
+    ) -> Result<(), SensorError> {
+        let n = self.bearings_rad.len();
+        if world_from_scanner.len() != n {
+            return Err(sweep_error(format!(
+                "scan {}: {} beam poses for {n} bearings",
+                self.poses.len(),
+                world_from_scanner.len()
+            )));
+        }
+        self.push(world_from_scanner, ranges_m, intensities, materials)
+    }
+
+    /// [`SweepBuilder::push_scan`] with one pose for the whole scan, or
+    /// one per beam.
+    fn push(
+        &mut self,
+        poses: &[Isometry3],
         ranges_m: &[Option<Real>],
         intensities: &[Real],
         materials: Option<&[Option<MaterialId>]>,
@@ -450,10 +502,12 @@ impl SweepBuilder {
                 materials.map_or(String::new(), |m| format!(", {} materials", m.len()))
             )));
         }
-        if !is_finite_pose(world_from_scanner) {
-            return Err(sweep_error(format!(
-                "scanner pose of scan {j} is not finite"
-            )));
+        if let Some(k) = poses.iter().position(|p| !is_finite_pose(p)) {
+            return Err(sweep_error(if poses.len() == 1 {
+                format!("scanner pose of scan {j} is not finite")
+            } else {
+                format!("scanner pose of scan {j}, ray {k} is not finite")
+            }));
         }
         if let Some(i) = ranges_m
             .iter()
@@ -464,11 +518,18 @@ impl SweepBuilder {
                 ranges_m[i]
             )));
         }
-        let origin = Point3::from(world_from_scanner.translation.vector);
+        let Some(&first) = poses.first() else {
+            return Err(sweep_error(format!("scan {j}: no scanner pose")));
+        };
         for (i, r) in ranges_m.iter().enumerate() {
-            let Some(r) = r else { continue };
+            let pose = poses.get(i).unwrap_or(&first);
+            let origin = Point3::from(pose.translation.vector);
+            let Some(r) = r else {
+                self.misses.push((origin, pose.rotation * self.dirs[i]));
+                continue;
+            };
             self.points.push(SweepPoint {
-                point: origin + world_from_scanner.rotation * (self.dirs[i] * *r),
+                point: origin + pose.rotation * (self.dirs[i] * *r),
                 origin,
                 intensity: intensities[i],
                 material: materials.and_then(|m| m[i]),
@@ -478,7 +539,7 @@ impl SweepBuilder {
                 }),
             });
         }
-        self.poses.push(*world_from_scanner);
+        self.poses.push(first);
         Ok(())
     }
 
@@ -501,6 +562,7 @@ impl SweepBuilder {
         });
         sweep.scanner_poses = self.poses;
         sweep.bearings_rad = self.bearings_rad;
+        sweep.misses = self.misses;
         Ok(sweep)
     }
 }
