@@ -42,6 +42,7 @@
 //! # Ok::<(), hw::HwError>(())
 //! ```
 
+use crate::motion::{LineMotion, MovingScan, MovingScanner};
 use crate::{Arm, HwError, LineScanner, RangeSensors, ScanReadings};
 use geom::Real;
 use robot::timing::MotionLimits;
@@ -192,6 +193,18 @@ impl RobotClock {
         })
     }
 
+    /// Let the clock run on the current activity until `t_ns` (nothing
+    /// when it is there already); the event's interval is when it began
+    /// and `t_ns`.
+    fn pass_until(&self, began_ns: u64, t_ns: u64) {
+        self.with(|s| {
+            let d = t_ns.saturating_sub(s.now_ns);
+            s.now_ns += d;
+            s.spent_ns[index(s.activity)] += d;
+            s.last = (began_ns, t_ns);
+        });
+    }
+
     /// The robot stands still for `seconds` doing `activity` (the current
     /// activity is kept for what follows).
     pub fn stand(&self, activity: Activity, seconds: Real) {
@@ -247,6 +260,8 @@ pub struct Timed<H> {
     inner: H,
     timing: RobotTiming,
     clock: RobotClock,
+    /// The continuous motion under way and when it began, nanoseconds.
+    motion: Option<(u64, LineMotion)>,
 }
 
 impl<H> Timed<H> {
@@ -256,6 +271,7 @@ impl<H> Timed<H> {
             inner,
             timing,
             clock,
+            motion: None,
         }
     }
 
@@ -303,6 +319,69 @@ impl<H: LineScanner> LineScanner for Timed<H> {
 
     fn seed_noise(&mut self, seed: u64) {
         self.inner.seed_noise(seed);
+    }
+
+    fn moving(&mut self) -> Option<&mut dyn MovingScanner> {
+        if self.inner.moving().is_some() {
+            Some(self)
+        } else {
+            None
+        }
+    }
+}
+
+fn cannot_move_scanning() -> HwError {
+    HwError::Setting {
+        what: "continuous motion".into(),
+        message: "this hardware cannot scan while the arm moves".into(),
+    }
+}
+
+/// A continuous motion on the clock: each scan ends `scan_time` after its
+/// first beam (the event's interval is the scan's), and the motion's
+/// end, the time its profile takes and then the settling allowance, with
+/// the last scan's end if that is later.
+impl<H: LineScanner> MovingScanner for Timed<H> {
+    fn start_motion(&mut self, motion: &LineMotion) -> Result<(), HwError> {
+        let inner = self.inner.moving().ok_or_else(cannot_move_scanning)?;
+        inner.start_motion(motion)?;
+        self.motion = Some((self.clock.now_ns(), motion.clone()));
+        Ok(())
+    }
+
+    fn next_scan(&mut self) -> Result<Option<MovingScan>, HwError> {
+        let inner = self.inner.moving().ok_or_else(cannot_move_scanning)?;
+        let scan = inner.next_scan()?;
+        let (t0, motion) = self.motion.as_ref().ok_or_else(|| HwError::Script {
+            message: "a scan of a continuous motion asked before the motion began".into(),
+        })?;
+        if let Some(s) = &scan {
+            let start = t0 + ns(s.start_s);
+            self.clock
+                .pass_until(start, start + ns(self.timing.scan_time_s));
+        } else {
+            let d = motion.duration_s();
+            let end = t0 + ns(d);
+            let settled = if d > 0.0 {
+                end + ns(self.timing.settle_s)
+            } else {
+                end
+            };
+            let now = self.clock.now_ns();
+            self.clock.pass_until(*t0, settled.max(now));
+            self.clock.with(|s| s.last = (*t0, end.max(*t0)));
+            self.motion = None;
+        }
+        Ok(scan)
+    }
+
+    fn brake(&mut self) -> Result<LineMotion, HwError> {
+        let inner = self.inner.moving().ok_or_else(cannot_move_scanning)?;
+        let braked = inner.brake()?;
+        if let Some((_, m)) = &mut self.motion {
+            m.clone_from(&braked);
+        }
+        Ok(braked)
     }
 }
 

@@ -29,6 +29,7 @@
 //! # Ok::<(), hw::HwError>(())
 //! ```
 
+use crate::motion::{LineMotion, MovingScan, MovingScanner};
 use crate::{Arm, HwError, LineScanner, RangeSensors, ScanReadings};
 use geom::Real;
 use sensor::SensorPoint;
@@ -50,6 +51,14 @@ pub enum Event {
     Read(Vec<Option<SensorPoint>>),
     /// The scanner's noise was seeded ([`LineScanner::seed_noise`]).
     Seeded(u64),
+    /// A continuous motion began ([`crate::motion`]).
+    MotionStarted(LineMotion),
+    /// A scan taken while the arm moved.
+    ScannedMoving(MovingScan),
+    /// The arm was braked; the motion as it then ran.
+    Braked(LineMotion),
+    /// The continuous motion ended with the arm at rest at these joints.
+    MotionEnded(Vec<Real>),
 }
 
 /// A log of hardware: where the arm started, the scanner's bearings and
@@ -90,6 +99,8 @@ impl Sink for Script {
 pub struct Tap<H, S> {
     inner: H,
     sink: S,
+    /// The continuous motion under way (its end is where the arm rests).
+    running: Option<LineMotion>,
 }
 
 /// Any hardware, logged: every successful call is appended to a [`Script`].
@@ -104,7 +115,11 @@ impl<H: Arm> Tap<H, Script> {
             bearings_rad,
             events: Vec::new(),
         };
-        Self { inner, sink }
+        Self {
+            inner,
+            sink,
+            running: None,
+        }
     }
 
     /// The log so far.
@@ -116,7 +131,11 @@ impl<H: Arm> Tap<H, Script> {
 impl<H, S: Sink> Tap<H, S> {
     /// Hand every call of `inner` to `sink`.
     pub fn with_sink(inner: H, sink: S) -> Self {
-        Self { inner, sink }
+        Self {
+            inner,
+            sink,
+            running: None,
+        }
     }
 
     /// The hardware tapped.
@@ -159,6 +178,51 @@ impl<H: LineScanner, S: Sink> LineScanner for Tap<H, S> {
     fn seed_noise(&mut self, seed: u64) {
         self.inner.seed_noise(seed);
         self.sink.event(&Event::Seeded(seed));
+    }
+
+    fn moving(&mut self) -> Option<&mut dyn MovingScanner> {
+        if self.inner.moving().is_some() {
+            Some(self)
+        } else {
+            None
+        }
+    }
+}
+
+fn cannot_move_scanning() -> HwError {
+    HwError::Setting {
+        what: "continuous motion".into(),
+        message: "this hardware cannot scan while the arm moves".into(),
+    }
+}
+
+impl<H: LineScanner, S: Sink> MovingScanner for Tap<H, S> {
+    fn start_motion(&mut self, motion: &LineMotion) -> Result<(), HwError> {
+        let inner = self.inner.moving().ok_or_else(cannot_move_scanning)?;
+        inner.start_motion(motion)?;
+        self.running = Some(motion.clone());
+        self.sink.event(&Event::MotionStarted(motion.clone()));
+        Ok(())
+    }
+
+    fn next_scan(&mut self) -> Result<Option<MovingScan>, HwError> {
+        let inner = self.inner.moving().ok_or_else(cannot_move_scanning)?;
+        let scan = inner.next_scan()?;
+        if let Some(s) = &scan {
+            self.sink.event(&Event::ScannedMoving(s.clone()));
+        } else {
+            let end = self.running.take().map(|m| m.end()).unwrap_or_default();
+            self.sink.event(&Event::MotionEnded(end));
+        }
+        Ok(scan)
+    }
+
+    fn brake(&mut self) -> Result<LineMotion, HwError> {
+        let inner = self.inner.moving().ok_or_else(cannot_move_scanning)?;
+        let braked = inner.brake()?;
+        self.running = Some(braked.clone());
+        self.sink.event(&Event::Braked(braked.clone()));
+        Ok(braked)
     }
 }
 
@@ -217,6 +281,10 @@ fn mismatch(k: usize, asked: &str, event: &Event) -> HwError {
         Event::Scanned(_) => "a scan".to_owned(),
         Event::Read(_) => "a reading of the range finders".to_owned(),
         Event::Seeded(s) => format!("seeding the noise with {s}"),
+        Event::MotionStarted(m) => format!("a continuous motion to {:?}", m.to),
+        Event::ScannedMoving(_) => "a scan while moving".to_owned(),
+        Event::Braked(_) => "braking".to_owned(),
+        Event::MotionEnded(q) => format!("the end of a continuous motion at {q:?}"),
     };
     HwError::Script {
         message: format!("event {k}: {asked} asked, but the script recorded {recorded}"),
@@ -255,6 +323,56 @@ impl LineScanner for Replay {
             Event::Scanned(s) => Ok(s.clone()),
             other => {
                 let e = mismatch(k, "a scan", other);
+                self.next = k;
+                Err(e)
+            }
+        }
+    }
+    fn moving(&mut self) -> Option<&mut dyn MovingScanner> {
+        Some(self)
+    }
+}
+
+/// A continuous motion played back: the motion asked must be the one
+/// recorded; the scans and the braking are the recorded ones.
+impl MovingScanner for Replay {
+    fn start_motion(&mut self, motion: &LineMotion) -> Result<(), HwError> {
+        let asked = format!("a continuous motion to {:?}", motion.to);
+        let k = self.next;
+        match self.take(&asked)? {
+            Event::MotionStarted(m) if m == motion => Ok(()),
+            other => {
+                let e = mismatch(k, &asked, other);
+                self.next = k;
+                Err(e)
+            }
+        }
+    }
+
+    fn next_scan(&mut self) -> Result<Option<MovingScan>, HwError> {
+        let k = self.next;
+        let asked = "a scan while moving";
+        let (scan, rest) = match self.take(asked)? {
+            Event::ScannedMoving(s) => (Some(s.clone()), None),
+            Event::MotionEnded(q) => (None, Some(q.clone())),
+            other => {
+                let e = mismatch(k, asked, other);
+                self.next = k;
+                return Err(e);
+            }
+        };
+        if let Some(q) = rest {
+            self.q = q;
+        }
+        Ok(scan)
+    }
+
+    fn brake(&mut self) -> Result<LineMotion, HwError> {
+        let k = self.next;
+        match self.take("braking")? {
+            Event::Braked(m) => Ok(m.clone()),
+            other => {
+                let e = mismatch(k, "braking", other);
                 self.next = k;
                 Err(e)
             }

@@ -75,6 +75,12 @@ pub trait LineScanner {
     fn seed_noise(&mut self, seed: u64) {
         let _ = seed;
     }
+    /// The scanner and its arm scanning while the arm moves
+    /// ([`crate::motion`]), where the hardware can; `None` (the default)
+    /// for hardware that scans standing only.
+    fn moving(&mut self) -> Option<&mut dyn crate::motion::MovingScanner> {
+        None
+    }
 }
 
 /// Single-point range finders mounted on the robot.
@@ -106,6 +112,10 @@ impl<T: LineScanner + ?Sized> LineScanner for &mut T {
 
     fn seed_noise(&mut self, seed: u64) {
         (**self).seed_noise(seed);
+    }
+
+    fn moving(&mut self) -> Option<&mut dyn crate::motion::MovingScanner> {
+        (**self).moving()
     }
 }
 
