@@ -54,6 +54,26 @@ pub enum Selection {
     RankSum,
 }
 
+/// How the arm moves while the scanner scans (a transit that scans, a
+/// sweep).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Motion {
+    /// Stop and go: the arm steps, settles, and the scanner scans
+    /// standing; a transit scans after every `motion_scan_step_deg`, a
+    /// sweep after every tilt step. Paul's system scanned so (A§5.1).
+    #[default]
+    StopAndGo,
+    /// Continuous ([`hw::motion`]): a transit's every straight segment and
+    /// a sweep's tilt are each one timed motion with the scanner scanning
+    /// all along (a scan every `scan_time`), each beam placed at the pose
+    /// of its moment. A transit moves at most `motion_scan_step_deg` per
+    /// scan on its largest joint (and within the joints' limits), a
+    /// sweep its tilt step per scan. Hardware that cannot scan while
+    /// moving is refused.
+    Continuous,
+}
+
 /// How Stage Two chooses its next viewpoint.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -173,6 +193,8 @@ pub struct ExploreConfig {
     /// while the arm moves (the Hokuyo of A§5.1 gives a scan every 100 ms:
     /// the default 1° is the arm at 10°/s).
     pub motion_scan_step_deg: Real,
+    /// How the arm moves while the scanner scans.
+    pub motion: Motion,
     /// How the next viewpoint is chosen among the safe candidates.
     pub selection: Selection,
     /// Stage One keeps the robot's collision capsules at least this far
@@ -208,6 +230,7 @@ impl Default for ExploreConfig {
             stage_two_clearance_m: 0.05,
             mapping: MappingConfig::default(),
             motion_scan_step_deg: 1.0,
+            motion: Motion::StopAndGo,
             selection: Selection::Information,
             stage_one_clearance_m: 0.05,
         }
@@ -222,6 +245,7 @@ impl ExploreConfig {
     pub fn thesis_stage_one(mut self) -> Self {
         self.selection = Selection::RankSum;
         self.motion_scan_step_deg = 0.0;
+        self.motion = Motion::StopAndGo;
         self.prediction.motion_poses = 0;
         self.stage_one_clearance_m = 0.0;
         self.local_candidates = 200;

@@ -27,7 +27,8 @@ pub mod stage_one;
 
 pub use config::{
     ExploreConfig, MAX_ATTEMPTS, MAX_LINK_K, MAX_LOCAL_CANDIDATES, MAX_LOCAL_REACH_M,
-    MAX_MOTION_POSES, MAX_VIEWPOINTS, MappingConfig, PredictionConfig, Selection, StageTwoChoice,
+    MAX_MOTION_POSES, MAX_VIEWPOINTS, MappingConfig, Motion, PredictionConfig, Selection,
+    StageTwoChoice,
 };
 pub use discs::DiscMap;
 pub use error::ExploreError;

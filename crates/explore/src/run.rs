@@ -602,69 +602,99 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         let mut last: Option<(Vec<Real>, Real)> = None;
         let mut fresh = PointClearance::new();
         let search_m = clearance_m - GUARD_MARGIN_M;
+        // Continuous motion: each segment one timed motion, at most `step`
+        // on the largest joint per scan.
+        let scan_time_s = self.setup.timing.scan_time_s;
+        let line = (self.config().motion == crate::Motion::Continuous).then(|| {
+            let cap = if scan_time_s > 0.0 {
+                step / scan_time_s
+            } else {
+                Real::INFINITY
+            };
+            self.setup.timing.limits.capped(cap)
+        });
+        let mut stopped_at = self.q.clone();
         for w in waypoints.windows(2) {
             let s = &self.setup;
             let (fine, points) = (&self.fine, &mut self.points);
             // Each step keeps the bound from what the scanner has measured
             // so far, the motion's own scans included: a surface seen on
             // the way stops the arm before it comes too close.
-            let done = hw::scan_motion(
-                &mut *self.hw,
-                &s.robot,
-                &s.world_from_base,
-                (&w[0], &w[1]),
-                step,
-                &mut builder,
-                &mut |at, next, b| {
-                    fresh.clear();
-                    points.insert_noting(
-                        b.points()[kept..].iter().map(|p| &p.point),
-                        Some(&mut fresh),
-                    );
-                    kept = b.points().len();
-                    if clearance_m <= 0.0 {
-                        return true;
+            let mut guard = |at: &[Real], next: &[Real], b: &sensor::SweepBuilder| {
+                fresh.clear();
+                points.insert_noting(
+                    b.points()[kept..].iter().map(|p| &p.point),
+                    Some(&mut fresh),
+                );
+                kept = b.points().len();
+                if clearance_m <= 0.0 {
+                    return true;
+                }
+                let clearance = |q: &[Real]| points.configuration_clearance(fine, q, search_m);
+                let here = match last.take() {
+                    Some((q, c)) if q.as_slice() == at => {
+                        c.min(fresh.configuration_clearance(fine, at, search_m))
                     }
-                    let clearance = |q: &[Real]| points.configuration_clearance(fine, q, search_m);
-                    let here = match last.take() {
-                        Some((q, c)) if q.as_slice() == at => {
-                            c.min(fresh.configuration_clearance(fine, at, search_m))
+                    _ => clearance(at),
+                };
+                let least = *bound.get_or_insert(here);
+                let mut at_next = None;
+                let ok = fine.interpolate(at, next).iter().all(|c| {
+                    let v = if c.as_slice() == at {
+                        here
+                    } else {
+                        let v = clearance(c);
+                        if c.as_slice() == next {
+                            at_next = Some(v);
                         }
-                        _ => clearance(at),
+                        v
                     };
-                    let least = *bound.get_or_insert(here);
-                    let mut at_next = None;
-                    let ok = fine.interpolate(at, next).iter().all(|c| {
-                        let v = if c.as_slice() == at {
-                            here
-                        } else {
-                            let v = clearance(c);
-                            if c.as_slice() == next {
-                                at_next = Some(v);
-                            }
-                            v
-                        };
-                        v >= least - GUARD_TOLERANCE_M
-                    });
-                    if ok {
-                        let there = at_next.unwrap_or_else(|| clearance(next));
-                        bound = Some(least.max(there));
-                        last = Some((next.to_vec(), there));
-                    }
-                    ok
-                },
-            )?;
-            let reached = if done.completed {
-                w[1].clone()
+                    v >= least - GUARD_TOLERANCE_M
+                });
+                if ok {
+                    let there = at_next.unwrap_or_else(|| clearance(next));
+                    bound = Some(least.max(there));
+                    last = Some((next.to_vec(), there));
+                }
+                ok
+            };
+            // One timed motion, the guard on a receding horizon; or steps.
+            let (completed_here, reached) = if let Some(limits) = &line {
+                let motion = hw::motion::LineMotion::new(limits, &w[0], &w[1]);
+                let done = hw::motion::scan_line(
+                    &mut *self.hw,
+                    &s.robot,
+                    &s.world_from_base,
+                    &motion,
+                    scan_time_s,
+                    &mut builder,
+                    &mut guard,
+                )?;
+                (done.completed, done.reached)
             } else {
-                self.hw.joints()
+                let done = hw::scan_motion(
+                    &mut *self.hw,
+                    &s.robot,
+                    &s.world_from_base,
+                    (&w[0], &w[1]),
+                    step,
+                    &mut builder,
+                    &mut guard,
+                )?;
+                let reached = if done.completed {
+                    w[1].clone()
+                } else {
+                    self.hw.joints()
+                };
+                (done.completed, reached)
             };
             // The map is the one the motion started on until its scans are
             // integrated below: the audit sees what the arm did.
             if !replayed {
                 self.audit(k, &w[0], &reached)?;
             }
-            if !done.completed {
+            stopped_at = reached;
+            if !completed_here {
                 completed = false;
                 break;
             }
@@ -673,7 +703,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         // stopped it.
         self.q = match waypoints.last() {
             Some(last) if completed => last.clone(),
-            _ => self.hw.joints(),
+            _ => stopped_at,
         };
         if builder.scan_count() > 0 {
             let t = Instant::now();
@@ -725,15 +755,38 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         let t = Instant::now();
         let s = &self.setup;
         self.options.clock.set_activity(Activity::StandingToSweep);
-        let sweep = tilt_sweep_through(
-            &mut *self.hw,
-            &s.robot,
-            &s.world_from_base,
-            &q,
-            s.stage.tilt_joint(),
-            &tilts,
-            &mut |_, _| {},
-        )?;
+        let sweep = match (self.config().motion, tilts.first(), tilts.last()) {
+            // One motion across, the scanner scanning all along at the
+            // sweep's tilt step per scan.
+            (crate::Motion::Continuous, Some(&lo), Some(&hi)) if tilts.len() > 1 => {
+                let step = (hi - lo).abs() / (tilts.len() - 1) as Real;
+                let t = &s.timing;
+                let limits = t.limits.capped(if t.scan_time_s > 0.0 {
+                    step / t.scan_time_s
+                } else {
+                    Real::INFINITY
+                });
+                hw::motion::tilt_sweep_moving(
+                    &mut *self.hw,
+                    &s.robot,
+                    &s.world_from_base,
+                    &q,
+                    s.stage.tilt_joint(),
+                    (lo, hi),
+                    &limits,
+                    t.scan_time_s,
+                )?
+            }
+            _ => tilt_sweep_through(
+                &mut *self.hw,
+                &s.robot,
+                &s.world_from_base,
+                &q,
+                s.stage.tilt_joint(),
+                &tilts,
+                &mut |_, _| {},
+            )?,
+        };
         let sweep_ms = self.timed(t);
         let t = Instant::now();
         let stats = self.setup.stage.integrate(&sweep);

@@ -6,6 +6,7 @@
 
 use crate::{ExploreConfig, ExploreError, StageOne};
 use geom::{Isometry3, Real};
+use hw::clock::RobotTiming;
 use plan::{CacheOutcome, CspaceModel};
 use robot::Robot;
 use sensor::{Scanner, ScannerConfig, SweepConfig};
@@ -39,6 +40,9 @@ pub struct SetupInputs {
     pub cspace_cache: Option<PathBuf>,
     /// Where the trained LRC is cached (`None`: trained every run).
     pub lrc_cache: Option<PathBuf>,
+    /// The robot's joint limits and the scanner's scan time: how fast a
+    /// continuous motion runs and how long a motion takes.
+    pub timing: RobotTiming,
 }
 
 /// Everything a run starts from.
@@ -66,6 +70,8 @@ pub struct Setup {
     pub cspace: String,
     /// Where the trained LRC is cached (`None`: trained every run).
     pub lrc_cache: Option<PathBuf>,
+    /// The robot's joint limits and the scanner's scan time.
+    pub timing: RobotTiming,
 }
 
 impl Setup {
@@ -83,7 +89,14 @@ impl Setup {
             materials,
             cspace_cache,
             lrc_cache,
+            timing,
         } = inputs;
+        timing
+            .check(robot.dof())
+            .map_err(|message| ExploreError::Robot {
+                robot: robot.name.clone(),
+                message: format!("timing: {message}"),
+            })?;
         config.sweep = sweep;
         // Rays without a return free space up to a little short of the range
         // (map's perfect-detection reading), and predictions cast as far.
@@ -129,6 +142,7 @@ impl Setup {
             stage,
             cspace,
             lrc_cache,
+            timing,
         })
     }
 }

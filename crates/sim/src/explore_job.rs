@@ -366,7 +366,9 @@ pub fn explore_setup(
         .as_scene()
         .map(|scene| scene.materials().to_vec())
         .unwrap_or_default();
+    let timing = loaded.robot_timing(&robot)?;
     let setup = Setup::new(SetupInputs {
+        timing,
         robot,
         world_from_base,
         scanner: spec.config,

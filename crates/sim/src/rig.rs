@@ -5,6 +5,7 @@
 
 use crate::SimError;
 use geom::{Isometry3, Real};
+use hw::motion::{LineMotion, MovingScan, MovingScanner};
 use hw::{Arm, HwError, LineScanner, RangeSensors, ScanReadings};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -27,6 +28,8 @@ pub struct SimRig {
     scanner: Option<Scanner>,
     rng: ChaCha8Rng,
     range_noise_sigma_m: Real,
+    /// The continuous motion under way and the scans taken on it.
+    motion: Option<(LineMotion, usize)>,
 }
 
 impl SimRig {
@@ -67,6 +70,7 @@ impl SimRig {
             scanner,
             rng: ChaCha8Rng::seed_from_u64(seed),
             range_noise_sigma_m: 0.0,
+            motion: None,
         })
     }
 
@@ -181,6 +185,101 @@ impl LineScanner for SimRig {
     fn seed_noise(&mut self, seed: u64) {
         self.reseed(seed);
     }
+
+    fn moving(&mut self) -> Option<&mut dyn MovingScanner> {
+        if self.scanner.is_some() {
+            Some(self)
+        } else {
+            None
+        }
+    }
+}
+
+/// Seconds between the poses a moving scan's beams are cast from (each
+/// beam's pose is interpolated between them; the loop places beams from
+/// joint states ten times as far apart).
+const TRUTH_PERIOD_S: Real = 0.001;
+
+/// The arm follows a continuous motion exactly; the scanner takes a scan
+/// every `scan_time_s` from the motion's start, each beam cast from the
+/// scanner pose of its own moment, until the arm rests.
+impl MovingScanner for SimRig {
+    fn start_motion(&mut self, motion: &LineMotion) -> Result<(), HwError> {
+        check_stands_at(&self.joints(), &motion.from, 1e-9).map_err(|message| {
+            HwError::Setting {
+                what: "continuous motion".into(),
+                message: format!("the arm {message}"),
+            }
+        })?;
+        self.robot.check_within_limits(&motion.to)?;
+        self.motion = Some((motion.clone(), 0));
+        Ok(())
+    }
+
+    fn next_scan(&mut self) -> Result<Option<MovingScan>, HwError> {
+        let scanner = self.scanner.as_ref().ok_or(HwError::NoScanner)?;
+        let (motion, k) = self.motion.as_mut().ok_or_else(|| HwError::Setting {
+            what: "continuous motion".into(),
+            message: "a scan asked before a motion began".into(),
+        })?;
+        let scan_time = scanner.config().scan_time_s;
+        let start = *k as Real * scan_time;
+        if start >= motion.duration_s() {
+            let end = motion.end();
+            self.motion = None;
+            self.posture.move_to(&self.robot, &end)?;
+            return Ok(None);
+        }
+        *k += 1;
+        let n = scanner.ray_count();
+        // As a `LaserScan` states it (float32), so that a bag places the
+        // beams where the loop did.
+        let dt = sensor::float32(hw::motion::time_increment_s(
+            scan_time,
+            scanner.bearings_rad(),
+        ));
+        let last = start + (n.max(1) - 1) as Real * dt;
+        let truth: Vec<robot::moving::JointSample> = {
+            let (a, b) = (
+                (start / TRUTH_PERIOD_S).floor() as i64,
+                (last / TRUTH_PERIOD_S).ceil() as i64,
+            );
+            (a..=b.max(a))
+                .map(|m| {
+                    let t = m as Real * TRUTH_PERIOD_S;
+                    robot::moving::JointSample {
+                        t_s: t,
+                        q: motion.at(t),
+                    }
+                })
+                .collect()
+        };
+        let poses =
+            robot::moving::beam_poses(&self.robot, &self.world_from_base, &truth, start, dt, n)?;
+        let scan = scanner.scan_posed(self.world.as_ref(), &poses, &mut self.rng);
+        let joints = motion.samples(start, last);
+        let now = motion.at(start + scan_time);
+        self.posture.move_to(&self.robot, &now)?;
+        Ok(Some(MovingScan {
+            readings: ScanReadings::of_simulated(&scan).in_float32(),
+            start_s: start,
+            time_increment_s: dt,
+            joints,
+        }))
+    }
+
+    fn brake(&mut self) -> Result<LineMotion, HwError> {
+        let scan_time = self
+            .scanner
+            .as_ref()
+            .map_or(0.0, |s| s.config().scan_time_s);
+        let (motion, k) = self.motion.as_mut().ok_or_else(|| HwError::Setting {
+            what: "continuous motion".into(),
+            message: "braking asked before a motion began".into(),
+        })?;
+        *motion = motion.braked(*k as Real * scan_time);
+        Ok(motion.clone())
+    }
 }
 
 impl RangeSensors for SimRig {
@@ -261,6 +360,10 @@ pub(crate) fn check_stands_at(q: &[Real], start: &[Real], tolerance: Real) -> Re
     }
 }
 
+fn ns(seconds: Real) -> u64 {
+    (seconds.max(0.0) * 1e9).round() as u64
+}
+
 /// Hand one event of tapped hardware (`hw::script::Tap` around a
 /// `hw::clock::Timed`) to a run's bag, stamped by the robot clock the
 /// hardware runs on: the event's interval is the clock's last.
@@ -283,6 +386,21 @@ pub fn bag_event(
             let d: Vec<Option<Real>> = readings.iter().map(|r| r.map(|p| p.distance_m)).collect();
             bag.read(start, &d);
         }
-        Event::Seeded(_) => {}
+        Event::ScannedMoving(s) => {
+            // The motion began `start_s` before the scan (the clock's
+            // interval is the scan's).
+            let began = start.saturating_sub(ns(s.start_s));
+            for j in &s.joints {
+                bag.passed(began + ns(j.t_s), &j.q);
+            }
+            bag.scanned_moving(
+                start,
+                (end.saturating_sub(start) as Real * 1e-9, s.time_increment_s),
+                &s.readings.ranges_m,
+                &s.readings.intensities,
+            );
+        }
+        Event::MotionEnded(q) => bag.rested(end, q),
+        Event::Seeded(_) | Event::MotionStarted(_) | Event::Braked(_) => {}
     }
 }

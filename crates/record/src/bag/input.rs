@@ -310,10 +310,33 @@ pub fn sweeps_from_bag(
             Some(x) => x,
             None => builder.insert((SweepBuilder::new(&bearings)?, bearings)),
         };
-        robot.fk_into(&q, &mut frames)?;
-        let world_from_link = world_from_base * frames[link.0];
-        let pose = world_from_link * link_from_scanner;
-        b.push_scan(&pose, &ranges, &intensities, None)?;
+        let mut pose_at = |q: &[Real]| -> Result<Isometry3, BagError> {
+            robot.fk_into(q, &mut frames)?;
+            Ok(world_from_base * frames[link.0] * link_from_scanner)
+        };
+        let increment = Real::from(scan.time_increment);
+        if increment > 0.0 && ranges.len() > 1 {
+            // Taken while the arm moved: each beam at the pose of its own
+            // moment, between the states around it.
+            let last = t.saturating_add(ns_of(increment * (ranges.len() - 1) as Real));
+            let Some(around) = states_over(&states, t, last) else {
+                unplaced += 1;
+                continue;
+            };
+            let times: Vec<Real> = around
+                .iter()
+                .map(|(s, _)| (*s as i128 - t as i128) as Real * 1e-9)
+                .collect();
+            let poses = around
+                .iter()
+                .map(|(_, q)| pose_at(q))
+                .collect::<Result<Vec<_>, _>>()?;
+            let beams =
+                robot::moving::interpolate_beams(&times, &poses, 0.0, increment, ranges.len());
+            b.push_scan_posed(&beams, &ranges, &intensities, None)?;
+        } else {
+            b.push_scan(&pose_at(&q)?, &ranges, &intensities, None)?;
+        }
         placed += 1;
     }
     if let Some((b, _)) = builder
@@ -458,6 +481,18 @@ fn scanner_on(
         robot.name,
         topics::TF_STATIC
     ))
+}
+
+fn ns_of(seconds: Real) -> u64 {
+    (seconds.max(0.0) * 1e9).round() as u64
+}
+
+/// The states from the last at or before `t0` to the first at or after
+/// `t1` (`None` when they do not span the interval).
+fn states_over(states: &[(u64, Vec<Real>)], t0: u64, t1: u64) -> Option<&[(u64, Vec<Real>)]> {
+    let a = states.partition_point(|(s, _)| *s <= t0).checked_sub(1)?;
+    let b = states.partition_point(|(s, _)| *s < t1);
+    (b < states.len()).then(|| &states[a..=b])
 }
 
 /// The joints at `t`, interpolated between the states around it (`None`

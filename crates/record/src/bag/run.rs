@@ -149,6 +149,48 @@ impl RunBag {
         self.keep(r);
     }
 
+    /// The arm, moving, reported joints `q` at `stamp_ns` (a state at or
+    /// before the last one written is dropped: a moving scan's states
+    /// overlap the next one's).
+    pub fn passed(&mut self, stamp_ns: u64, q: &[Real]) {
+        if stamp_ns > self.last_state_ns {
+            self.q = q.to_vec();
+            let r = self.write_joints(stamp_ns, q);
+            self.keep(r);
+        }
+    }
+
+    /// A continuous motion ended at `end_ns` with the arm at rest at `q`
+    /// (its last state, unless a scan's states reach past it).
+    pub fn rested(&mut self, end_ns: u64, q: &[Real]) {
+        self.passed(end_ns, q);
+        self.q = q.to_vec();
+    }
+
+    /// A scan taken while the arm moved began at `start_ns` and took
+    /// `scan_time_s`, beam `i` measured `i · time_increment_s` after the
+    /// first (`LaserScan.time_increment`); the arm's states around it come
+    /// through [`RunBag::passed`].
+    pub fn scanned_moving(
+        &mut self,
+        start_ns: u64,
+        (scan_time_s, time_increment_s): (Real, Real),
+        ranges_m: &[Option<Real>],
+        intensities: &[Real],
+    ) {
+        let mut msg = laser_scan(
+            start_ns,
+            &self.bearings,
+            ranges_m,
+            intensities,
+            self.config.scan_range_m,
+            scan_time_s,
+        );
+        msg.time_increment = time_increment_s as f32;
+        let r = self.bag.write(topics::SCAN, start_ns, &msg);
+        self.keep(r);
+    }
+
     /// Every range finder was read at `stamp_ns`: the distance per finder
     /// (`None`: nothing in range).
     pub fn read(&mut self, stamp_ns: u64, distances_m: &[Option<Real>]) {

@@ -4,6 +4,7 @@
 mod bag;
 mod bounds;
 mod bridge_scan;
+mod continuous;
 mod follow_reach;
 mod follow_rig;
 mod follow_run;
