@@ -9,7 +9,7 @@
 //! | [`ray`] | [`Ray`]: origin + unit direction |
 //! | [`plane`] | [`Plane`]: signed distance, projection, line intersection, two-plane line |
 //! | [`mod@line`] | [`Line3`], [`Segment3`]: closest points between lines and segments |
-//! | [`polygon2`] | signed area, simplicity, containment, sight tests, 2-D segment queries |
+//! | [`polygon2`] | signed area, simplicity, containment, sight tests, 2-D segment queries, the overlap of two polygons |
 //! | [`polygon3`] | [`PlaneFrame`]: 2-D coordinates on a plane, planar polygons in 3-D |
 //! | [`moments`] | [`Moments`]: moment sums (P§2.2) and [`Pca`] by symmetric eigen-decomposition |
 //! | [`triangle`] | [`Triangle`]: ray hit, closest point, segment/triangle distance, intersection |
