@@ -42,6 +42,19 @@ pub enum SurfaceError {
         /// What is wrong with it.
         message: String,
     },
+    /// An initial segment overlaps an initial segment already in the model
+    /// on the same surface (see
+    /// [`SurfaceModel::add_initial_segment`](crate::SurfaceModel::add_initial_segment)).
+    #[error(
+        "initial segment: overlaps initial segment {} over {area_m2:.3e} m² of the same surface (facing the same way, within λ of it); initial segments never merge, so that surface would be modelled twice",
+        other.0
+    )]
+    InitialOverlap {
+        /// The segment it overlaps.
+        other: SegmentId,
+        /// The common area, m².
+        area_m2: Real,
+    },
     /// A file could not be parsed.
     #[error("{source_name}:{line}: {field}: {message}")]
     Parse {

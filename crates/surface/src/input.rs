@@ -220,6 +220,34 @@ pub fn read_initial_segments_json(
     text: &str,
     source_name: &str,
 ) -> Result<Vec<Vec<Point3>>, SurfaceError> {
+    read_initial_segments_located(text, source_name).map(|s| s.segments)
+}
+
+/// Initial segments as read from a file, with where each is written.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InitialSegments {
+    /// One vertex list per segment.
+    pub segments: Vec<Vec<Point3>>,
+    /// `lines[i]`: the 1-based line on which segment `i`'s vertex list opens.
+    pub lines: Vec<usize>,
+}
+
+/// [`read_initial_segments_json`], with the line each segment opens on, for
+/// messages about the segments that name their lines. Its own errors name the
+/// segment's line too.
+///
+/// ```
+/// let text = "{\"segments\": [\n  [[0, 0, 0], [1, 0, 0], [1, 1, 0]],\n  [[0, 0, 1], [1, 0, 1], [1, 1, 1]]\n]}";
+/// let read = surface::read_initial_segments_located(text, "two.json").unwrap();
+/// assert_eq!(read.lines, [2, 3]);
+/// let bad = "{\"segments\": [\n  [[0, 0, 0], [1, 0, 0], [1, 1, 0]],\n  [[0, 0, 1], [1, 0, 1]]\n]}";
+/// let err = surface::read_initial_segments_located(bad, "two.json").unwrap_err();
+/// assert!(err.to_string().starts_with("two.json:3: segments[1]: 2 vertices"), "{err}");
+/// ```
+pub fn read_initial_segments_located(
+    text: &str,
+    source_name: &str,
+) -> Result<InitialSegments, SurfaceError> {
     let raw: RawInitial = serde_json::from_str(text).map_err(|e| {
         let field = if e.to_string().contains("segments") {
             "segments"
@@ -228,12 +256,14 @@ pub fn read_initial_segments_json(
         };
         parse_error(source_name, e.line().max(1), field, e.to_string())
     })?;
+    let mut lines = segment_lines(text);
+    lines.resize(raw.segments.len(), 1);
     let mut out = Vec::with_capacity(raw.segments.len());
     for (s, verts) in raw.segments.iter().enumerate() {
         if verts.len() < 3 {
             return Err(parse_error(
                 source_name,
-                1,
+                lines[s],
                 &format!("segments[{s}]"),
                 format!("{} vertices (at least 3 needed)", verts.len()),
             ));
@@ -246,7 +276,7 @@ pub fn read_initial_segments_json(
             {
                 return Err(parse_error(
                     source_name,
-                    1,
+                    lines[s],
                     &format!("segments[{s}][{v}]"),
                     format!("not finite or beyond ±{:e} m", geom::MAX_COORDINATE_M),
                 ));
@@ -255,7 +285,62 @@ pub fn read_initial_segments_json(
         }
         out.push(pts);
     }
-    Ok(out)
+    Ok(InitialSegments {
+        segments: out,
+        lines,
+    })
+}
+
+/// The 1-based line on which each element of the top-level `"segments"` array
+/// of a JSON document opens (`text` parsed already, so well formed): a scan
+/// of brackets outside strings.
+fn segment_lines(text: &str) -> Vec<usize> {
+    let mut lines = Vec::new();
+    let (mut line, mut depth) = (1, 0usize);
+    let (mut in_string, mut escaped) = (false, false);
+    let mut string_start = 0;
+    // The last string closed at depth 1 (a key of the top-level object), and
+    // whether the array being read at depth 2 is that of `"segments"`.
+    let mut last_key: Option<&str> = None;
+    let mut in_segments = false;
+    for (i, c) in text.char_indices() {
+        if c == '\n' {
+            line += 1;
+        }
+        if in_string {
+            if escaped {
+                escaped = false;
+            } else if c == '\\' {
+                escaped = true;
+            } else if c == '"' {
+                in_string = false;
+                if depth == 1 {
+                    last_key = text.get(string_start..=i);
+                }
+            }
+            continue;
+        }
+        match c {
+            '"' => {
+                in_string = true;
+                string_start = i;
+            }
+            '[' | '{' => {
+                depth += 1;
+                if depth == 2 {
+                    in_segments = c == '['
+                        && last_key
+                            .and_then(|k| serde_json::from_str::<String>(k).ok())
+                            .is_some_and(|k| k == "segments");
+                } else if depth == 3 && in_segments {
+                    lines.push(line);
+                }
+            }
+            ']' | '}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    lines
 }
 
 #[cfg(test)]

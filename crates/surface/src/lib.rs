@@ -27,7 +27,10 @@ pub use config::{DEFAULT_MAX_SET_POINTS, MAX_LAMBDA_M, MIN_LAMBDA_M, MergeOrder,
 pub use error::{InvariantViolation, SurfaceError};
 pub use export::{EdgeJson, ModelJson, ModelStats, SegmentJson, StatsJson, UpdateTimes};
 pub use fissure::FissureType;
-pub use input::{SensorSet, read_initial_segments_json, read_sets_jsonl, read_sets_jsonl_limited};
+pub use input::{
+    InitialSegments, SensorSet, read_initial_segments_json, read_initial_segments_located,
+    read_sets_jsonl, read_sets_jsonl_limited,
+};
 pub use merge::MergeFailure;
 pub use model::SurfaceModel;
 pub use overlay::CombineError;

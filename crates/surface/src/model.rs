@@ -218,6 +218,15 @@ impl SurfaceModel {
     /// which shared edges and corner vertices can be formed. `vertices` run
     /// anticlockwise about the outward normal and must be coplanar (within
     /// `λ·10⁻⁵`), simple and of non-zero area.
+    ///
+    /// It must not overlap an initial segment already in the model on the same
+    /// surface: facing the same way (normals within μ/2), the two planes within
+    /// λ of each other at the centroid of the common part, and that part of more
+    /// than `λ²·10⁻⁴` in area ([`SurfaceError::InitialOverlap`]). Polygons
+    /// that overlap so represent one surface twice; ordinary segments would be
+    /// merged (P§2.4.3), initial ones never are, so the model would keep both.
+    /// Initial segments may touch along edges (a table in tiles), face each
+    /// other (both sides of a sheet) or lie apart (parallel shelves).
     pub fn add_initial_segment(&mut self, vertices: &[Point3]) -> Result<SegmentId, SurfaceError> {
         let bad = |message: String| Err(SurfaceError::InitialSegment { message });
         if vertices.len() < 3 {
@@ -255,6 +264,9 @@ impl SurfaceModel {
         if !polygon2::is_simple(&pts, self.tol.eps) || polygon2::signed_area(&pts) <= 0.0 {
             return bad("the perimeter crosses itself or has edges shorter than λ·10⁻⁴".into());
         }
+        if let Some((other, area_m2)) = self.overlapped_initial(vertices, &frame, &pts) {
+            return Err(SurfaceError::InitialOverlap { other, area_m2 });
+        }
         self.check_id_space()?;
         let id = self.new_segment_id();
         let nodes = pts
@@ -284,6 +296,38 @@ impl SurfaceModel {
         self.grid.insert(id, seg.bounds());
         self.segments.insert(id, seg);
         Ok(id)
+    }
+
+    /// The first initial segment (by id) that a new initial polygon overlaps
+    /// on the same surface (see [`Self::add_initial_segment`]), with the
+    /// common area: `vertices`, and `pts` the same in 2-D in `frame`
+    /// (anticlockwise).
+    fn overlapped_initial(
+        &self,
+        vertices: &[Point3],
+        frame: &PlaneFrame,
+        pts: &[geom::Point2],
+    ) -> Option<(SegmentId, Real)> {
+        let lambda = self.tol.lambda;
+        let cos_half_mu = (1.0 - self.tol.sin_parallel * self.tol.sin_parallel).sqrt();
+        let bounds = geom::Aabb::from_points(vertices).loosened(lambda);
+        let mut near = self.grid.query(&bounds);
+        near.sort_unstable();
+        near.into_iter().find_map(|id| {
+            let other = self.polygon(id).filter(|p| p.is_initial())?;
+            if other.normal().dot(&frame.normal.into_inner()) <= cos_half_mu {
+                return None;
+            }
+            // Projected along the new plane's normal: the other polygon stays
+            // simple and anticlockwise (the normals are within μ/2).
+            let theirs: Vec<geom::Point2> = other.vertices().map(|v| frame.to_2d(&v)).collect();
+            let common = polygon2::overlap(pts, &theirs, self.tol.eps);
+            let centroid = frame.to_3d(&common.centroid?);
+            let apart = (centroid - other.centroid())
+                .dot(&other.normal().into_inner())
+                .abs();
+            (common.area > lambda * lambda * 1e-4 && apart <= lambda).then_some((id, common.area))
+        })
     }
 
     // ----- ids -------------------------------------------------------------

@@ -35,6 +35,19 @@ pub enum ReplayError {
         /// Why.
         source: SurfaceError,
     },
+    /// An initial segment overlaps an earlier one on the same surface
+    /// ([`SurfaceError::InitialOverlap`], by the segments' indices).
+    #[error(
+        "initial segment {index} overlaps initial segment {other} over {area_m2:.3e} m² of the same surface (facing the same way, within λ of it); initial segments never merge, so that surface would be modelled twice"
+    )]
+    InitialOverlap {
+        /// 0-based index of the refused segment in the initial-segment list.
+        index: usize,
+        /// 0-based index of the segment it overlaps (earlier in the list).
+        other: usize,
+        /// The common area, m².
+        area_m2: Real,
+    },
     /// A sensor set was refused.
     #[error("set {index}: {source}")]
     Set {
@@ -86,10 +99,23 @@ pub fn replay(
     progress: &mut dyn FnMut(usize),
 ) -> Result<Replay, ReplayError> {
     let mut model = SurfaceModel::new(config).map_err(ReplayError::Config)?;
+    let mut initial_ids = Vec::with_capacity(initial.len());
     for (index, vertices) in initial.iter().enumerate() {
-        model
-            .add_initial_segment(vertices)
-            .map_err(|source| ReplayError::Initial { index, source })?;
+        let id = model.add_initial_segment(vertices).map_err(|source| {
+            match &source {
+                SurfaceError::InitialOverlap { other, area_m2 } => initial_ids
+                    .iter()
+                    .position(|id| id == other)
+                    .map(|other| ReplayError::InitialOverlap {
+                        index,
+                        other,
+                        area_m2: *area_m2,
+                    }),
+                _ => None,
+            }
+            .unwrap_or(ReplayError::Initial { index, source })
+        })?;
+        initial_ids.push(id);
     }
     let mut update_us = Vec::with_capacity(sets.len());
     for (index, set) in sets.iter().enumerate() {

@@ -243,6 +243,92 @@ fn bad_input_is_refused_and_leaves_the_model_unchanged() {
     m.check_invariants().unwrap();
 }
 
+/// Issue 48: an initial segment that overlaps another on the same surface is
+/// refused, naming it and the common area (worked out by hand for these
+/// rectangles), and the model is as before; initial segments that only touch,
+/// face each other, lie on parallel planes farther apart than λ, or cross at
+/// an angle are kept.
+#[test]
+fn overlapping_initial_segments_are_refused() {
+    // Anticlockwise about +z (or about −z with `down`), at height z.
+    let rect = |x0: f64, y0: f64, x1: f64, y1: f64, z: f64| {
+        vec![
+            Point3::new(x0, y0, z),
+            Point3::new(x1, y0, z),
+            Point3::new(x1, y1, z),
+            Point3::new(x0, y1, z),
+        ]
+    };
+    let down = |mut v: Vec<Point3>| {
+        v.reverse();
+        v
+    };
+    let lambda = SurfaceConfig::default().lambda;
+    let tilt = 4.0_f64.to_radians();
+    let refused: [(&str, Vec<Point3>, f64); 5] = [
+        ("the same square", rect(0.0, 0.0, 1.0, 1.0, 0.0), 1.0),
+        ("a quarter", rect(0.5, 0.5, 1.5, 1.5, 0.0), 0.25),
+        ("a square inside", rect(0.2, 0.2, 0.4, 0.6, 0.0), 0.08),
+        ("0.9 λ above", rect(0.5, 0.0, 1.5, 1.0, 0.9 * lambda), 0.5),
+        // Rising 4° along x from x = 0.5 (μ/2 is 5°), the planes 0.017 m
+        // apart at the common part's centroid: measured in the tilted plane,
+        // where the first square's half beyond x = 0.5 is cos 4° as wide.
+        (
+            "tilted by 4°",
+            vec![
+                Point3::new(0.5, 0.0, 0.0),
+                Point3::new(1.5, 0.0, tilt.tan()),
+                Point3::new(1.5, 1.0, tilt.tan()),
+                Point3::new(0.5, 1.0, 0.0),
+            ],
+            0.5 * tilt.cos(),
+        ),
+    ];
+    for (what, square, area) in refused {
+        let mut m = SurfaceModel::new(SurfaceConfig::default()).unwrap();
+        let first = m
+            .add_initial_segment(&rect(0.0, 0.0, 1.0, 1.0, 0.0))
+            .unwrap();
+        let before = m.to_model_json();
+        match m.add_initial_segment(&square) {
+            Err(SurfaceError::InitialOverlap { other, area_m2 }) => {
+                assert_eq!(other, first, "{what}");
+                assert!((area_m2 - area).abs() < 1e-9, "{what}: {area_m2}");
+            }
+            other => panic!("{what}: {other:?}"),
+        }
+        assert_eq!(m.to_model_json(), before, "{what}");
+        m.check_invariants().unwrap();
+    }
+    let kept: [(&str, Vec<Point3>); 6] = [
+        ("a tile beside it", rect(1.0, 0.0, 2.0, 1.0, 0.0)),
+        ("a tile at its corner", rect(1.0, 1.0, 2.0, 2.0, 0.0)),
+        ("its underside", down(rect(0.0, 0.0, 1.0, 1.0, 0.0))),
+        (
+            "a shelf 1.1 λ above",
+            rect(0.0, 0.0, 1.0, 1.0, 1.1 * lambda),
+        ),
+        (
+            "a wall through it",
+            vec![
+                Point3::new(0.5, -0.5, -0.5),
+                Point3::new(0.5, 1.5, -0.5),
+                Point3::new(0.5, 1.5, 0.5),
+                Point3::new(0.5, -0.5, 0.5),
+            ],
+        ),
+        ("far away", rect(5.0, 5.0, 6.0, 6.0, 0.0)),
+    ];
+    for (what, square) in kept {
+        let mut m = SurfaceModel::new(SurfaceConfig::default()).unwrap();
+        m.add_initial_segment(&rect(0.0, 0.0, 1.0, 1.0, 0.0))
+            .unwrap();
+        m.add_initial_segment(&square)
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        m.check_invariants().unwrap();
+    }
+}
+
 #[test]
 fn degenerate_input_is_handled() {
     let mut m = SurfaceModel::new(SurfaceConfig::default()).unwrap();
