@@ -589,13 +589,22 @@ impl FollowSetup {
             .len()
             .saturating_sub(self.a_priori_faces.len());
         let mut faces = Vec::new();
+        let mut ids = Vec::with_capacity(self.initial_segments.len());
         for (i, seg) in self.initial_segments.iter().enumerate() {
             let id = model.add_initial_segment(seg).map_err(|e| match e {
                 SurfaceError::InitialSegment { message } => {
                     bad("initial segments", format!("segment {i}: {message}"))
                 }
+                SurfaceError::InitialOverlap { other, area_m2 } => bad(
+                    "initial segments",
+                    format!(
+                        "segment {i} overlaps segment {} over {area_m2:.3e} m² of the same surface (facing the same way, within λ of it); initial segments never merge, so that surface would be modelled twice",
+                        ids.iter().position(|id| *id == other).unwrap_or(other.0 as usize)
+                    ),
+                ),
                 e => e.into(),
             })?;
+            ids.push(id);
             if i >= first_face {
                 faces.push(id);
             }

@@ -55,7 +55,8 @@ pub struct FollowArgs {
     #[arg(long)]
     scale: Option<Real>,
     /// A-priori segments instead of the scenario's: `{"segments": [[[x,y,z], ...], ...]}`,
-    /// each anticlockwise about its outward normal.
+    /// each anticlockwise about its outward normal; no two may overlap on the
+    /// same surface (initial segments never merge).
     #[arg(long)]
     initial: Option<PathBuf>,
     /// Another robot: point3, arm4 or a URDF file (FILE.urdf). On the built-in

@@ -9,7 +9,8 @@ use std::fs::File;
 use std::io::BufReader;
 use std::path::PathBuf;
 use surface::{
-    ReplayError, ReplayOptions, SurfaceConfig, read_initial_segments_json, read_sets_jsonl_limited,
+    InitialSegments, ReplayError, ReplayOptions, SurfaceConfig, read_initial_segments_located,
+    read_sets_jsonl_limited,
 };
 
 #[derive(Debug, Args)]
@@ -54,7 +55,8 @@ pub struct ModelArgs {
     #[arg(long, allow_negative_numbers = true)]
     phi: Option<Real>,
     /// A-priori segments (P§4.3): `{"segments": [[[x,y,z], ...], ...]}`, each
-    /// anticlockwise about its outward normal.
+    /// anticlockwise about its outward normal; no two may overlap on the same
+    /// surface (initial segments never merge).
     #[arg(long)]
     initial: Option<PathBuf>,
     /// Run the invariant checker after every update.
@@ -141,22 +143,35 @@ pub fn model(a: &ModelArgs) -> Result<()> {
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("reading {}", path.display()))?;
-            read_initial_segments_json(&text, &path.display().to_string())?
+            read_initial_segments_located(&text, &path.display().to_string())?
         }
-        None => Vec::new(),
+        None => InitialSegments::default(),
     };
     let pb = super::progress_bar(sets.len() as u64, "modelling");
     let options = ReplayOptions {
         check_invariants: a.check,
     };
-    let replayed = surface::replay(config, &initial, &sets, options, &mut |done| {
+    let replayed = surface::replay(config, &initial.segments, &sets, options, &mut |done| {
         pb.set_position(done as u64);
     });
     pb.finish_and_clear();
+    // Initial segments by file, line and index (`segments[i]`, as the file
+    // reader names them).
+    let initial_path = a.initial.as_deref().unwrap_or(sets_path).display();
+    let line = |i: usize| initial.lines.get(i).copied().unwrap_or(1);
     let replayed = replayed.map_err(|e| match e {
         ReplayError::Initial { index, source } => anyhow::anyhow!(
-            "{}: initial segment {index}: {source}",
-            a.initial.as_deref().unwrap_or(sets_path).display()
+            "{initial_path}:{}: segments[{index}]: {source}",
+            line(index)
+        ),
+        ReplayError::InitialOverlap {
+            index,
+            other,
+            area_m2,
+        } => anyhow::anyhow!(
+            "{initial_path}:{}: segments[{index}] overlaps segments[{other}] (line {}) over {area_m2:.3e} m² of the same surface: both face the same way (within μ/2) and lie within λ of each other there; initial segments never merge (P§4.3), so that surface would be modelled twice (give it once, or as tiles that only touch)",
+            line(index),
+            line(other)
         ),
         ReplayError::Set { index, source } => {
             anyhow::anyhow!(

@@ -542,6 +542,88 @@ fn model_reads_sets_with_the_configured_limit_and_rejects_no_sets() {
     assert!(!dir.path().join("m2").exists());
 }
 
+/// Issue 48: `model --initial` with two segments overlapping on the same
+/// surface (the campaign's case: accepted silently, the surface modelled
+/// twice) is refused naming the file, both segments and their lines, and
+/// writes nothing; tiles that only touch are a model.
+#[test]
+fn model_refuses_initial_segments_that_overlap() {
+    use std::fmt::Write as _;
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).display().to_string();
+    // Sets of 3×3 points on the plane z = 0, seen from above.
+    let mut sets = String::new();
+    for i in 0..20 {
+        let pts: Vec<String> = (0..9)
+            .map(|k| {
+                format!(
+                    "[{}, {}, 0]",
+                    0.1 + 0.04 * f64::from(i) + 0.02 * f64::from(k % 3),
+                    0.4 + 0.02 * f64::from(k / 3)
+                )
+            })
+            .collect();
+        writeln!(
+            sets,
+            "{{\"points\": [{}], \"axes\": [{}]}}",
+            pts.join(", "),
+            ["[0, 0, -1]"; 9].join(", ")
+        )
+        .unwrap();
+    }
+    std::fs::write(p("sets.jsonl"), sets).unwrap();
+    let square = |x0: f64, y0: f64, x1: f64, y1: f64| {
+        format!("[[{x0}, {y0}, 0], [{x1}, {y0}, 0], [{x1}, {y1}, 0], [{x0}, {y1}, 0]]")
+    };
+    // Two tiles of a table that meet along x = 1, then a square over both.
+    let tiles = [square(0.0, 0.0, 1.0, 1.0), square(1.0, 0.0, 2.0, 1.0)];
+    std::fs::write(
+        p("tiles.json"),
+        format!("{{\"segments\": [\n  {},\n  {}\n]}}\n", tiles[0], tiles[1]),
+    )
+    .unwrap();
+    std::fs::write(
+        p("overlap.json"),
+        format!(
+            "{{\"segments\": [\n  {},\n  {},\n\n  {}\n]}}\n",
+            tiles[0],
+            tiles[1],
+            square(0.5, 0.5, 1.5, 1.5)
+        ),
+    )
+    .unwrap();
+    let said = ok(&[
+        "model",
+        "--sets",
+        &p("sets.jsonl"),
+        "--initial",
+        &p("tiles.json"),
+        "--out",
+        &p("tiles"),
+    ]);
+    assert!(said.contains("20 sets"), "{said}");
+    let e = fails(&[
+        "model",
+        "--sets",
+        &p("sets.jsonl"),
+        "--initial",
+        &p("overlap.json"),
+        "--out",
+        &p("overlap"),
+    ]);
+    // The third segment (line 5) is the first that overlaps: the first tile
+    // (line 2), over its quarter of 0.25 m².
+    assert!(
+        e.contains(&format!(
+            "{}:5: segments[2] overlaps segments[0] (line 2) over 2.500e-1 m²",
+            p("overlap.json")
+        )),
+        "{e}"
+    );
+    clean(&e);
+    assert!(!dir.path().join("overlap").exists());
+}
+
 #[test]
 fn urdf_warnings_reach_the_user() {
     let dir = tempfile::tempdir().unwrap();
