@@ -10,51 +10,48 @@
 //!
 //! `cargo test --release -p sim --test long explore_oracle -- --ignored --nocapture`
 
-use explore::ExploreConfig;
+use crate::shared;
+use explore::{ExploreConfig, ExploreRun};
+use record::explore::OracleComparison;
 use scenario::Scenario;
-use sim::explore_job::{ExploreOptions, OracleOption, run_exploration};
-use std::path::Path;
+use sim::explore_job::{ExploreOptions, OracleOption, explore_setup, run_exploration};
 
-/// Options with the C-space model and the oracle cached for the long tests.
-fn options(name: &str, seed: u64) -> ExploreOptions {
-    let tmp = Path::new(env!("CARGO_TARGET_TMPDIR"));
+/// Options with the C-space model and the oracle cached for the long tests
+/// (`cache`: the oracle's file, one per scenario and configuration: a file
+/// made for other inputs is made again).
+fn options(cache: &str, seed: u64) -> ExploreOptions {
     ExploreOptions {
         seed,
-        cspace_cache: Some(tmp.join("cspace-denso-vm6083.json")),
-        oracle: OracleOption::On(Some(tmp.join(format!("oracle-{name}.json")))),
+        cspace_cache: Some(shared::tmp().join("cspace-denso-vm6083.json")),
+        oracle: OracleOption::On(Some(shared::tmp().join(format!("oracle-{cache}.json")))),
         ..ExploreOptions::default()
     }
 }
 
-/// Stage One on `scenario` with `config` (the scenario's own when `None`):
-/// (A1 ratio to the oracle's 12 sweeps after 12 viewpoints, at the end,
-/// viewpoints, termination), after checking its safety.
-fn stage_one(
-    scenario: &str,
+/// Stage One of `run` (scenario `name`, `seed`) against `oracle`: (A1 ratio
+/// to the oracle's 12 sweeps after 12 viewpoints, at the end of Stage One,
+/// Stage One's viewpoints, its termination, the run's least clearance and
+/// unsafe configurations), printed.
+fn judge(
+    name: &str,
     seed: u64,
-    config: Option<ExploreConfig>,
+    run: &ExploreRun,
+    oracle: record::explore::CoverageOracle,
 ) -> (f64, f64, usize, String, f64, usize) {
-    let loaded = Scenario::load(scenario).unwrap();
-    let name = loaded.scenario.name.clone();
-    let outcome = run_exploration(
-        &loaded,
-        &ExploreOptions {
-            config,
-            ..options(&name, seed)
-        },
-        &mut |_| {},
-    )
-    .unwrap();
-    let run = &outcome.run;
-    let o = outcome.coverage_summary().unwrap().oracle.unwrap();
-    let curve: Vec<String> = run
+    let stage_one: Vec<f64> = run
         .viewpoints
         .iter()
-        .map(|v| format!("{:.1}", 100.0 * v.coverage_a1.unwrap()))
+        .filter(|v| v.stage == 1)
+        .map(|v| v.coverage_a1.unwrap())
+        .collect();
+    let o = OracleComparison::new(oracle, &stage_one);
+    let curve: Vec<String> = stage_one
+        .iter()
+        .map(|a1| format!("{:.1}", 100.0 * a1))
         .collect();
     println!(
         "{name} seed {seed}: {} viewpoints ({}), A1 % {}; oracle {:.1} % after 12 sweeps; ratio {:.2} after 12, {:.2} at the end; min clearance {:.3} m",
-        run.viewpoints.len(),
+        stage_one.len(),
         run.termination.name(),
         curve.join(" "),
         100.0 * o.a1_after_12,
@@ -72,26 +69,66 @@ fn stage_one(
     (
         o.ratio_after_12,
         o.ratio_at_stage_one_end,
-        run.viewpoints.len(),
+        stage_one.len(),
         run.termination.name().to_owned(),
         run.tally.min_clearance_m.unwrap(),
         run.unsafe_configurations.len(),
     )
 }
 
+/// Stage One on `scenario` with `config` (the scenario's own when `None`),
+/// its oracle cached as `oracle-{cache}.json`, judged by [`judge`].
+fn stage_one(
+    scenario: &str,
+    cache: &str,
+    seed: u64,
+    config: Option<ExploreConfig>,
+) -> (f64, f64, usize, String, f64, usize) {
+    let loaded = Scenario::load(scenario).unwrap();
+    let outcome = run_exploration(
+        &loaded,
+        &ExploreOptions {
+            config,
+            ..options(cache, seed)
+        },
+        &mut |_| {},
+    )
+    .unwrap();
+    let oracle = outcome.oracle.clone().unwrap();
+    judge(&loaded.scenario.name, seed, &outcome.run, oracle)
+}
+
+/// bridge1's Stage One, seed 0: that of the shared run of both stages
+/// ([`shared::bridge1_both_stages`]), against its oracle (computed here, or
+/// read from its cache: the same oracle a run computes beside itself). Its
+/// clearance, collisions and unsafe configurations are the whole run's,
+/// Stage Two's motions included.
+fn bridge1_stage_one() -> (f64, f64, usize, String, f64, usize) {
+    let outcome = shared::bridge1_both_stages();
+    let (setup, world) =
+        explore_setup(&outcome.loaded, &shared::bridge1_both_stages_options()).unwrap();
+    let (oracle, _) = sim::oracle::run_oracle(
+        &outcome.loaded,
+        &setup,
+        &world,
+        Some(&shared::tmp().join("oracle-bridge1.json")),
+    )
+    .unwrap();
+    judge("bridge1", 0, &outcome.run, oracle)
+}
+
 #[test]
 #[ignore = "minutes in release; run by .ci/run"]
 fn stage_one_comes_near_the_oracle_on_bridge1_and_an_untuned_channel() {
-    let scenes = [
-        "bridge1".to_owned(),
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../data/scenarios/channel4.toml"
-        )
-        .to_owned(),
-    ];
-    for scene in &scenes {
-        let (at_12, at_end, n, end, clearance, unsafe_configurations) = stage_one(scene, 0, None);
+    let channel4 = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/scenarios/channel4.toml"
+    );
+    for (scene, judged) in [
+        ("bridge1", bridge1_stage_one()),
+        (channel4, stage_one(channel4, "channel4", 0, None)),
+    ] {
+        let (at_12, at_end, n, end, clearance, unsafe_configurations) = judged;
         assert!(clearance >= 0.05, "{scene}: {clearance:.3} m");
         assert_eq!(unsafe_configurations, 0, "{scene}");
         assert!(at_12 >= 0.85, "{scene}: {at_12:.3} of the oracle after 12");
@@ -102,7 +139,9 @@ fn stage_one_comes_near_the_oracle_on_bridge1_and_an_untuned_channel() {
         assert!(n <= 15, "{scene}: {n} viewpoints");
         assert_eq!(end, "information_converged", "{scene}");
     }
-    // Paul's Stage One beside it (reported).
+    // Paul's Stage One beside it (reported), its oracle in a file of its
+    // own (its planning differs, so it is another oracle; sharing bridge1's
+    // file, each run made the other's again).
     let loaded = Scenario::load("bridge1").unwrap();
     let thesis = loaded
         .scenario
@@ -110,7 +149,8 @@ fn stage_one_comes_near_the_oracle_on_bridge1_and_an_untuned_channel() {
         .clone()
         .unwrap_or_default()
         .thesis_stage_one();
-    let (at_12, at_end, n, end, clearance, _) = stage_one("bridge1", 0, Some(thesis));
+    let (at_12, at_end, n, end, clearance, _) =
+        stage_one("bridge1", "bridge1-thesis", 0, Some(thesis));
     println!(
         "Paul's configuration: {at_12:.2} after 12, {at_end:.2} at the end of {n} ({end}); min clearance {clearance:.3} m"
     );

@@ -304,19 +304,10 @@ fn a_urdf_ur5_explores_a_bridge_sized_to_its_reach_safely() {
 #[test]
 #[ignore = "seconds in release; run by .ci/run"]
 fn stage_two_aims_at_discs_safely_and_lowers_the_material_information() {
-    let loaded = Scenario::load("bridge1").unwrap();
-    let mut config = loaded.scenario.explore.clone().unwrap();
-    // Stage One to its own end (after 8 viewpoints no disc is targetable yet:
-    // the arm has not seen enough free space to reach a valid pose).
-    config.max_viewpoints = 40;
-    config.stage_two_max_viewpoints = 8;
-    let options = ExploreOptions {
-        seed: 0,
-        config: Some(config),
-        stage_two: true,
-        ..cached()
-    };
-    let outcome = run_exploration(&loaded, &options, &mut |_| {}).unwrap();
+    // bridge1, seed 0: Stage One to its own end, then 8 Stage Two
+    // viewpoints (the run the coverage-oracle test judges Stage One of).
+    let outcome = crate::shared::bridge1_both_stages();
+    let loaded = &outcome.loaded;
     let run = &outcome.run;
     let two: Vec<_> = run.viewpoints.iter().filter(|r| r.stage == 2).collect();
     println!(
@@ -367,7 +358,7 @@ fn stage_two_aims_at_discs_safely_and_lowers_the_material_information() {
     let folder = dir.path().join("run");
     let staging = record::Staging::new(&folder).unwrap();
     let t = std::time::Instant::now();
-    let plan = sim::explore_job::write_run(&outcome, &staging).unwrap();
+    let plan = sim::explore_job::write_run(outcome, &staging).unwrap();
     let seconds = t.elapsed().as_secs_f64();
     staging.commit().unwrap();
     for name in [
@@ -383,7 +374,7 @@ fn stage_two_aims_at_discs_safely_and_lowers_the_material_information() {
     }
     let discs = map::sld_io::load_discs_csv(&folder.join("discs.csv")).unwrap();
     assert_eq!(discs.len(), run.discs.discs.len());
-    check_blast_plan(&outcome, &plan.unwrap(), seconds);
+    check_blast_plan(outcome, &plan.unwrap(), seconds);
 }
 
 /// Which bridge1 surface a disc lies on, for issue 11's "roof and web

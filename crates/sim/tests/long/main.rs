@@ -5,3 +5,4 @@ mod explore_oracle;
 mod explore_stage_one;
 mod follow_complete;
 mod material_oracle;
+mod shared;
