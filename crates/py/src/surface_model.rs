@@ -114,7 +114,9 @@ impl PySurfaceModel {
     /// coplanar, anticlockwise about the outward normal (a table seen from
     /// above runs anticlockwise). Returns the new segment's id. Raises
     /// ``ValueError`` for vertices that are not finite, not coplanar, or do
-    /// not bound a simple polygon of positive area.
+    /// not bound a simple polygon of positive area, and for a polygon that
+    /// overlaps an initial segment already added on the same surface
+    /// (initial segments never merge).
     fn add_initial_segment(&mut self, vertices: &Bound<'_, PyAny>) -> PyResult<u32> {
         let vertices = points_of("vertices", vertices)?;
         self.model

@@ -190,6 +190,20 @@ def test_bad_initial_segment_raises_value_error(vertices, pattern):
     assert model.stats["segments"] == 0
 
 
+def test_overlapping_initial_segments_raise_value_error():
+    """The same table twice is one surface modelled twice: refused, naming
+    the segment it overlaps and the common area (16 m²), and not added."""
+    model = surveyor.SurfaceModel()
+    first = model.add_initial_segment(np.array(TABLE))
+    with pytest.raises(ValueError,
+                       match=rf"vertices: initial segment: overlaps initial segment {first} over 1\.600e1 m²"):
+        model.add_initial_segment(np.array(TABLE))
+    assert model.stats["segments"] == 1
+    # A second table beside the first (sharing its edge x = 2) is kept.
+    beside = [[x + 4.0, y, z] for x, y, z in TABLE]
+    assert model.add_initial_segment(np.array(beside)) > first
+
+
 def test_unwritable_paths_raise_os_error(tmp_path):
     model = surveyor.SurfaceModel()
     model.add_initial_segment(np.array(TABLE))
