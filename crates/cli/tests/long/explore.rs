@@ -77,9 +77,10 @@ fn stage_two_run() -> &'static StageTwoRun {
     })
 }
 
-/// A one-viewpoint Stage One run of bridge1, made once for the tests that
-/// need a run folder but not its contents (plan-blast's tool file, the full
-/// disk's C-space cache): its C-space cache and folder.
+/// A one-viewpoint Stage One run of bridge1 with its timings, made once for
+/// the tests that need a run folder but not its contents (plan-blast's tool
+/// file, the full disk's C-space cache) and for the report's timings card:
+/// its C-space cache and folder.
 struct SmallRun {
     cache: std::path::PathBuf,
     whole: std::path::PathBuf,
@@ -92,11 +93,13 @@ fn small_run() -> &'static SmallRun {
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let (cache, whole) = (dir.join("cspace.json"), dir.join("whole"));
-        ok_owned(&explore_args(
+        let args = explore_args(
             &["--stages", "one", "--max-viewpoints", "1"],
             &cache,
             &whole,
-        ));
+        );
+        let timed: Vec<String> = args.into_iter().filter(|a| a != "--no-timings").collect();
+        ok_owned(&timed);
         SmallRun { cache, whole }
     })
 }
@@ -684,19 +687,9 @@ fn cards_of(html: &str) -> Vec<(String, serde_json::Value)> {
 #[test]
 #[ignore = "an exploration run (and the shared ones): run by .ci/run"]
 fn the_report_opens_with_the_run_s_final_figures() {
-    let small = small_run();
-    let dir = tempfile::tempdir().unwrap();
-    let timed = dir.path().join("timed");
-    let args = explore_args(
-        &["--stages", "one", "--max-viewpoints", "1"],
-        &small.cache,
-        &timed,
-    );
-    let args: Vec<String> = args.into_iter().filter(|a| a != "--no-timings").collect();
-    ok_owned(&args);
     for (run, must) in [
         (
-            timed.as_path(),
+            small_run().whole.as_path(),
             &[
                 "timings.total_s",
                 "robot_time_s.total",
