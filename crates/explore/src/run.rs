@@ -28,13 +28,14 @@ use crate::setup::Setup;
 use crate::stage_one::path_via_visited;
 use crate::{Choice, ExploreConfig, ExploreError, StageOne, StageTwoChoice, Termination};
 use geom::{Isometry3, Real, TriMesh};
-use hw::clock::{Activity, ClockMark, RobotClock, RobotTime};
+use hw::clock::{Activity, ClockMark, RobotClock, RobotTime, RobotTiming};
 use hw::{Arm, LineScanner, tilt_sweep, tilt_sweep_through};
 use map::{IntegrationStats, TsdfConfig, TsdfMap};
 use plan::{ClearanceChecker, PlanConfig, PointClearance, Safety};
 use record::checkpoint::{CHECKPOINT_FORMAT, Checkpoint};
 use record::{ScoredCandidate, UnsafeConfiguration, ViewpointRecord};
 use robot::Robot;
+use robot::timing::MotionLimits;
 use sensor::{Scanner, Sweep, SweepPoint};
 use std::collections::VecDeque;
 use std::path::PathBuf;
@@ -759,13 +760,8 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             // One motion across, the scanner scanning all along at the
             // sweep's tilt step per scan.
             (crate::Motion::Continuous, Some(&lo), Some(&hi)) if tilts.len() > 1 => {
-                let step = (hi - lo).abs() / (tilts.len() - 1) as Real;
                 let t = &s.timing;
-                let limits = t.limits.capped(if t.scan_time_s > 0.0 {
-                    step / t.scan_time_s
-                } else {
-                    Real::INFINITY
-                });
+                let limits = sweep_limits(t, lo, hi, tilts.len());
                 hw::motion::tilt_sweep_moving(
                     &mut *self.hw,
                     &s.robot,
@@ -1289,11 +1285,54 @@ impl<'s> Aimer<'s> {
         Ok(None)
     }
 }
-/// The robot's time as Stage Two weighs a candidate: the fastest joint's
-/// speed, rad/s, and the scanner's period, seconds (the Hokuyo URG-04LX of
-/// A§5.1 scans every 100 ms; `run.mcap`'s clock counts the same).
-const ROBOT_JOINT_SPEED: Real = 1.0;
-const ROBOT_SCAN_PERIOD_S: Real = 0.1;
+/// Seconds of robot time a sweep through `tilts` of joint `j` from `q`
+/// takes on `timing` (out to the first tilt, across, back), moving as
+/// `motion` says: stop and go, a motion, its settling and a scan per tilt;
+/// continuous, one motion across at the tilt step per scan
+/// ([`sweep_limits`]).
+pub(crate) fn sweep_seconds(
+    timing: &RobotTiming,
+    motion: crate::Motion,
+    q: &[Real],
+    j: usize,
+    tilts: &[Real],
+) -> Real {
+    let at = |t: Real| {
+        let mut c = q.to_vec();
+        if let Some(v) = c.get_mut(j) {
+            *v = t;
+        }
+        c
+    };
+    let (Some(&lo), Some(&hi)) = (tilts.first(), tilts.last()) else {
+        return 0.0;
+    };
+    let ends = timing.motion_s(q, &at(lo)) + timing.motion_s(&at(hi), q);
+    match motion {
+        crate::Motion::Continuous if tilts.len() > 1 => {
+            let limits = sweep_limits(timing, lo, hi, tilts.len());
+            ends + limits.duration_s(&at(lo), &at(hi)) + timing.settle_s + timing.scan_time_s
+        }
+        _ => {
+            let steps: Real = tilts
+                .windows(2)
+                .map(|w| timing.motion_s(&at(w[0]), &at(w[1])))
+                .sum();
+            ends + steps + tilts.len() as Real * timing.scan_time_s
+        }
+    }
+}
+
+/// The joint limits of a continuous sweep from tilt `lo` to `hi` over `n`
+/// tilt values: the tilt moves one step per scan.
+pub(crate) fn sweep_limits(timing: &RobotTiming, lo: Real, hi: Real, n: usize) -> MotionLimits {
+    let step = (hi - lo).abs() / (n.max(2) - 1) as Real;
+    timing.limits.capped(if timing.scan_time_s > 0.0 {
+        step / timing.scan_time_s
+    } else {
+        Real::INFINITY
+    })
+}
 
 /// A Stage Two candidate: the disc aimed at, the LM pose, and the discs its
 /// predicted sweep gives a usable observation of (the target among them),
@@ -1385,25 +1424,17 @@ impl Aimer<'_> {
                     return Ok(None);
                 }
                 let h3_seen: Real = usable.iter().map(|j| h3[j]).sum();
-                // Per second of the robot's time: the way there (its
-                // largest joint change) and the sweep.
-                let travel = q
-                    .iter()
-                    .zip(&goal)
-                    .map(|(a, b)| (a - b).abs())
-                    .fold(0.0, Real::max);
+                // Per second of the robot's time (its clock): the straight
+                // way there and the sweep.
+                let timing = &s.timing;
                 let tilts = stage.sweep_tilts(&goal);
-                let tilt_travel = match (tilts.first(), tilts.last()) {
-                    (Some(lo), Some(hi)) => 2.0 * (hi - lo).abs(),
-                    _ => 0.0,
-                };
-                let seconds = (travel + tilt_travel) / ROBOT_JOINT_SPEED
-                    + tilts.len() as Real * ROBOT_SCAN_PERIOD_S;
+                let seconds = timing.motion_s(q, &goal)
+                    + sweep_seconds(timing, config.motion, &goal, stage.tilt_joint(), &tilts);
                 Ok(Some(Aimed {
                     target: i,
                     goal,
                     usable,
-                    gain: h3_seen / seconds.max(ROBOT_SCAN_PERIOD_S),
+                    gain: h3_seen / seconds.max(timing.scan_time_s).max(1e-3),
                 }))
             })
             .collect::<Result<Vec<_>, _>>()?
@@ -1470,4 +1501,40 @@ fn clear_of_map(
         }
     }
     Ok(true)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A sweep of three tilts 0.5 rad apart on joints of 1 rad/s and
+    /// 2 rad/s², by hand. Stop and go: each 0.5 rad motion is a triangle
+    /// of 1 s plus 0.05 s to settle; four of them (out, two steps, back)
+    /// and three scans of 0.1 s: 4.5 s. Continuous: out and back as
+    /// before (2.1 s), across 1 rad on one trapezoid of 1.5 s (the tilt
+    /// step per scan, 5 rad/s, caps nothing), settling and the last scan:
+    /// 3.75 s.
+    #[test]
+    fn sweep_seconds_by_hand() {
+        let timing = RobotTiming {
+            limits: MotionLimits::uniform(2, 1.0, 2.0),
+            settle_s: 0.05,
+            scan_time_s: 0.1,
+            reading_period_s: 0.01,
+        };
+        let tilts = [-0.5, 0.0, 0.5];
+        let q = [0.3, 0.0];
+        let s = sweep_seconds(&timing, crate::Motion::StopAndGo, &q, 1, &tilts);
+        assert!((s - 4.5).abs() < 1e-12, "{s}");
+        let c = sweep_seconds(&timing, crate::Motion::Continuous, &q, 1, &tilts);
+        assert!((c - 3.75).abs() < 1e-12, "{c}");
+        // A finer sweep is capped by its step: 0.01 rad a scan is 0.1 rad/s.
+        let fine: Vec<Real> = (0..=100).map(|k| -0.5 + 0.01 * k as Real).collect();
+        let l = sweep_limits(&timing, -0.5, 0.5, fine.len());
+        assert!((l.velocity[1] - 0.1).abs() < 1e-12);
+        assert_eq!(
+            sweep_seconds(&timing, crate::Motion::Continuous, &q, 1, &[]),
+            0.0
+        );
+    }
 }
