@@ -189,6 +189,13 @@ pub fn run<H: Arm + LineScanner + ?Sized>(
         clock = Instant::now();
         s
     };
+    if setup.config.motion == crate::Motion::Continuous && hw.moving().is_none() {
+        return Err(ExploreError::Config {
+            field: "explore.motion",
+            expected: "\"stop_and_go\" on hardware that cannot scan while the arm moves",
+            got: "\"continuous\"".into(),
+        });
+    }
     let mut episode = Episode::new(setup, hw, judge, options)?;
     let restored = if options.resume {
         Some(episode.restore()?)
