@@ -324,8 +324,6 @@ mod tests {
         assert_eq!(limits.duration_s(&[0.3, 0.2], &[0.3, 0.2]), 0.0);
     }
 
-    /// Sampled along the profile, no joint ever exceeds its speed or
-    /// acceleration, and the motion is continuous from 0 to 1.
     /// Braked at any moment, a motion is the same until then, keeps its
     /// speed continuous and within its limits after, and rests where its
     /// fraction ends; braking while slowing down changes nothing.
@@ -365,6 +363,8 @@ mod tests {
         }
     }
 
+    /// Sampled along the profile, no joint ever exceeds its speed or
+    /// acceleration, and the motion is continuous from 0 to 1.
     #[test]
     fn sampled_motion_keeps_every_limit() {
         let limits = MotionLimits {
