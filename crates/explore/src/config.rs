@@ -84,14 +84,15 @@ pub enum StageTwoChoice {
     /// pose whose predicted sweep gives the LRC a usable observation of the
     /// most `H3` over *every* disc it sees, per second of the robot's time
     /// (the way there and the sweep), is taken among those a safe path
-    /// reaches; scans at viewpoints only. A disc a chosen sweep was
-    /// predicted to identify and did not is not counted again. Our choice:
+    /// reaches (when none is, the next discs of the ranking: see
+    /// `stage_two_target_windows`). A disc a chosen sweep was predicted to
+    /// identify and did not is not counted again. Our choice:
     /// Paul's one disc a viewpoint identified 50–100 of bridge1's 8866 discs
     /// in A2 per viewpoint (the crate README measures both).
     #[default]
     Information,
     /// A§3.3, §6.3.2: the disc with the most `H3` left that a valid,
-    /// reachable LM pose targets; scans at viewpoints only.
+    /// reachable LM pose targets.
     Thesis,
 }
 
@@ -170,6 +171,14 @@ pub struct ExploreConfig {
     /// Two ends: a disc whose pose is invalid, whose sweep is unsafe or which
     /// no safe path reaches is passed over for good.
     pub stage_two_target_attempts: usize,
+    /// With [`StageTwoChoice::Information`], windows of
+    /// `stage_two_target_attempts` discs of the ranking a decision aims in
+    /// before Stage Two ends: the next window only when no pose aimed at in
+    /// this one is reachable. One window ended channel4's Stage Two (seed 0,
+    /// continuous motion) before its first viewpoint, when the arm stood
+    /// where none of the 5 valid poses of the first 16 discs had a safe
+    /// path and discs further down the ranking had.
+    pub stage_two_target_windows: usize,
     /// How Stage Two chooses (`"information"` or Paul's `"thesis"`).
     pub stage_two: StageTwoChoice,
     /// With [`StageTwoChoice::Information`], LM poses scored per decision
@@ -193,6 +202,12 @@ pub struct ExploreConfig {
     /// while the arm moves (the Hokuyo of A§5.1 gives a scan every 100 ms:
     /// the default 1° is the arm at 10°/s).
     pub motion_scan_step_deg: Real,
+    /// Stage Two scans while the arm moves to its next viewpoint, a scan
+    /// each time the joints have moved this far (degrees, as
+    /// `motion_scan_step_deg`), and the LRC classifies those scans as it
+    /// does a viewpoint's sweep (A§4.4: every ray updates the material
+    /// belief of the voxel it hits); 0 scans at viewpoints only, as Paul.
+    pub stage_two_scan_step_deg: Real,
     /// How the arm moves while the scanner scans.
     pub motion: Motion,
     /// How the next viewpoint is chosen among the safe candidates.
@@ -224,12 +239,14 @@ impl Default for ExploreConfig {
             stage_two_max_viewpoints: 20,
             significant_h3: 0.5,
             stage_two_target_attempts: 60,
+            stage_two_target_windows: 4,
             stage_two: StageTwoChoice::Information,
             stage_two_candidates: 16,
             stage_two_spread_m: 0.3,
             stage_two_clearance_m: 0.05,
             mapping: MappingConfig::default(),
             motion_scan_step_deg: 1.0,
+            stage_two_scan_step_deg: 0.0,
             motion: Motion::StopAndGo,
             selection: Selection::Information,
             stage_one_clearance_m: 0.05,
@@ -285,30 +302,7 @@ impl ExploreConfig {
             } => Ok(()),
             e => Err(ExploreError::Plan(e)),
         })?;
-        for (field, v) in [
-            (
-                "explore.prediction.ray_step_deg",
-                self.prediction.ray_step_deg,
-            ),
-            (
-                "explore.prediction.tilt_step_deg",
-                self.prediction.tilt_step_deg,
-            ),
-        ] {
-            // The scanner's own steps are 0.36° and 0.4°: a finer prediction
-            // casts rays the scanner never has.
-            if !(v.is_finite() && (0.1..=90.0).contains(&v)) {
-                return Err(bad(field, "an angle from 0.1 to 90 degrees", v.to_string()));
-            }
-        }
-        let m = self.motion_scan_step_deg;
-        if !(m.is_finite() && (m == 0.0 || (0.1..=90.0).contains(&m))) {
-            return Err(bad(
-                "explore.motion_scan_step_deg",
-                "0 (no scans while moving) or an angle from 0.1 to 90 degrees",
-                m.to_string(),
-            ));
-        }
+        self.validate_angles()?;
         if self.prediction.motion_poses > MAX_MOTION_POSES {
             return Err(bad(
                 "explore.prediction.motion_poses",
@@ -369,6 +363,14 @@ impl ExploreConfig {
                 return Err(bad(field, "at most 10000", v.to_string()));
             }
         }
+        let w = self.stage_two_target_windows;
+        if !(1..=MAX_ATTEMPTS).contains(&w) {
+            return Err(bad(
+                "explore.stage_two_target_windows",
+                "from 1 to 10000 windows",
+                w.to_string(),
+            ));
+        }
         if self.link_k > MAX_LINK_K {
             return Err(bad(
                 "explore.link_k",
@@ -399,5 +401,81 @@ impl ExploreConfig {
             ));
         }
         Ok(())
+    }
+
+    /// Check the angle steps: the prediction's, and the transits' scans.
+    fn validate_angles(&self) -> Result<(), ExploreError> {
+        let bad = |field: &'static str, expected: &'static str, got: String| ExploreError::Config {
+            field,
+            expected,
+            got,
+        };
+        for (field, v) in [
+            (
+                "explore.prediction.ray_step_deg",
+                self.prediction.ray_step_deg,
+            ),
+            (
+                "explore.prediction.tilt_step_deg",
+                self.prediction.tilt_step_deg,
+            ),
+        ] {
+            // The scanner's own steps are 0.36° and 0.4°: a finer prediction
+            // casts rays the scanner never has.
+            if !(v.is_finite() && (0.1..=90.0).contains(&v)) {
+                return Err(bad(field, "an angle from 0.1 to 90 degrees", v.to_string()));
+            }
+        }
+        for (field, m) in [
+            ("explore.motion_scan_step_deg", self.motion_scan_step_deg),
+            (
+                "explore.stage_two_scan_step_deg",
+                self.stage_two_scan_step_deg,
+            ),
+        ] {
+            if !(m.is_finite() && (m == 0.0 || (0.1..=90.0).contains(&m))) {
+                return Err(bad(
+                    field,
+                    "0 (no scans while moving) or an angle from 0.1 to 90 degrees",
+                    m.to_string(),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Stage Two's transit scans and decision windows are checked like the
+    /// other steps and counts: the field is named, the value stated.
+    #[test]
+    fn stage_two_transit_and_window_settings_are_checked() {
+        assert!(ExploreConfig::default().validate().is_ok());
+        for step in [0.05, -1.0, Real::NAN, 91.0] {
+            let c = ExploreConfig {
+                stage_two_scan_step_deg: step,
+                ..ExploreConfig::default()
+            };
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.contains("explore.stage_two_scan_step_deg"), "{e}");
+        }
+        for step in [0.0, 0.1, 3.0, 90.0] {
+            let c = ExploreConfig {
+                stage_two_scan_step_deg: step,
+                ..ExploreConfig::default()
+            };
+            assert!(c.validate().is_ok(), "{step}");
+        }
+        for windows in [0, MAX_ATTEMPTS + 1] {
+            let c = ExploreConfig {
+                stage_two_target_windows: windows,
+                ..ExploreConfig::default()
+            };
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.contains("explore.stage_two_target_windows"), "{e}");
+        }
     }
 }

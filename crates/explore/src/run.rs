@@ -575,8 +575,9 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         k: usize,
         waypoints: &[Vec<Real>],
         replayed: bool,
+        transit: Transit<'_>,
     ) -> Result<bool, ExploreError> {
-        let step = self.config().motion_scan_step_deg.to_radians();
+        let step = transit.step_deg.to_radians();
         if step <= 0.0 {
             // A replayed viewpoint's arm is put where it stood.
             if !replayed {
@@ -595,7 +596,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         {
             self.hw.move_to(first)?;
         }
-        let clearance_m = self.config().stage_one_clearance_m;
+        let clearance_m = transit.clearance_m;
         // Points of `builder` already in `self.points`.
         let mut kept = 0;
         let mut completed = true;
@@ -613,14 +614,8 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
         // Continuous motion: each segment one timed motion, at most `step`
         // on the largest joint per scan.
         let scan_time_s = self.setup.timing.scan_time_s;
-        let line = (self.config().motion == crate::Motion::Continuous).then(|| {
-            let cap = if scan_time_s > 0.0 {
-                step / scan_time_s
-            } else {
-                Real::INFINITY
-            };
-            self.setup.timing.limits.capped(cap)
-        });
+        let line = (self.config().motion == crate::Motion::Continuous)
+            .then(|| per_scan(&self.setup.timing, step));
         let mut stopped_at = self.q.clone();
         for w in waypoints.windows(2) {
             let s = &self.setup;
@@ -722,9 +717,22 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             // builder's points in order): the same index, without looking
             // each up again.
             self.add_points(k, &sweep, kept);
+            if let Some((m, discs)) = transit.classify {
+                m.observe(discs, &sweep)?;
+            }
             self.decided(t.elapsed().as_secs_f64());
         }
         Ok(completed)
+    }
+
+    /// Stage One's transits: `motion_scan_step_deg`, its clearance, no
+    /// classification.
+    fn stage_one_transit(&self) -> Transit<'static> {
+        Transit {
+            step_deg: self.config().motion_scan_step_deg,
+            clearance_m: self.config().stage_one_clearance_m,
+            classify: None,
+        }
     }
 
     /// Keep the points `sweep` measured for viewpoint `k` (the cloud, the
@@ -961,7 +969,7 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             // audit come from the checkpoint.
             let replayed = replay.pop_front();
             if let Some(r) = &replayed {
-                arrived = self.move_scanning(k, &r.path, true)?;
+                arrived = self.move_scanning(k, &r.path, true, self.stage_one_transit())?;
                 self.stand_at(r)?;
             }
             let (sweep, taken) = self.take_viewpoint(k, replayed.is_some(), None)?;
@@ -1006,7 +1014,12 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             };
             // Move along the path, auditing each motion against the map as
             // it is, and scanning as the arm moves.
-            arrived = self.move_scanning(k + 1, &choice.path.waypoints, false)?;
+            arrived = self.move_scanning(
+                k + 1,
+                &choice.path.waypoints,
+                false,
+                self.stage_one_transit(),
+            )?;
             let scored = decision
                 .candidates
                 .iter()
@@ -1056,7 +1069,14 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             // record and audit come from the checkpoint).
             let replayed = replay.pop_front();
             let mut predicted = Vec::new();
+            let transit = |config: &ExploreConfig, m, discs| Transit {
+                step_deg: config.stage_two_scan_step_deg,
+                clearance_m: config.stage_two_clearance_m,
+                classify: Some((m, discs)),
+            };
             let aim = if let Some(r) = &replayed {
+                let t = transit(&self.setup.config, &mut *m, &mut *discs);
+                self.move_scanning(k, &r.path, true, t)?;
                 self.stand_at(r)?;
                 None
             } else {
@@ -1074,7 +1094,8 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
                     return Ok("no_targetable_disc");
                 };
                 predicted = usable;
-                self.move_along(k, &path.waypoints)?;
+                let t = transit(&self.setup.config, &mut *m, &mut *discs);
+                self.move_scanning(k, &path.waypoints, false, t)?;
                 Some(Aim {
                     target,
                     path,
@@ -1119,6 +1140,15 @@ impl<'a, H: Arm + LineScanner + ?Sized> Episode<'a, H> {
             }
         }
     }
+}
+
+/// How a transit scans: a scan each `step_deg` of the largest joint (0:
+/// none), keeping `clearance_m` from the measured points, and the LRC
+/// classifying the scans when `classify` holds the beliefs.
+struct Transit<'m> {
+    step_deg: Real,
+    clearance_m: Real,
+    classify: Option<(&'m mut Materials, &'m mut DiscMap)>,
 }
 
 /// Stage Two's choice of the next disc and pose.
@@ -1330,10 +1360,44 @@ pub(crate) fn sweep_seconds(
     }
 }
 
+/// Seconds of robot time the straight transit `from` → `to` takes on
+/// `timing` when it scans every `step` radians of its largest joint (0:
+/// one motion, no scans), moving as `motion` says: stop and go, a motion,
+/// its settling and a scan per step; continuous, one motion at most `step`
+/// per scan.
+pub(crate) fn transit_seconds(
+    timing: &RobotTiming,
+    motion: crate::Motion,
+    step: Real,
+    from: &[Real],
+    to: &[Real],
+) -> Real {
+    let span = from
+        .iter()
+        .zip(to)
+        .map(|(a, b)| (b - a).abs())
+        .fold(0.0, Real::max);
+    if step <= 0.0 || span <= 0.0 {
+        return timing.motion_s(from, to);
+    }
+    match motion {
+        crate::Motion::Continuous => per_scan(timing, step).duration_s(from, to) + timing.settle_s,
+        crate::Motion::StopAndGo => {
+            let n = (span / step).ceil().max(1.0);
+            let first: Vec<Real> = from.iter().zip(to).map(|(a, b)| a + (b - a) / n).collect();
+            n * (timing.motion_s(from, &first) + timing.scan_time_s)
+        }
+    }
+}
+
 /// The joint limits of a continuous sweep from tilt `lo` to `hi` over `n`
 /// tilt values: the tilt moves one step per scan.
 pub(crate) fn sweep_limits(timing: &RobotTiming, lo: Real, hi: Real, n: usize) -> MotionLimits {
-    let step = (hi - lo).abs() / (n.max(2) - 1) as Real;
+    per_scan(timing, (hi - lo).abs() / (n.max(2) - 1) as Real)
+}
+
+/// `timing`'s joint limits, no joint faster than `step` radians a scan.
+fn per_scan(timing: &RobotTiming, step: Real) -> MotionLimits {
     timing.limits.capped(if timing.scan_time_s > 0.0 {
         step / timing.scan_time_s
     } else {
@@ -1354,13 +1418,16 @@ struct Aimed {
 
 impl Aimer<'_> {
     /// [`StageTwoChoice::Information`]: LM poses for up to
-    /// `stage_two_candidates` discs (most `H3` first, each at least
-    /// `stage_two_spread_m` from the others aimed at), each kept when its
-    /// sweep is safe and its predicted sweep on the map gives a usable
+    /// `stage_two_candidates` discs among the first
+    /// `stage_two_target_attempts` of the ranking (most `H3` first, each at
+    /// least `stage_two_spread_m` from the others aimed at), each kept when
+    /// its sweep is safe and its predicted sweep on the map gives a usable
     /// observation of its target; the one whose predicted sweep observes the
     /// most `H3` over every disc it sees per second of the robot's time (the
     /// straight way there and the sweep) that a safe path reaches is chosen.
-    /// Returns the target, the path, the discs ranked and the discs the
+    /// When no pose aimed at is reachable, the same with the next
+    /// `stage_two_target_attempts` discs of the ranking, up to
+    /// `stage_two_target_windows` times. Returns the target, the path, the discs ranked and the discs the
     /// chosen sweep is predicted to observe. Every disc aimed at is marked
     /// in `tried` for good.
     fn choose_information<H: Arm + LineScanner + ?Sized>(
@@ -1371,7 +1438,6 @@ impl Aimer<'_> {
         tried: &mut [bool],
         k: usize,
     ) -> Result<Option<StageTwoChoiceMade>, ExploreError> {
-        use rayon::prelude::*;
         let s = &episode.setup;
         let config = &s.config;
         let stage = &s.stage;
@@ -1379,23 +1445,74 @@ impl Aimer<'_> {
         let ranked = self.ranked(episode, m, discs, tried);
         let open: Vec<usize> = ranked.iter().map(|&(i, _)| i).collect();
         let h3: std::collections::HashMap<usize, Real> = ranked.iter().copied().collect();
-        // The targets: spread over the surfaces, each tried once.
-        let spread2 = config.stage_two_spread_m * config.stage_two_spread_m;
-        let mut targets: Vec<usize> = Vec::new();
-        for &(i, _) in ranked.iter().take(config.stage_two_target_attempts) {
-            if targets.len() >= config.stage_two_candidates {
-                break;
+        let q = &episode.q;
+        // The path keeps `stage_two_clearance_m` from the measured points
+        // (as Stage One's paths do: the noisy points can lie nearer than the
+        // TSDF mesh they were fused into); the mapped surface's clearance is
+        // checked after.
+        let mut checker = plan::MemoChecker::new(ClearanceChecker::new(
+            stage.model().safety().checker(stage.grid()),
+            stage.model().safety(),
+            &episode.points,
+            config.stage_two_clearance_m,
+            q,
+        ));
+        let visited: Vec<&[Real]> = episode
+            .viewpoints
+            .iter()
+            .map(|r| r.joints.as_slice())
+            .collect();
+        // The ranking in windows of `stage_two_target_attempts` discs: the
+        // next window only when no pose aimed in this one is reachable.
+        let window = config.stage_two_target_attempts.max(1);
+        for from in (0..ranked.len())
+            .step_by(window)
+            .take(config.stage_two_target_windows)
+        {
+            let next = &ranked[from..(from + window).min(ranked.len())];
+            // The targets: spread over the surfaces, each tried once.
+            let spread2 = config.stage_two_spread_m * config.stage_two_spread_m;
+            let mut targets: Vec<usize> = Vec::new();
+            for &(i, _) in next {
+                if targets.len() >= config.stage_two_candidates {
+                    break;
+                }
+                let c = discs.discs[i].centre;
+                if targets
+                    .iter()
+                    .any(|&t| (discs.discs[t].centre - c).norm_squared() < spread2)
+                {
+                    continue;
+                }
+                tried[i] = true;
+                targets.push(i);
             }
-            let c = discs.discs[i].centre;
-            if targets
-                .iter()
-                .any(|&t| (discs.discs[t].centre - c).norm_squared() < spread2)
-            {
-                continue;
+            for a in self.aim(episode, m, discs, &targets, (&open, &h3), k)? {
+                if let Some(path) = self.reach(episode, &visited, &a.goal, &mut checker)? {
+                    return Ok(Some((a.target, path, ranked.len(), a.usable)));
+                }
             }
-            tried[i] = true;
-            targets.push(i);
         }
+        Ok(None)
+    }
+
+    /// LM poses for `targets` from where the arm stands, each kept when its
+    /// sweep is safe and its sweep predicted on the map gives a usable
+    /// observation of its target, most `H3` (of `h3`, over the discs of
+    /// `open` it observes) per second of the robot's time first.
+    fn aim<H: Arm + LineScanner + ?Sized>(
+        &self,
+        episode: &Episode<'_, H>,
+        m: &Materials,
+        discs: &DiscMap,
+        targets: &[usize],
+        (open, h3): (&[usize], &std::collections::HashMap<usize, Real>),
+        k: usize,
+    ) -> Result<Vec<Aimed>, ExploreError> {
+        use rayon::prelude::*;
+        let s = &episode.setup;
+        let config = &s.config;
+        let stage = &s.stage;
         let q = &episode.q;
         let selector = &self.selector;
         let world = &self.map_world;
@@ -1426,16 +1543,18 @@ impl Aimer<'_> {
                     &config.sweep,
                     &mut |_, _| {},
                 )?;
-                let usable = m.usable(discs, predicted.points(), &open);
+                let usable = m.usable(discs, predicted.points(), open);
                 if !usable.contains(&i) {
                     return Ok(None);
                 }
                 let h3_seen: Real = usable.iter().map(|j| h3[j]).sum();
                 // Per second of the robot's time (its clock): the straight
-                // way there and the sweep.
+                // way there (scanning as Stage Two's transits do) and the
+                // sweep.
                 let timing = &s.timing;
                 let tilts = stage.sweep_tilts(&goal);
-                let seconds = timing.motion_s(q, &goal)
+                let step = config.stage_two_scan_step_deg.to_radians();
+                let seconds = transit_seconds(timing, config.motion, step, q, &goal)
                     + sweep_seconds(timing, config.motion, &goal, stage.tilt_joint(), &tilts);
                 Ok(Some(Aimed {
                     target: i,
@@ -1449,28 +1568,7 @@ impl Aimer<'_> {
             .flatten()
             .collect();
         aimed.sort_by(|a, b| b.gain.total_cmp(&a.gain).then(a.target.cmp(&b.target)));
-        // The path keeps `stage_two_clearance_m` from the measured points
-        // (as Stage One's paths do: the noisy points can lie nearer than the
-        // TSDF mesh they were fused into); the mapped surface's clearance is
-        // checked after.
-        let mut checker = plan::MemoChecker::new(ClearanceChecker::new(
-            stage.model().safety().checker(stage.grid()),
-            stage.model().safety(),
-            &episode.points,
-            config.stage_two_clearance_m,
-            q,
-        ));
-        let visited: Vec<&[Real]> = episode
-            .viewpoints
-            .iter()
-            .map(|r| r.joints.as_slice())
-            .collect();
-        for a in aimed {
-            if let Some(path) = self.reach(episode, &visited, &a.goal, &mut checker)? {
-                return Ok(Some((a.target, path, ranked.len(), a.usable)));
-            }
-        }
-        Ok(None)
+        Ok(aimed)
     }
 }
 
@@ -1541,6 +1639,33 @@ mod tests {
         assert!((l.velocity[1] - 0.1).abs() < 1e-12);
         assert_eq!(
             sweep_seconds(&timing, crate::Motion::Continuous, &q, 1, &[]),
+            0.0
+        );
+    }
+
+    /// A scanning transit's seconds by hand (1 rad/s, 2 rad/s²: a move of
+    /// `d` takes `d + 0.5` s from 0.5 rad on, `2√(d/2)` below).
+    #[test]
+    fn transit_seconds_by_hand() {
+        let timing = RobotTiming {
+            limits: MotionLimits::uniform(2, 1.0, 2.0),
+            settle_s: 0.05,
+            scan_time_s: 0.1,
+            reading_period_s: 0.01,
+        };
+        let (a, b) = ([0.0, 0.0], [1.0, 0.2]);
+        let t = |motion, step| transit_seconds(&timing, motion, step, &a, &b);
+        // No scans: one trapezoid and its settling, 1.5 + 0.05 s.
+        assert!((t(crate::Motion::StopAndGo, 0.0) - 1.55).abs() < 1e-12);
+        // Stop and go every 0.25 rad: 4 × (2√0.125 + 0.05 + 0.1) s.
+        let by_hand = 4.0 * (2.0 * 0.125_f64.sqrt() + 0.15);
+        assert!((t(crate::Motion::StopAndGo, 0.25) - by_hand).abs() < 1e-9);
+        // Continuous at 0.25 rad a scan: the joints' own 1 rad/s binds.
+        assert!((t(crate::Motion::Continuous, 0.25) - 1.55).abs() < 1e-12);
+        // At 0.05 rad a scan, 0.5 rad/s: 1/0.5 + 0.5/2 + 0.05 s.
+        assert!((t(crate::Motion::Continuous, 0.05) - 2.3).abs() < 1e-12);
+        assert_eq!(
+            transit_seconds(&timing, crate::Motion::Continuous, 0.1, &a, &a),
             0.0
         );
     }

@@ -41,8 +41,8 @@ fn ok_owned(args: &[String]) -> String {
     ok(&args.iter().map(String::as_str).collect::<Vec<_>>())
 }
 
-/// A bridge1 run through both stages (budget of 3 Stage Two viewpoints, seed
-/// 4), made once for the tests that need one (both kill -9 tests, the resume
+/// A bridge1 run through both stages (budget of 3 Stage Two viewpoints,
+/// transits scanned every 2°, seed 4), made once for the tests that need one (both kill -9 tests, the resume
 /// refusals and plan-blast's): its arguments, C-space cache and folder.
 struct StageTwoRun {
     args: Vec<String>,
@@ -57,11 +57,19 @@ fn stage_two_run() -> &'static StageTwoRun {
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let scenario = dir.join("b.toml");
-        let text = ok(&["scenario", "show", "bridge1"]).replace(
-            "stage_two_max_viewpoints = 20",
-            "stage_two_max_viewpoints = 3",
-        );
+        // Stage Two's transits scan (and the LRC classifies those scans),
+        // so a resume must replay them too.
+        let text = ok(&["scenario", "show", "bridge1"])
+            .replace(
+                "stage_two_max_viewpoints = 20",
+                "stage_two_max_viewpoints = 3",
+            )
+            .replace(
+                "stage_two_scan_step_deg = 0.0",
+                "stage_two_scan_step_deg = 2.0",
+            );
         assert!(text.contains("stage_two_max_viewpoints = 3"));
+        assert!(text.contains("stage_two_scan_step_deg = 2.0"));
         std::fs::write(&scenario, text).unwrap();
         let args = vec![
             "--scenario".to_owned(),

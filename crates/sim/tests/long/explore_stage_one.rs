@@ -338,6 +338,16 @@ fn stage_two_aims_at_discs_safely_and_lowers_the_material_information() {
         );
         assert!((0.25..=0.8).contains(&hit.d_m), "{}", hit.d_m);
         assert!(hit.rho_m <= 0.015 + 1e-9, "{}", hit.rho_m);
+        // The transit scanned on its way there (`stage_two_scan_step_deg`):
+        // some of the viewpoint's points were measured from scanner
+        // positions well away from where the sweep stood.
+        let on_the_way = run
+            .cloud
+            .iter()
+            .zip(&run.cloud_viewpoint)
+            .filter(|(p, k)| **k == r.k && (p.origin.coords - pose.translation.vector).norm() > 0.1)
+            .count();
+        assert!(on_the_way > 100, "viewpoint {}: {on_the_way} points", r.k);
     }
     // The material information falls after every Stage Two viewpoint, from
     // where Stage One's sweeps left it (its last row).

@@ -20,7 +20,8 @@ pub fn tmp() -> &'static Path {
 /// The options of [`bridge1_both_stages`]: the C-space model cached, the
 /// scenario's Stage One with room to end by its own rule (after 8 viewpoints
 /// no disc is targetable yet: the arm has not seen enough free space to
-/// reach a valid pose), 8 Stage Two viewpoints, no oracle (the coverage
+/// reach a valid pose), 8 Stage Two viewpoints whose transits scan every 2°,
+/// no oracle (the coverage
 /// oracle's test computes it on its own: with Stage Two the run would also
 /// compute the material oracle, which no test here reads).
 pub fn bridge1_both_stages_options() -> ExploreOptions {
@@ -28,6 +29,8 @@ pub fn bridge1_both_stages_options() -> ExploreOptions {
     let mut config = loaded.scenario.explore.clone().unwrap();
     config.max_viewpoints = 40;
     config.stage_two_max_viewpoints = 8;
+    // Stage Two scans on its way (every 2°) and classifies those scans.
+    config.stage_two_scan_step_deg = 2.0;
     ExploreOptions {
         seed: 0,
         config: Some(config),
