@@ -1427,9 +1427,9 @@ impl Aimer<'_> {
     /// straight way there and the sweep) that a safe path reaches is chosen.
     /// When no pose aimed at is reachable, the same with the next
     /// `stage_two_target_attempts` discs of the ranking, up to
-    /// `stage_two_target_windows` times. Returns the target, the path, the discs ranked and the discs the
-    /// chosen sweep is predicted to observe. Every disc aimed at is marked
-    /// in `tried` for good.
+    /// `stage_two_target_windows` times. Returns the target, the path, the
+    /// discs ranked and the discs the chosen sweep is predicted to observe.
+    /// Every disc aimed at is marked in `tried` for good.
     fn choose_information<H: Arm + LineScanner + ?Sized>(
         &mut self,
         episode: &Episode<'_, H>,
@@ -1465,13 +1465,13 @@ impl Aimer<'_> {
         // The ranking in windows of `stage_two_target_attempts` discs: the
         // next window only when no pose aimed in this one is reachable.
         let window = config.stage_two_target_attempts.max(1);
+        let spread2 = config.stage_two_spread_m * config.stage_two_spread_m;
         for from in (0..ranked.len())
             .step_by(window)
             .take(config.stage_two_target_windows)
         {
             let next = &ranked[from..(from + window).min(ranked.len())];
             // The targets: spread over the surfaces, each tried once.
-            let spread2 = config.stage_two_spread_m * config.stage_two_spread_m;
             let mut targets: Vec<usize> = Vec::new();
             for &(i, _) in next {
                 if targets.len() >= config.stage_two_candidates {

@@ -42,8 +42,9 @@ fn ok_owned(args: &[String]) -> String {
 }
 
 /// A bridge1 run through both stages (budget of 3 Stage Two viewpoints,
-/// transits scanned every 2°, seed 4), made once for the tests that need one (both kill -9 tests, the resume
-/// refusals and plan-blast's): its arguments, C-space cache and folder.
+/// Stage Two's transits scanned every 2°, seed 4), made once for the tests
+/// that need one (both kill -9 tests, the resume refusals and
+/// plan-blast's): its arguments, C-space cache and folder.
 struct StageTwoRun {
     args: Vec<String>,
     cache: std::path::PathBuf,
