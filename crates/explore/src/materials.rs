@@ -135,15 +135,18 @@ impl Materials {
     /// Of the discs `candidates`, those a sweep of `points` (a prediction on
     /// the mapped surface) would give the LRC an observation of that passes
     /// its geometric checks (range, incidence, returns and span in the fit
-    /// window, flatness), as [`Materials::observe`] forms it.
+    /// window, flatness), as [`Materials::observe`] forms it; `None`, with
+    /// no other disc checked, when disc `first` (checked first) is not among
+    /// them.
     pub(crate) fn usable(
         &self,
         d: &DiscMap,
         points: &[SweepPoint],
         candidates: &[usize],
-    ) -> Vec<usize> {
+        first: usize,
+    ) -> Option<Vec<usize>> {
         if points.is_empty() {
-            return Vec::new();
+            return None;
         }
         let index = PatchIndex::new(points);
         let origins = geom::Aabb::from_points(points.iter().map(|p| &p.origin));
@@ -153,44 +156,54 @@ impl Materials {
         // range (with room for the target's projection onto the patch's
         // plane), or no origin on the disc's seen side (no returns left).
         let near_m = (lrc.config.min_range_m - 0.15).max(0.0);
-        candidates
-            .iter()
-            .copied()
-            .filter(|&i| {
-                let c = &d.discs[i].centre;
-                if origins.distance_squared_to_point(c) > self.reach_m * self.reach_m {
-                    return false;
-                }
-                // The farthest corner of the origins' box, and the farthest
-                // any origin reaches along the disc's facing normal.
-                let far = (0..3)
-                    .map(|a| {
-                        (c[a] - origins.min[a])
-                            .abs()
-                            .max((c[a] - origins.max[a]).abs())
-                    })
-                    .map(|v| v * v)
-                    .sum::<Real>();
-                if far < near_m * near_m {
-                    return false;
-                }
-                d.facing.get(i).is_none_or(|f| {
-                    (0..3)
-                        .map(|a| (f[a] * origins.min[a]).max(f[a] * origins.max[a]))
-                        .sum::<Real>()
-                        > c.coords.dot(f)
+        let plausible = |i: usize| {
+            let c = &d.discs[i].centre;
+            if origins.distance_squared_to_point(c) > self.reach_m * self.reach_m {
+                return false;
+            }
+            // The farthest corner of the origins' box, and the farthest
+            // any origin reaches along the disc's facing normal.
+            let far = (0..3)
+                .map(|a| {
+                    (c[a] - origins.min[a])
+                        .abs()
+                        .max((c[a] - origins.max[a]).abs())
                 })
+                .map(|v| v * v)
+                .sum::<Real>();
+            if far < near_m * near_m {
+                return false;
+            }
+            d.facing.get(i).is_none_or(|f| {
+                (0..3)
+                    .map(|a| (f[a] * origins.min[a]).max(f[a] * origins.max[a]))
+                    .sum::<Real>()
+                    > c.coords.dot(f)
             })
-            .filter(|&i| {
-                let disc = &d.discs[i];
-                let obs = index.observation(
-                    &disc.centre,
+        };
+        let mut obs = sensor::Observation::default();
+        let mut passes = |i: usize| {
+            plausible(i) && {
+                index.observe_into(
+                    &d.discs[i].centre,
                     self.patch_m,
                     seen_side(d.facing.get(i)).as_ref(),
+                    false,
+                    &mut obs,
                 );
-                lrc.check_geometry(&obs, &lrc.config).is_ok()
-            })
-            .collect()
+                lrc.geometry_passes(&obs, &lrc.config).is_ok()
+            }
+        };
+        if !passes(first) {
+            return None;
+        }
+        Some(
+            candidates
+                .iter()
+                .copied()
+                .filter(|&i| i == first || passes(i))
+                .collect(),
+        )
     }
 
     /// The material information remaining on disc `i` (eq. 4.16 over its

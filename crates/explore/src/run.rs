@@ -1543,7 +1543,9 @@ impl Aimer<'_> {
                     &config.sweep,
                     &mut |_, _| {},
                 )?;
-                let usable = m.usable(discs, predicted.points(), open);
+                let Some(usable) = m.usable(discs, predicted.points(), open, i) else {
+                    return Ok(None);
+                };
                 if !usable.contains(&i) {
                     return Ok(None);
                 }

@@ -175,21 +175,22 @@ fn binned_quadratic_fit(u: &[Real], y: &[Real], bins: usize) -> Option<([Real; 3
     Some((b, mse))
 }
 
-/// Features of an observation, with the constraints of `cfg` enforced (see
-/// the [module docs](crate::classifier) for the steps).
-pub fn extract_features(
-    obs: &Observation,
-    cfg: &LrcConfig,
-) -> Result<(Features, PatchGeometry), ClassifyError> {
-    let window = cfg.fit_window_deg.to_radians();
-    let too_few = |found| ClassifyError::TooFewPoints {
-        found,
-        needed: cfg.min_points,
-        window_deg: cfg.fit_window_deg,
-    };
+/// The patch's plane and the target's range and incidence (steps 1 and 2
+/// of [`extract_features`]), with the observation's returns checked.
+struct Patch {
+    centroid: Point3,
+    normal: UnitVector3,
+    range_m: Real,
+    incidence_rad: Real,
+    plane_rms_m: Real,
+}
+
+/// The returns checked, then steps 1 and 2 of [`extract_features`] with
+/// their constraints.
+fn plane_of(obs: &Observation, cfg: &LrcConfig) -> Result<Patch, ClassifyError> {
     let n = obs.returns.len();
     if n < cfg.min_points.max(3) {
-        return Err(too_few(n));
+        return Err(too_few(n, cfg));
     }
     let finite3 = |v: &Vector3| v.x.is_finite() && v.y.is_finite() && v.z.is_finite();
     for (index, r) in obs.returns.iter().enumerate() {
@@ -260,6 +261,87 @@ pub fn extract_features(
             max_deg: cfg.max_incidence_deg,
         });
     }
+    Ok(Patch {
+        centroid,
+        normal,
+        range_m,
+        incidence_rad,
+        plane_rms_m: pca.eigenvalues[0].max(0.0).sqrt(),
+    })
+}
+
+fn too_few(found: usize, cfg: &LrcConfig) -> ClassifyError {
+    ClassifyError::TooFewPoints {
+        found,
+        needed: cfg.min_points,
+        window_deg: cfg.fit_window_deg,
+    }
+}
+
+/// The distance from `r`'s origin to the plane along its ray, when the ray
+/// meets the plane in front of it (step 3's test of a return).
+fn plane_range(r: &ObservedReturn, plane: &Patch, cos: Real) -> Option<Real> {
+    let range = (plane.centroid - r.origin).dot(&plane.normal) / -cos;
+    (!range.is_nan() && range > 0.0).then_some(range)
+}
+
+/// Whether the returns of `obs` inside the fit window are enough, and span
+/// enough incidence, for the fits (what [`extract_features`] decides,
+/// without the features): `Ok` exactly when its steps 1–3 pass. The window
+/// test compares cosines (an arc cosine only within 10⁻⁹ of the window's
+/// edge) and stops as soon as both counts are met.
+pub(super) fn check_window(obs: &Observation, cfg: &LrcConfig) -> Result<Real, ClassifyError> {
+    let plane = plane_of(obs, cfg)?;
+    let window = cfg.fit_window_deg.to_radians();
+    let cos_window = window.cos();
+    let inside = |cos: Real| {
+        if cos > cos_window + 1e-9 {
+            true
+        } else if cos < cos_window - 1e-9 {
+            false
+        } else {
+            cos.min(1.0).acos() <= window
+        }
+    };
+    // The incidence span from the extreme cosines (acos decreases).
+    let span_deg =
+        |lo_cos: Real, hi_cos: Real| (lo_cos.min(1.0).acos() - hi_cos.min(1.0).acos()).to_degrees();
+    let (mut used, mut lo_cos, mut hi_cos) = (0usize, Real::INFINITY, Real::NEG_INFINITY);
+    for r in &obs.returns {
+        let cos = -r.direction.dot(&plane.normal);
+        if cos <= 1e-9 || !inside(cos) || plane_range(r, &plane, cos).is_none() {
+            continue;
+        }
+        used += 1;
+        lo_cos = lo_cos.min(cos);
+        hi_cos = hi_cos.max(cos);
+        if used >= cfg.min_points && used % 16 == 0 && span_deg(lo_cos, hi_cos) >= cfg.min_span_deg
+        {
+            return Ok(plane.plane_rms_m);
+        }
+    }
+    if used < cfg.min_points {
+        return Err(too_few(used, cfg));
+    }
+    let span = span_deg(lo_cos, hi_cos);
+    if span < cfg.min_span_deg {
+        return Err(ClassifyError::NarrowIncidence {
+            span_deg: span,
+            needed_deg: cfg.min_span_deg,
+        });
+    }
+    Ok(plane.plane_rms_m)
+}
+
+/// Features of an observation, with the constraints of `cfg` enforced (see
+/// the [module docs](crate::classifier) for the steps).
+pub fn extract_features(
+    obs: &Observation,
+    cfg: &LrcConfig,
+) -> Result<(Features, PatchGeometry), ClassifyError> {
+    let plane = plane_of(obs, cfg)?;
+    let window = cfg.fit_window_deg.to_radians();
+    let n = obs.returns.len();
 
     // 3. Per-return incidence, plane range, range error, compensated intensity.
     let mut u = Vec::with_capacity(n);
@@ -267,7 +349,7 @@ pub fn extract_features(
     let mut range_error = Vec::with_capacity(n);
     let (mut lo, mut hi) = (Real::INFINITY, Real::NEG_INFINITY);
     for r in &obs.returns {
-        let cos = -r.direction.dot(&normal);
+        let cos = -r.direction.dot(&plane.normal);
         if cos <= 1e-9 {
             continue; // the ray runs away from the fitted plane
         }
@@ -275,10 +357,9 @@ pub fn extract_features(
         if phi > window {
             continue;
         }
-        let plane_range = (centroid - r.origin).dot(&normal) / -cos;
-        if plane_range.is_nan() || plane_range <= 0.0 {
+        let Some(plane_range) = plane_range(r, &plane, cos) else {
             continue;
-        }
+        };
         lo = lo.min(phi);
         hi = hi.max(phi);
         u.push(phi / window);
@@ -287,7 +368,7 @@ pub fn extract_features(
         range_error.push(r.range_m - plane_range);
     }
     if u.len() < cfg.min_points {
-        return Err(too_few(u.len()));
+        return Err(too_few(u.len(), cfg));
     }
     let span = hi - lo;
     if span.to_degrees() < cfg.min_span_deg {
@@ -311,12 +392,12 @@ pub fn extract_features(
             range_mse: mse_r,
         },
         PatchGeometry {
-            normal,
-            range_m,
-            incidence_rad,
+            normal: plane.normal,
+            range_m: plane.range_m,
+            incidence_rad: plane.incidence_rad,
             points_used: u.len(),
             incidence_span_rad: (lo, hi),
-            plane_rms_m: pca.eigenvalues[0].max(0.0).sqrt(),
+            plane_rms_m: plane.plane_rms_m,
         },
     ))
 }

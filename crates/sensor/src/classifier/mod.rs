@@ -51,7 +51,10 @@
 //! ([`ClassifyError::Atypical`]): under a uniform prior the posterior of an
 //! observation unlike every material still names one of them, confidently.
 //! [`Lrc::check_geometry`] runs the geometric checks alone, to predict from
-//! a simulated observation of the map whether a pose can serve the LRC.
+//! a simulated observation of the map whether a pose can serve the LRC;
+//! [`Lrc::geometry_passes`] decides the same faster (no fits, and it stops
+//! counting returns once there are enough), for the many such predictions
+//! of Stage Two's choice.
 //!
 //! The fits weigh equal bins of incidence equally ([`LrcConfig::fit_bins`]),
 //! so how densely a pose samples each incidence does not bend the curves.
@@ -631,19 +634,29 @@ impl Lrc {
         config: &LrcConfig,
     ) -> Result<PatchGeometry, ClassifyError> {
         let (_, geometry) = extract_features(obs, config)?;
-        self.check_flat(&geometry, config)?;
+        self.check_flat(geometry.plane_rms_m, config)?;
         Ok(geometry)
     }
 
-    fn check_flat(
+    /// Whether [`Lrc::check_geometry`] passes, decided faster: the fit
+    /// window's returns are counted (not fitted) and counting stops once
+    /// there are enough of them over a wide enough incidence. The error, when
+    /// there is one, is the first check that fails in this order, which may
+    /// differ from `check_geometry`'s.
+    pub fn geometry_passes(
         &self,
-        geometry: &PatchGeometry,
+        obs: &Observation,
         config: &LrcConfig,
     ) -> Result<(), ClassifyError> {
+        let plane_rms_m = features::check_window(obs, config)?;
+        self.check_flat(plane_rms_m, config)
+    }
+
+    fn check_flat(&self, plane_rms_m: Real, config: &LrcConfig) -> Result<(), ClassifyError> {
         let limit_m = self.plane_rms_limit_m * config.max_plane_rms_ratio;
-        if geometry.plane_rms_m > limit_m {
+        if plane_rms_m > limit_m {
             return Err(ClassifyError::NotFlat {
-                rms_m: geometry.plane_rms_m,
+                rms_m: plane_rms_m,
                 limit_m,
             });
         }
@@ -658,7 +671,7 @@ impl Lrc {
         config: &LrcConfig,
     ) -> Result<Classification, ClassifyError> {
         let (features, geometry) = extract_features(obs, config)?;
-        self.check_flat(&geometry, config)?;
+        self.check_flat(geometry.plane_rms_m, config)?;
         let (posterior, mahalanobis_sq) = self.evaluate(&features, geometry.incidence_span_rad)?;
         let nearest = mahalanobis_sq
             .iter()

@@ -448,3 +448,82 @@ fn mahalanobis_distances_of_fresh_observations_follow_chi_square() {
     assert!((2.0..6.0).contains(&median), "median {median}");
     assert!(beyond <= 0.1, "{beyond}");
 }
+
+/// `Lrc::geometry_passes` (counting, stopping early) decides as
+/// `Lrc::check_geometry` (the full features) does, on observations inside
+/// and outside every constraint: ranges and incidences beyond the limits,
+/// returns thinned to around the 50 the fit window needs, patches small
+/// enough for a narrow incidence span, and patches folded off their plane.
+#[test]
+fn geometry_passes_decides_as_check_geometry() {
+    let materials = default_materials();
+    let scanner = ScannerConfig::default();
+    let config = LrcConfig::default();
+    let mut rng = ChaCha8Rng::seed_from_u64(45);
+    let mut outcomes = std::collections::BTreeMap::<String, usize>::new();
+    for n in 0..400 {
+        let small = n % 3 == 0;
+        let setup = ObservationSetup {
+            range_m: rng.random_range(0.15..0.95),
+            incidence_rad: rng.random_range(0.0..55f64.to_radians()),
+            tilt_direction_rad: rng.random_range(0.0..std::f64::consts::TAU),
+            sweep_step_deg: if small { 0.2 } else { STEP_DEG },
+            sweep_half_deg: rng.random_range(1.0..30.0),
+            patch_radius_m: if small {
+                rng.random_range(0.02..0.05)
+            } else {
+                0.18
+            },
+        };
+        let material = &materials[n % materials.len()];
+        let mut obs = simulate_observation(&setup, material, &scanner, &mut rng).unwrap();
+        // Keep about `keep` returns (spread over the patch), to land around
+        // the fit window's 50.
+        let keep = rng.random_range(20..400usize);
+        if !small && obs.returns.len() > keep {
+            let every = obs.returns.len().div_ceil(keep);
+            obs.returns = obs.returns.into_iter().step_by(every).collect();
+        }
+        if n % 7 == 0 {
+            let fold = rng.random_range(0.0..1.0);
+            for r in &mut obs.returns {
+                let p = r.point();
+                let p = Point3::new(p.x, p.y, p.z + fold * p.x.max(0.0));
+                let (direction, range_m) = UnitVector3::new_and_get(p - r.origin);
+                *r = ObservedReturn {
+                    direction,
+                    range_m,
+                    ..*r
+                };
+            }
+        }
+        let full = lrc().check_geometry(&obs, &config);
+        let fast = lrc().geometry_passes(&obs, &config);
+        assert_eq!(
+            full.is_ok(),
+            fast.is_ok(),
+            "{setup:?}: {full:?} against {fast:?}"
+        );
+        let kind = match &full {
+            Ok(_) => "passes".to_string(),
+            Err(e) => format!("{e:?}")
+                .split([' ', '{'])
+                .next()
+                .unwrap()
+                .to_string(),
+        };
+        *outcomes.entry(kind).or_default() += 1;
+    }
+    // Every outcome was exercised, each enough times to mean something.
+    for kind in [
+        "passes",
+        "OutOfRange",
+        "TooOblique",
+        "TooFewPoints",
+        "NarrowIncidence",
+        "NotFlat",
+    ] {
+        let seen = outcomes.get(kind).copied().unwrap_or(0);
+        assert!(seen >= 5, "{kind}: {seen} of 400 ({outcomes:?})");
+    }
+}
