@@ -156,8 +156,8 @@ impl<'a> PatchIndex<'a> {
             &[target.x, target.y, target.z],
             radius_m * radius_m,
         );
-        // Point indices (a sweep holds far fewer than 2³² points) sort
-        // faster than the neighbours.
+        // Point indices sort faster as `u32` than the neighbours do (2³²
+        // sweep points, at least 56 bytes each, would take 240 GB).
         let mut idx: Vec<u32> = near.iter().map(|n| n.item as u32).collect();
         if in_point_order {
             idx.sort_unstable();
