@@ -236,6 +236,10 @@ struct Progress {
     /// was stored, never reset by a change of goal.
     watch_counter: u32,
     watched: Vec<Real>,
+    /// Steps of repositioning left (`FollowConfig::reposition_steps`).
+    reposition_left: u32,
+    /// The step before which no new repositioning starts.
+    reposition_after: u64,
 }
 
 /// A direction with an optional step limit (P§3.4.3, P§3.4.5).
@@ -335,6 +339,8 @@ impl Follower {
                 reset_requested: true,
                 watch_counter: 0,
                 watched: Vec::new(),
+                reposition_left: 0,
+                reposition_after: 0,
             },
             last_points: Vec::new(),
             sensed,
@@ -641,10 +647,28 @@ impl Follower {
         // three joints have no null space to take it in).
         // It yields to link avoidance where a link is near the model
         // (`joint_limit_yield`): there the null space is the links'.
-        if self.robot.dof() > 3 && self.config.joint_limit_gain > 0.0 {
+        // While repositioning before a give-up (P§3.4.7,
+        // `reposition_steps`) the gain is at least `reposition_gain`.
+        let repositioning = self.progress.reposition_left > 0;
+        if repositioning {
+            self.progress.reposition_left -= 1;
+        }
+        if self.robot.dof() > 3 && (self.config.joint_limit_gain > 0.0 || repositioning) {
             let w = largest_link_weight(self.config.objective, proximities, switches, &self.config);
             let share = 1.0 - self.config.joint_limit_yield * w;
-            z += joint_limit_gradient(&self.robot, q, &self.config) * share;
+            let gradient = if repositioning {
+                let config = FollowConfig {
+                    joint_limit_gain: self
+                        .config
+                        .joint_limit_gain
+                        .max(self.config.reposition_gain),
+                    ..self.config
+                };
+                joint_limit_gradient(&self.robot, q, &config)
+            } else {
+                joint_limit_gradient(&self.robot, q, &self.config)
+            };
+            z += gradient * share;
         }
         actuator_change(
             &self.robot,
