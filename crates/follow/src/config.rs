@@ -161,6 +161,19 @@ pub struct FollowConfig {
     /// [`Self::reposition_steps`]; the larger of it and
     /// [`Self::joint_limit_gain`]).
     pub reposition_gain: Real,
+    /// The joint-limit term keeps links off (our addition, issue 45): its
+    /// null-space motion `α(I − J⁺J)z_j` loses, within the null space, the
+    /// part that would bring a link within the influence distance closer
+    /// than its radius plus [`Self::link_margin_m`] from the model in one
+    /// step, or a link already within that any closer (to first order; see
+    /// [`crate::actuator::actuator_change_bounded`]). Pudney's link-distance
+    /// term is taken as it is. `false` (the default) takes the joint-limit
+    /// term whole: repositioning (`reposition_steps`) at a raised gain then
+    /// pushed arm4's last link onto block2's edge between the chamfer and
+    /// the +y face until the safety guard held it at its margin, where the
+    /// model's chamfer ended up to 6 mm short of the true edge (14.2 mm
+    /// true clearance; crate README).
+    pub joint_limit_keeps_links_off: bool,
     /// A link closer to the model than its radius plus this margin may not be
     /// brought closer by the control-point motion (our addition to P§3.3,
     /// see [`crate::actuator::actuator_change`]), metres.
@@ -216,6 +229,7 @@ impl Default for FollowConfig {
             joint_limit_yield: 0.0,
             reposition_steps: 0,
             reposition_gain: 0.01,
+            joint_limit_keeps_links_off: false,
             link_margin_m: 0.05,
             guard: true,
             guard_margin_m: 0.02,
