@@ -300,13 +300,39 @@ pub fn actuator_change(
     guards: &[DVector<Real>],
     config: &FollowConfig,
 ) -> DVector<Real> {
+    let none = DVector::zeros(robot.dof());
+    actuator_change_bounded(robot, q, jacobian, motion, z, &none, guards, &[], config)
+}
+
+/// [`actuator_change`] with a second reconfiguration vector `z_bounded`
+/// (the joint-limit term, [`FollowConfig::joint_limit_keeps_links_off`])
+/// whose null-space motion `v = α(I − J⁺J)z_bounded` is bounded by
+/// `bounds`, rows `(g, b)` with `g = n̂ᵀ J_l` as in `guards`: `g·v ≥ −b`,
+/// a link may come at most `b` closer (to first order). It loses, within
+/// the null space, the part that would break a bound (see
+/// `keep_links_off_in_null_space`), so it still leaves the control point
+/// where it is. `z` (Pudney's link distances) is taken as it is.
+#[allow(clippy::too_many_arguments)]
+pub fn actuator_change_bounded(
+    robot: &Robot,
+    q: &[Real],
+    jacobian: &Matrix6xX<Real>,
+    motion: &Vector3,
+    z: &DVector<Real>,
+    z_bounded: &DVector<Real>,
+    guards: &[DVector<Real>],
+    bounds: &[(DVector<Real>, Real)],
+    config: &FollowConfig,
+) -> DVector<Real> {
     let dof = robot.dof();
     let limits = robot.limits();
     let kinds = robot.joint_kinds();
     let mut locked = vec![false; dof];
     let mut dq = DVector::zeros(dof);
     for _ in 0..=dof {
-        dq = eq3(&kinds, jacobian, motion, z, guards, &locked, config);
+        dq = eq3(
+            &kinds, jacobian, motion, z, z_bounded, guards, bounds, &locked, config,
+        );
         if !dq.iter().all(|v| v.is_finite()) {
             return DVector::zeros(dof);
         }
@@ -418,6 +444,8 @@ fn second_order(
         &j1,
         &residual,
         &none,
+        &none,
+        &[],
         &[],
         locked,
         config,
@@ -430,13 +458,17 @@ fn second_order(
 
 /// Eq. 3 with the joints in `locked` held still (their columns of `J` and
 /// entries of `z` zeroed: `J⁺` then has zero rows and `I − J⁺J` zero
-/// off-diagonal entries for them), the guard applied to its control-point term.
+/// off-diagonal entries for them), the guard applied to its control-point term
+/// and to the null-space motion of `z_bounded`.
+#[allow(clippy::too_many_arguments)]
 fn eq3(
     kinds: &[JointKind],
     jacobian: &Matrix6xX<Real>,
     motion: &Vector3,
     z: &DVector<Real>,
+    z_bounded: &DVector<Real>,
     guards: &[DVector<Real>],
+    bounds: &[(DVector<Real>, Real)],
     locked: &[bool],
     config: &FollowConfig,
 ) -> DVector<Real> {
@@ -457,9 +489,16 @@ fn eq3(
     let mut dq = &j_pinv * xdot;
     keep_links_off(&mut dq, guards, locked);
     let z = DVector::from_fn(dof, |k, _| if locked[k] { 0.0 } else { z[k] });
-    if config.alpha > 0.0 && z.iter().any(|v| *v != 0.0) {
+    let zb = DVector::from_fn(dof, |k, _| if locked[k] { 0.0 } else { z_bounded[k] });
+    let bounded = zb.iter().any(|v| *v != 0.0);
+    if config.alpha > 0.0 && (bounded || z.iter().any(|v| *v != 0.0)) {
         let null = robot::null_space_projector(&j, &j_pinv);
-        let reconfiguration = (null * z) * config.alpha;
+        let mut reconfiguration = (&null * z) * config.alpha;
+        if bounded {
+            let mut b = (&null * zb) * config.alpha;
+            keep_links_off_in_null_space(&mut b, &null, bounds, locked);
+            reconfiguration += b;
+        }
         // Three free joints or fewer leave no null space for the
         // control point's three coordinates: (I − J⁺J)z is then damping's
         // rounding, summed as before.
@@ -509,6 +548,52 @@ fn keep_links_off(dq: &mut DVector<Real>, guards: &[DVector<Real>], locked: &[bo
     }
     if rows.iter().any(|g| g.dot(dq) < -1e-12) {
         dq.fill(0.0);
+    }
+}
+
+/// The bounds on a null-space motion `v` (`null` = `I − J⁺J`): for each
+/// row `(g, b)`, `g·v ≥ −b` (a link comes at most `b` closer, to first
+/// order). A broken bound is met along `N g`, the row's own null-space
+/// part, so what is left still leaves the control point where it is (to
+/// first order), by projection onto each broken half-space in turn, a few
+/// rounds; when a bound stays broken the motion is dropped (a row with no
+/// null-space part, `gᵀN g` ≈ 0, cannot be met within the null space).
+fn keep_links_off_in_null_space(
+    v: &mut DVector<Real>,
+    null: &DMatrix<Real>,
+    bounds: &[(DVector<Real>, Real)],
+    locked: &[bool],
+) {
+    if bounds.iter().all(|(g, b)| g.dot(v) >= -b) {
+        return;
+    }
+    let rows: Vec<(DVector<Real>, DVector<Real>, Real)> = bounds
+        .iter()
+        .map(|(g, b)| {
+            let g = DVector::from_fn(g.len(), |k, _| if locked[k] { 0.0 } else { g[k] });
+            let u = null * &g;
+            (g, u, *b)
+        })
+        .collect();
+    for _ in 0..GUARD_ROUNDS {
+        let mut moved = false;
+        for (g, u, b) in &rows {
+            let gu = g.dot(u);
+            let short = -b - g.dot(v);
+            if short > 0.0 && gu > 1e-18 {
+                v.axpy(short / gu, u, 1.0);
+                moved = true;
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+    if rows
+        .iter()
+        .any(|(g, _, b)| g.dot(v) < -b - 1e-9 * v.norm().max(1e-12) * g.norm())
+    {
+        v.fill(0.0);
     }
 }
 
@@ -694,6 +779,78 @@ mod tests {
         assert_eq!(
             guarded(&[v(-1.0, 1.0, 0.0)], &[true, false, false]),
             v(1.0, 0.0, 0.0)
+        );
+    }
+
+    /// On arm4: the bounds on a null-space motion keep it in the null
+    /// space (the control point stays, to first order), let a link come
+    /// no more than its bound closer along a row the motion closes on, and
+    /// leave a motion that moves away from the row as it is; through
+    /// `actuator_change_bounded`, a row it moves away from changes nothing
+    /// and one it closes on head-on with no room stops it (up to the
+    /// second-order correction).
+    #[test]
+    fn bounded_reconfiguration_on_arm4() {
+        let robot = robot::builtin("arm4").unwrap();
+        let q = [0.3, 0.7, -0.2, 0.9, 0.4, 0.5];
+        let cfg = FollowConfig {
+            ceiling_revolute_deg: 1e6,
+            damping: 0.0,
+            ..FollowConfig::default()
+        };
+        let (tool_link, tool) = robot.tool;
+        let jac = robot
+            .jacobian(&q, tool_link, &Point3::from(tool.translation.vector))
+            .unwrap();
+        let j3 = DMatrix::from_fn(3, 6, |r, c| jac[(r, c)]);
+        let pinv = robot::pseudo_inverse(&j3, 1e-12);
+        let null = robot::null_space_projector(&j3, &pinv);
+        let zb = DVector::from_vec(vec![0.1, -0.2, 0.3, 0.05, -0.1, 0.2]) * 1e-4;
+        let free = &null * &zb * cfg.alpha;
+        assert!(free.norm() > 1e-4);
+        // A row through link 3's middle (link index 4) against the way the
+        // free motion moves it.
+        let lj = robot
+            .jacobian(&q, LinkId(4), &Point3::new(0.0, 0.0, 0.5))
+            .unwrap();
+        let moved = Vector3::from_fn(|r, _| (0..6).map(|c| lj[(r, c)] * free[c]).sum());
+        let n = geom::unit(moved).unwrap();
+        let row = DVector::from_fn(6, |k, _| {
+            -(n.x * lj[(0, k)] + n.y * lj[(1, k)] + n.z * lj[(2, k)])
+        });
+        let closing = -row.dot(&free);
+        assert!(
+            closing > 1e-5,
+            "the free motion closes on the row: {closing}"
+        );
+        let unlocked = [false; 6];
+        for b in [0.0, 0.25 * closing] {
+            let mut v = free.clone();
+            keep_links_off_in_null_space(&mut v, &null, &[(row.clone(), b)], &unlocked);
+            assert!(row.dot(&v) >= -b - 1e-12, "bound {b}: {}", row.dot(&v));
+            assert!(v.norm() > 1e-6, "bound {b}: the motion is kept in part");
+            assert!(
+                (&j3 * &v).norm() < 1e-9 * v.norm(),
+                "bound {b}: off the null space"
+            );
+        }
+        let mut v = free.clone();
+        keep_links_off_in_null_space(&mut v, &null, &[(-row.clone(), 0.0)], &unlocked);
+        assert_eq!(v, free);
+        // Through the actuator change.
+        let zero = DVector::zeros(6);
+        let still = Vector3::zeros();
+        let whole = actuator_change_bounded(&robot, &q, &jac, &still, &zero, &zb, &[], &[], &cfg);
+        let away = [(-row.clone(), 0.0)];
+        let kept = actuator_change_bounded(&robot, &q, &jac, &still, &zero, &zb, &[], &away, &cfg);
+        assert_eq!(kept, whole);
+        let against = [(row.clone(), 0.0)];
+        let bounded =
+            actuator_change_bounded(&robot, &q, &jac, &still, &zero, &zb, &[], &against, &cfg);
+        assert!(
+            row.dot(&bounded) >= -1e-2 * closing,
+            "{}",
+            row.dot(&bounded)
         );
     }
 

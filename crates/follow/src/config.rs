@@ -149,6 +149,31 @@ pub struct FollowConfig {
     /// term whole; 1 leaves the null space to link avoidance wherever a link
     /// touches the model (measured in the crate README: not better).
     pub joint_limit_yield: Real,
+    /// Repositioning before giving up (our addition to P§3.4.7, issue 45):
+    /// when the progress check would give the goal up on a robot with joints
+    /// to spare (more than three) while a joint lies in the outer tenth of
+    /// its range, the follower first spends this many steps with the
+    /// joint-limit term at [`Self::reposition_gain`] (and no new
+    /// repositioning starts until twice that many steps after it ended).
+    /// 0 (the default) gives up at once, as P§3.4.7.
+    pub reposition_steps: u32,
+    /// The joint-limit gain while repositioning (see
+    /// [`Self::reposition_steps`]; the larger of it and
+    /// [`Self::joint_limit_gain`]).
+    pub reposition_gain: Real,
+    /// The joint-limit term keeps links off (our addition, issue 45): its
+    /// null-space motion `α(I − J⁺J)z_j` loses, within the null space, the
+    /// part that would bring a link within the influence distance closer
+    /// than its radius plus [`Self::link_margin_m`] from the model in one
+    /// step, or a link already within that any closer (to first order; see
+    /// [`crate::actuator::actuator_change_bounded`]). Pudney's link-distance
+    /// term is taken as it is. `false` (the default) takes the joint-limit
+    /// term whole: repositioning (`reposition_steps`) at a raised gain then
+    /// pushed arm4's last link onto block2's edge between the chamfer and
+    /// the +y face until the safety guard held it at its margin, where the
+    /// model's chamfer ended up to 6 mm short of the true edge (14.2 mm
+    /// true clearance; crate README).
+    pub joint_limit_keeps_links_off: bool,
     /// A link closer to the model than its radius plus this margin may not be
     /// brought closer by the control-point motion (our addition to P§3.3,
     /// see [`crate::actuator::actuator_change`]), metres.
@@ -202,6 +227,9 @@ impl Default for FollowConfig {
             task_share: 0.15,
             joint_limit_gain: 0.0,
             joint_limit_yield: 0.0,
+            reposition_steps: 0,
+            reposition_gain: 0.01,
+            joint_limit_keeps_links_off: false,
             link_margin_m: 0.05,
             guard: true,
             guard_margin_m: 0.02,
@@ -272,6 +300,13 @@ impl FollowConfig {
                 "joint_limit_yield",
                 "a fraction in 0..=1",
                 self.joint_limit_yield.to_string(),
+            );
+        }
+        if !(self.reposition_gain.is_finite() && self.reposition_gain >= 0.0) {
+            return bad(
+                "reposition_gain",
+                "a gain ≥ 0",
+                self.reposition_gain.to_string(),
             );
         }
         if !(self.link_margin_m.is_finite() && self.link_margin_m >= 0.0) {

@@ -7,7 +7,7 @@
 
 use crate::FollowError;
 use crate::actuator::{
-    LinkBody, LinkProximity, SwitchContact, actuator_change, joint_limit_gradient,
+    LinkBody, LinkProximity, SwitchContact, actuator_change_bounded, joint_limit_gradient,
     largest_link_weight, link_bodies, link_proximities, reconfiguration,
 };
 use crate::config::{FollowConfig, GapTargetRule, Objective};
@@ -236,6 +236,10 @@ struct Progress {
     /// was stored, never reset by a change of goal.
     watch_counter: u32,
     watched: Vec<Real>,
+    /// Steps of repositioning left (`FollowConfig::reposition_steps`).
+    reposition_left: u32,
+    /// The step before which no new repositioning starts.
+    reposition_after: u64,
 }
 
 /// A direction with an optional step limit (P§3.4.3, P§3.4.5).
@@ -335,6 +339,8 @@ impl Follower {
                 reset_requested: true,
                 watch_counter: 0,
                 watched: Vec::new(),
+                reposition_left: 0,
+                reposition_after: 0,
             },
             last_points: Vec::new(),
             sensed,
@@ -627,6 +633,32 @@ impl Follower {
                     + n.z * self.jacobian[(2, k)]
             }));
         }
+        // The bounds on the joint-limit term (`joint_limit_keeps_links_off`):
+        // every link within the influence distance may come at most as far
+        // closer as it is beyond its radius plus the link margin (a velocity
+        // damper at one step's scale), so no link is brought within the
+        // margin by it and none already within it closer.
+        let mut bounds = Vec::new();
+        if self.config.joint_limit_keeps_links_off {
+            for p in proximities {
+                if p.distance <= 0.0 {
+                    continue;
+                }
+                let Some(frame) = frames.get(p.link.0) else {
+                    continue;
+                };
+                let in_link = frame.inverse_transform_point(&p.on_link);
+                self.robot
+                    .jacobian_into(frames, p.link, &in_link, &mut self.jacobian);
+                let n = (p.on_link - p.on_model) / p.distance;
+                let row = nalgebra::DVector::from_fn(dof, |k, _| {
+                    n.x * self.jacobian[(0, k)]
+                        + n.y * self.jacobian[(1, k)]
+                        + n.z * self.jacobian[(2, k)]
+                });
+                bounds.push((row, (p.distance - p.radius - margin).max(0.0)));
+            }
+        }
         self.robot
             .jacobian_into(frames, tool_link, tool_in_link, &mut self.jacobian);
         let mut z = reconfiguration(
@@ -641,18 +673,45 @@ impl Follower {
         // three joints have no null space to take it in).
         // It yields to link avoidance where a link is near the model
         // (`joint_limit_yield`): there the null space is the links'.
-        if self.robot.dof() > 3 && self.config.joint_limit_gain > 0.0 {
+        // While repositioning before a give-up (P§3.4.7,
+        // `reposition_steps`) the gain is at least `reposition_gain`.
+        let repositioning = self.progress.reposition_left > 0;
+        if repositioning {
+            self.progress.reposition_left -= 1;
+        }
+        let mut z_bounded = nalgebra::DVector::zeros(dof);
+        if self.robot.dof() > 3 && (self.config.joint_limit_gain > 0.0 || repositioning) {
             let w = largest_link_weight(self.config.objective, proximities, switches, &self.config);
             let share = 1.0 - self.config.joint_limit_yield * w;
-            z += joint_limit_gradient(&self.robot, q, &self.config) * share;
+            let gradient = if repositioning {
+                let config = FollowConfig {
+                    joint_limit_gain: self
+                        .config
+                        .joint_limit_gain
+                        .max(self.config.reposition_gain),
+                    ..self.config
+                };
+                joint_limit_gradient(&self.robot, q, &config)
+            } else {
+                joint_limit_gradient(&self.robot, q, &self.config)
+            };
+            // Bounded by the link guard's rows when asked
+            // (`joint_limit_keeps_links_off`), else summed into z.
+            if self.config.joint_limit_keeps_links_off {
+                z_bounded = gradient * share;
+            } else {
+                z += gradient * share;
+            }
         }
-        actuator_change(
+        actuator_change_bounded(
             &self.robot,
             q,
             &self.jacobian,
             motion,
             &z,
+            &z_bounded,
             &guards,
+            &bounds,
             &self.config,
         )
         .iter()

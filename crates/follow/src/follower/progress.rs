@@ -17,7 +17,7 @@ impl Follower {
 
     pub(super) fn check_progress(&mut self, q: &[Real]) {
         if self.stalled(q) {
-            self.give_up();
+            self.give_up_or_reposition(q);
             return;
         }
         if self.progress.reset_requested || self.progress.stored.len() != q.len() {
@@ -34,8 +34,45 @@ impl Follower {
         let insufficient = self.moved_too_little(q, &self.progress.stored);
         self.progress.stored = q.to_vec();
         if insufficient {
-            self.give_up();
+            self.give_up_or_reposition(q);
         }
+    }
+
+    /// [`Self::give_up`], unless the robot repositions first
+    /// (`FollowConfig::reposition_steps`, our addition to P§3.4.7): a
+    /// redundant robot with a joint in the outer tenth of its range spends
+    /// that many steps with the joint-limit term raised to `reposition_gain`
+    /// instead of giving its goal up (in any mode), and no new repositioning
+    /// starts until twice that many steps after it ended.
+    fn give_up_or_reposition(&mut self, q: &[Real]) {
+        if self.config.reposition_steps > 0
+            && self.robot.dof() > 3
+            && self.progress.reposition_left == 0
+            && self.joint_near_limit(q)
+        {
+            // Once per goal would not hold: the goal's segment and edge are
+            // re-created by most updates (arm4 on block2 gave up a new
+            // segment id every 11 steps, its yaw and wrist roll on ±π).
+            let fresh = self.steps >= self.progress.reposition_after;
+            if fresh {
+                self.progress.reposition_left = self.config.reposition_steps;
+                self.progress.reposition_after =
+                    self.steps + 3 * u64::from(self.config.reposition_steps);
+                self.reset_progress();
+                return;
+            }
+        }
+        self.give_up();
+    }
+
+    /// `true` when a joint with limits lies in the outer tenth of its range.
+    fn joint_near_limit(&self, q: &[Real]) -> bool {
+        self.robot.limits().iter().zip(q).any(|(l, &qk)| {
+            l.is_some_and(|l| {
+                let half = 0.5 * (l.max - l.min);
+                half > 0.0 && half.is_finite() && ((qk - 0.5 * (l.max + l.min)) / half).abs() > 0.9
+            })
+        })
     }
 
     /// The stall watch (our addition to P§3.4.7): every [`STALL_CHECKS`]
