@@ -136,8 +136,8 @@ impl Materials {
     /// the mapped surface) would give the LRC an observation of that passes
     /// its geometric checks (range, incidence, returns and span in the fit
     /// window, flatness), as [`Materials::observe`] forms it; `None`, with
-    /// no other disc checked, when disc `first` (checked first) is not among
-    /// them.
+    /// no other disc checked, when disc `first` (checked first) fails those
+    /// checks. `first` is in the list only if it is among `candidates`.
     pub(crate) fn usable(
         &self,
         d: &DiscMap,
