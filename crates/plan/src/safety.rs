@@ -341,10 +341,14 @@ impl MotionChecker for SafetyChecker<'_> {
     }
 }
 
-/// `dist(Q) > 1` at `q` ([`SafetyChecker`]'s `pose_ok`).
+/// `dist(Q) > 1` at `q` ([`SafetyChecker`]'s `pose_ok`). Resolved only up
+/// to the next number above 1: a voxel nearer than that is at or below 1
+/// and ends the search, and no voxel farther can change the answer, so the
+/// ellipsoids' boxes are those of `dist = 1`, a third of the cap's across
+/// (the same answers as measuring up to the cap, in a ninth of the rows).
 fn safe_pose(safety: &Safety, grid: &OccupancyGrid, q: &[Real]) -> bool {
     safety
-        .dist_of_links(grid, q, 1..usize::MAX, safety.cap, 1.0)
+        .dist_of_links(grid, q, 1..usize::MAX, 1.0f64.next_up(), 1.0)
         .is_ok_and(|d| d > 1.0)
 }
 

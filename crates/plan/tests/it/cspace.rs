@@ -457,3 +457,33 @@ fn answers_together_are_the_answers_one_by_one() {
     // Some reached, some not (29 of 40).
     assert!((3..40).contains(&found), "{found}");
 }
+
+/// A pose is safe for the motion checker exactly when `dist(Q)` measured
+/// up to the cap is above 1 (the checker resolves it only up to 1), on
+/// poses on both sides of 1 and some close to it.
+#[test]
+fn a_safe_pose_is_one_whose_full_dist_is_above_one() {
+    use plan::MotionChecker;
+    let robot = vm6083();
+    let config = PlanConfig::default();
+    let safety = Safety::new(robot.clone(), Isometry3::identity(), &config, vec![1.0; 6]).unwrap();
+    let g = explored_grid(|c| c.z > 1.2 || (c - Point3::new(-0.4, 0.3, 0.3)).norm() < 0.2);
+    let mut checker = safety.checker(&g);
+    let mut rng = ChaCha8Rng::seed_from_u64(23);
+    let (mut safe, mut unsafe_, mut near) = (0, 0, 0);
+    for _ in 0..400 {
+        let q = random_q(&robot, &mut rng);
+        let full = safety.dist(&g, &q).unwrap();
+        assert_eq!(checker.pose_ok(&q), full > 1.0, "q {q:?}: dist {full}");
+        if full > 1.0 {
+            safe += 1;
+        } else {
+            unsafe_ += 1;
+        }
+        near += usize::from((0.8..1.5).contains(&full));
+    }
+    assert!(
+        safe > 20 && unsafe_ > 20 && near > 5,
+        "{safe} {unsafe_} {near}"
+    );
+}
