@@ -83,6 +83,10 @@ pub fn train_lrc(
 /// radius of a target, as an LRC observation.
 pub struct PatchIndex<'a> {
     points: &'a [SweepPoint],
+    /// Per point, its return (`None` for a point at its ray's origin): made
+    /// once here, not once per patch that holds the point (a point of a
+    /// predicted sweep is in about ten of the patches Stage Two looks at).
+    returns: Vec<Option<ObservedReturn>>,
     tree: kiddo::ImmutableKdTree<Real, 3>,
 }
 
@@ -101,8 +105,21 @@ impl<'a> PatchIndex<'a> {
             .iter()
             .map(|p| [p.point.x, p.point.y, p.point.z])
             .collect();
+        let returns = points
+            .iter()
+            .map(|p| {
+                let (direction, range_m) = UnitVector3::try_new_and_get(p.point - p.origin, 1e-12)?;
+                Some(ObservedReturn {
+                    origin: p.origin,
+                    direction,
+                    range_m,
+                    intensity: p.intensity,
+                })
+            })
+            .collect();
         Self {
             points,
+            returns,
             tree: kiddo::ImmutableKdTree::new_from_slice(&coords),
         }
     }
@@ -156,28 +173,26 @@ impl<'a> PatchIndex<'a> {
             &[target.x, target.y, target.z],
             radius_m * radius_m,
         );
-        // Point indices sort faster as `u32` than the neighbours do (2³²
-        // sweep points, at least 56 bytes each, would take 240 GB).
-        let mut idx: Vec<u32> = near.iter().map(|n| n.item as u32).collect();
-        if in_point_order {
-            idx.sort_unstable();
-        }
+        let on_side =
+            |r: &ObservedReturn| seen_side.is_none_or(|n| (r.origin - target).dot(n) > 0.0);
         obs.returns.clear();
-        obs.returns.extend(
-            idx.iter()
-                .map(|&k| &self.points[k as usize])
-                .filter(|p| seen_side.is_none_or(|n| (p.origin - target).dot(n) > 0.0))
-                .filter_map(|p| {
-                    let (direction, range_m) =
-                        UnitVector3::try_new_and_get(p.point - p.origin, 1e-12)?;
-                    Some(ObservedReturn {
-                        origin: p.origin,
-                        direction,
-                        range_m,
-                        intensity: p.intensity,
-                    })
-                }),
-        );
+        if in_point_order {
+            // Point indices sort faster as `u32` than the neighbours do (2³²
+            // sweep points, at least 56 bytes each, would take 240 GB).
+            let mut idx: Vec<u32> = near.iter().map(|n| n.item as u32).collect();
+            idx.sort_unstable();
+            obs.returns.extend(
+                idx.iter()
+                    .filter_map(|&k| self.returns[k as usize])
+                    .filter(on_side),
+            );
+        } else {
+            obs.returns.extend(
+                near.iter()
+                    .filter_map(|n| self.returns[n.item as usize])
+                    .filter(on_side),
+            );
+        }
         obs.target = Some(*target);
     }
 }
