@@ -434,16 +434,12 @@ impl TsdfMap {
                     let Some(band) = Band::new(&cfg, &rays[ray as usize]) else {
                         continue;
                     };
-                    band.walk(|key, sdf, w| {
-                        let k = key.coords();
-                        let l = [k[0] - first[0], k[1] - first[1], k[2] - first[2]];
-                        if l.iter().all(|v| (*v as u32) < bs as u32) {
-                            let v = &mut block.voxels[(l[0] + bs * (l[1] + bs * l[2])) as usize];
-                            let total = v.weight + w;
-                            v.distance_m = (v.distance_m * v.weight + sdf * w) / total;
-                            v.weight = total.min(max_w);
-                            applied += 1;
-                        }
+                    band.walk_within(first, bs, |l, sdf, w| {
+                        let v = &mut block.voxels[(l[0] + bs * (l[1] + bs * l[2])) as usize];
+                        let total = v.weight + w;
+                        v.distance_m = (v.distance_m * v.weight + sdf * w) / total;
+                        v.weight = total.min(max_w);
+                        applied += 1;
                     });
                 }
                 applied
@@ -771,27 +767,37 @@ impl Band {
     }
 
     /// Visit the band's voxels (the [`traverse`](crate::traverse) walk from
-    /// `τ` before the point to `τ` behind it) with their projective distance
-    /// in metres (clamped to `τ`) and weight; voxels more than `τ` behind the
-    /// surface or of zero weight are skipped.
+    /// `τ` before the point to `τ` behind it) that lie in the cube of `size`
+    /// voxels from key `first`, each by its offset from `first`, with its
+    /// projective distance in metres (clamped to `τ`) and weight; voxels
+    /// more than `τ` behind the surface or of zero weight are skipped. The
+    /// walk ends when it leaves the cube: it is monotone per axis, so a cube
+    /// once left is never re-entered.
     #[inline]
-    fn walk(&self, mut visit: impl FnMut(VoxelKey, f32, f32)) {
+    fn walk_within(&self, first: [i32; 3], size: i32, mut visit: impl FnMut([i32; 3], f32, f32)) {
         let tau = self.truncation;
         let mut w = Walk::new(self.start, self.end);
+        let mut entered = false;
         loop {
             let c = w.cell();
-            let sdf = (0..3)
-                .map(|ax| (self.point[ax] - (c[ax] as Real + 0.5)) * self.dir[ax])
-                .sum::<Real>();
-            if sdf >= -tau {
-                let mut weight = self.base_weight;
-                if self.dropoff && sdf < -1.0 {
-                    weight *= ((tau + sdf) / (tau - 1.0)).max(0.0);
+            // Cells are within a billion voxels of the origin (`Band::new`).
+            let l = [0, 1, 2].map(|ax| c[ax] as i32 - first[ax]);
+            if l.iter().all(|v| (*v as u32) < size as u32) {
+                entered = true;
+                let sdf = (0..3)
+                    .map(|ax| (self.point[ax] - (c[ax] as Real + 0.5)) * self.dir[ax])
+                    .sum::<Real>();
+                if sdf >= -tau {
+                    let mut weight = self.base_weight;
+                    if self.dropoff && sdf < -1.0 {
+                        weight *= ((tau + sdf) / (tau - 1.0)).max(0.0);
+                    }
+                    if weight > 0.0 {
+                        visit(l, (sdf.min(tau) * self.voxel_m) as f32, weight as f32);
+                    }
                 }
-                if weight > 0.0 {
-                    let key = VoxelKey::new(c[0] as i32, c[1] as i32, c[2] as i32);
-                    visit(key, (sdf.min(tau) * self.voxel_m) as f32, weight as f32);
-                }
+            } else if entered {
+                break;
             }
             if !w.advance() {
                 break;

@@ -330,3 +330,44 @@ fn merged_integrator_bundles_returns_per_voxel() {
     m2.integrate_sweep(&s);
     assert_eq!(m2.extract_mesh(), mesh);
 }
+
+/// Every voxel of the map, with its value: blocks of any size hold the same
+/// voxels with the same values to the bit (each voxel's updates are applied
+/// in ray order, whichever block it falls in); with blocks of 2 voxels most
+/// bands cross several blocks, with 64 most lie in one.
+#[test]
+fn the_block_size_does_not_change_any_voxel() {
+    let world = scene::builtin::scene("bridge1")
+        .unwrap()
+        .build(Path::new("."))
+        .unwrap();
+    let s = sweep(&world, &bridge_poses()[2], true, 7);
+    let voxels = |block_size: usize| {
+        let mut tsdf = TsdfMap::new(TsdfConfig {
+            block_size,
+            dropoff: true,
+            ..TsdfConfig::default()
+        })
+        .unwrap();
+        tsdf.integrate_sweep(&s);
+        let bs = block_size as i32;
+        let mut out = std::collections::BTreeMap::new();
+        for b in tsdf.block_keys() {
+            let f = b.first_voxel(bs).coords();
+            for (x, y, z) in
+                (0..bs).flat_map(|x| (0..bs).flat_map(move |y| (0..bs).map(move |z| (x, y, z))))
+            {
+                let key = map::VoxelKey::new(f[0] + x, f[1] + y, f[2] + z);
+                let v = tsdf.voxel(key).unwrap();
+                if v.weight > 0.0 {
+                    out.insert(key, (v.distance_m.to_bits(), v.weight.to_bits()));
+                }
+            }
+        }
+        out
+    };
+    let small = voxels(2);
+    assert!(small.len() > 10_000, "{}", small.len());
+    assert_eq!(small, voxels(8));
+    assert_eq!(small, voxels(64));
+}
