@@ -104,8 +104,7 @@ impl Targets {
 
     /// The cost of `order` under `w` (eq. A.9).
     pub fn cost(&self, order: &[usize], w: Weights) -> Real {
-        let (d, m) = self.totals(order);
-        w.alpha * d + w.beta * m
+        w.cost_of(self.totals(order))
     }
 
     fn step(&self, a: usize, b: usize, w: Weights) -> Real {
@@ -145,12 +144,24 @@ impl Weights {
 
     /// [`Weights::normalising`] of the mean totals of `orders`.
     pub fn of_population(targets: &Targets, orders: &[Vec<usize>]) -> Self {
-        let n = orders.len().max(1) as Real;
-        let (d, m) = orders.iter().fold((0.0, 0.0), |(d, m), o| {
-            let (a, b) = targets.totals(o);
-            (d + a, m + b)
-        });
+        let totals: Vec<(Real, Real)> = orders.iter().map(|o| targets.totals(o)).collect();
+        Self::of_totals(&totals)
+    }
+
+    /// [`Weights::of_population`] from the population's
+    /// [`Targets::totals`], each computed once.
+    fn of_totals(totals: &[(Real, Real)]) -> Self {
+        let n = totals.len().max(1) as Real;
+        let (d, m) = totals
+            .iter()
+            .fold((0.0, 0.0), |(d, m), (a, b)| (d + a, m + b));
         Self::normalising(d / n, m / n)
+    }
+
+    /// The cost (eq. A.9) of an order of these [`Targets::totals`]: what
+    /// [`Targets::cost`] gives for it under these weights.
+    fn cost_of(self, (d, m): (Real, Real)) -> Real {
+        self.alpha * d + self.beta * m
     }
 }
 
@@ -285,12 +296,12 @@ pub fn genetic(targets: &Targets, initial: &[usize], compare: Weights, cfg: &GaC
     }
     let mut history = Vec::with_capacity(cfg.generations);
     let mut weights = compare;
+    // Each individual's totals once a generation: the weights, the fitness
+    // and the best-so-far check all come from them.
+    let mut totals: Vec<(Real, Real)> = population.iter().map(|c| targets.totals(c)).collect();
     for _ in 0..cfg.generations {
-        weights = Weights::of_population(targets, &population);
-        let fitness: Vec<Real> = population
-            .iter()
-            .map(|c| targets.cost(c, weights))
-            .collect();
+        weights = Weights::of_totals(&totals);
+        let fitness: Vec<Real> = totals.iter().map(|&t| weights.cost_of(t)).collect();
         let pool = tournament(&(0..size).collect::<Vec<_>>(), &fitness, &mut rng);
         let reproduced = tournament(&pool, &fitness, &mut rng);
         let mut next: Vec<Vec<usize>> = reproduced.iter().map(|&i| population[i].clone()).collect();
@@ -306,8 +317,9 @@ pub fn genetic(targets: &Targets, initial: &[usize], compare: Weights, cfg: &GaC
             next.push(c);
         }
         population = next;
-        for c in &population {
-            let cost = targets.cost(c, compare);
+        totals = population.iter().map(|c| targets.totals(c)).collect();
+        for (c, &t) in population.iter().zip(&totals) {
+            let cost = compare.cost_of(t);
             if cost < best_cost {
                 best_cost = cost;
                 best.clone_from(c);
