@@ -125,6 +125,7 @@ pub fn link_proximities(
                     model: 0.0,
                     initial: 0.0,
                     object_faces: &[],
+                    convex_edge: 0.0,
                 };
                 model_nearest(model, none, &placed, &mut best, &mut pair);
                 if let Some((l, s)) = pair {

@@ -477,6 +477,35 @@ impl Placed {
         }
     }
 
+    /// Closest points between the shape (less its radius) and segment `s`:
+    /// `(distance, on the shape, on s)`, as [`Self::to_point`] for `limit`.
+    pub(crate) fn to_segment(&self, s: &Segment3, limit: Real) -> (Real, Point3, Point3) {
+        match self {
+            Self::Capsule { axis, .. } => {
+                let (ta, ts, d) = closest_segment_segment(axis, s);
+                (d, axis.point_at(ta), s.point_at(ts))
+            }
+            Self::Mesh { mesh, pose, keep } => {
+                let local = Segment3::new(
+                    pose.inverse_transform_point(&s.a),
+                    pose.inverse_transform_point(&s.b),
+                );
+                let sb = Aabb::new(local.a, local.b);
+                let mut best = (limit, s.a, s.a);
+                for (k, (t, b)) in mesh.tris.iter().zip(&mesh.boxes).enumerate() {
+                    if keep.as_ref().is_some_and(|m| !m[k]) || box_distance(b, &sb) >= best.0 {
+                        continue;
+                    }
+                    let (d, on_t, on_s) = closest_triangle_segment(t, &local);
+                    if d < best.0 {
+                        best = (d, pose * on_t, pose * on_s);
+                    }
+                }
+                best
+            }
+        }
+    }
+
     /// Closest points between the shape (less its radius) and the planar
     /// convex quadrilateral `q` (normal `n`), as [`Self::to_polygon`].
     pub(crate) fn to_quad(

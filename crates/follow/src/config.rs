@@ -197,6 +197,14 @@ pub struct FollowConfig {
     /// in its plane, metres: a brim that keeps the links from passing round
     /// the segment's edge to behind it (0: the segments as they are).
     pub guard_initial_extension_m: Real,
+    /// The guard demands this much more clearance, metres, from every
+    /// convex fold of the model: a shared edge, of a polygon that is not an
+    /// initial segment, whose neighbour lies behind the polygon's plane (0,
+    /// the default: no more than from the rest). Under range noise a fitted
+    /// plane tilts and the model's folds lie inside the true edges, by up to
+    /// 20 mm on block2's vertical edges (see [`crate::guard`]). Unshared
+    /// edges have their strip ([`Self::guard_edge_extension_m`]) instead.
+    pub guard_convex_edge_margin_m: Real,
     /// How current edge following cuts slices (P§3.4.3): `thesis` (λ/2
     /// wide) or `lattice` (width from the control point's sensor lattice).
     pub slices: SliceRule,
@@ -236,6 +244,7 @@ impl Default for FollowConfig {
             guard_recent_sets: 10,
             guard_edge_extension_m: 0.025,
             guard_initial_extension_m: 0.2,
+            guard_convex_edge_margin_m: 0.0,
             slices: SliceRule::Thesis,
             slice_line: SliceLineRule::Thesis,
             gap_targets: GapTargetRule::Thesis,
@@ -339,6 +348,15 @@ impl FollowConfig {
                 "guard_initial_extension_m",
                 "a distance in 0..=1",
                 self.guard_initial_extension_m.to_string(),
+            );
+        }
+        if !(self.guard_convex_edge_margin_m.is_finite()
+            && (0.0..=1.0).contains(&self.guard_convex_edge_margin_m))
+        {
+            return bad(
+                "guard_convex_edge_margin_m",
+                "a distance in 0..=1",
+                self.guard_convex_edge_margin_m.to_string(),
             );
         }
         if self.guard_recent_sets > 1000 {

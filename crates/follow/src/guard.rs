@@ -20,7 +20,13 @@
 //!   of [`FollowConfig::guard_initial_extension_m`] beyond every unshared edge
 //!   of an initial segment (a table: no link passes round its edge to behind it),
 //!   except the object's own faces given a priori
-//!   ([`crate::Follower::mark_object_faces`]).
+//!   ([`crate::Follower::mark_object_faces`]);
+//! * at a convex fold of the model (a shared edge whose neighbour lies behind
+//!   the polygon's plane), optionally [`FollowConfig::guard_convex_edge_margin_m`]
+//!   more clearance (off by default): the fold is where two fitted planes
+//!   meet, and under range noise a plane tilted by 0.5–2° put it 5–23 mm
+//!   inside the true edge (arm4 on noisy block2, where the last link's tip
+//!   came within 15–19 mm of the true vertical edges beside the −x face).
 //!
 //! Links are checked as the robot describes them: capsules, and collision
 //! meshes triangle by triangle, never a bound around a mesh (a
@@ -40,7 +46,7 @@
 use crate::actuator::ceiling_scale;
 use crate::body::{LinkBody, Placed};
 use crate::config::FollowConfig;
-use geom::{Isometry3, Point3, Real, Segment3};
+use geom::{Isometry3, Point3, Real, Segment3, Vector3};
 use nalgebra::{DVector, Matrix3, Matrix6xX};
 pub use record::follow::GuardCounts;
 use robot::Robot;
@@ -103,6 +109,7 @@ pub(crate) struct Guard {
     margin: Real,
     extension: Real,
     initial_extension: Real,
+    convex_edge: Real,
     /// Initial segments that are the object's own faces (given a priori),
     /// which get no brim: sorted.
     object_faces: Vec<SegmentId>,
@@ -121,6 +128,7 @@ impl Guard {
             margin: config.guard_margin_m,
             extension: config.guard_edge_extension_m,
             initial_extension: config.guard_initial_extension_m,
+            convex_edge: config.guard_convex_edge_margin_m,
             object_faces: Vec::new(),
             keep_sets: config.guard_recent_sets as usize,
             given: Vec::new(),
@@ -202,6 +210,7 @@ impl Guard {
                 model: self.extension,
                 initial: self.initial_extension,
                 object_faces: &self.object_faces,
+                convex_edge: self.convex_edge,
             },
             link,
             &mut d,
@@ -514,6 +523,9 @@ pub(crate) struct Extensions<'a> {
     pub(crate) initial: Real,
     /// ... except those of these (sorted): none.
     pub(crate) object_faces: &'a [SegmentId],
+    /// How much nearer than it is a convex shared edge of a polygon that is
+    /// not an initial segment counts (0: as near as it is).
+    pub(crate) convex_edge: Real,
 }
 
 /// Lowers `best` (and sets `pair`: on the axis, on the model) to the
@@ -526,7 +538,11 @@ pub(crate) struct Extensions<'a> {
 /// a convex edge whose other face was not modelled yet, arm4's last link met
 /// block1's true face 25 mm beyond its polygon); a strip also stands across
 /// a convex edge into the free space the robot follows in, so it is only
-/// λ/2 wide by default ([`FollowConfig::guard_edge_extension_m`]).
+/// λ/2 wide by default ([`FollowConfig::guard_edge_extension_m`]). A shared
+/// edge whose neighbour lies behind the polygon's plane (a convex fold)
+/// counts `ext.convex_edge` nearer than it is: the model's fold lies where
+/// two fitted planes meet, and a tilted plane puts it inside the true edge
+/// ([`FollowConfig::guard_convex_edge_margin_m`]).
 pub(crate) fn model_nearest(
     model: &SurfaceModel,
     ext: Extensions<'_>,
@@ -535,7 +551,8 @@ pub(crate) fn model_nearest(
     pair: &mut Option<(Point3, Point3)>,
 ) {
     let (mid, half) = link.centre_reach();
-    let mut ids = model.segments_near(&mid, half + *best + ext.model.max(ext.initial));
+    let widest = ext.model.max(ext.initial).max(ext.convex_edge);
+    let mut ids = model.segments_near(&mid, half + *best + widest);
     ids.sort_unstable();
     let offer = |best: &mut Real, pair: &mut Option<_>, d: Real, on_link, on_model| {
         if d < *best {
@@ -561,27 +578,51 @@ pub(crate) fn model_nearest(
                 } else {
                     ext.initial
                 };
-                let (d, on_link, on_model) = link.to_polygon(g, *best + extend.max(0.0));
+                let extend = extend.max(0.0);
+                let convex = if g.is_initial() {
+                    0.0
+                } else {
+                    ext.convex_edge.max(0.0)
+                };
+                let wider = extend.max(convex);
+                let (d, on_link, on_model) = link.to_polygon(g, *best + wider);
                 offer(best, pair, d, on_link, on_model);
-                if extend <= 0.0 || d - extend >= *best {
+                if wider <= 0.0 || d - wider >= *best {
                     continue;
                 }
                 let n = g.normal().into_inner();
                 for (i, node) in g.nodes().iter().enumerate() {
-                    if node.edge.share.is_some() {
-                        continue;
-                    }
                     let Some((a, b)) = g.edge_points(i) else {
                         continue;
                     };
-                    let de = link.lower_bound_to_segment(&Segment3::new(a, b), *best + extend);
-                    if de - extend >= *best {
+                    let share = node.edge.share;
+                    // A strip past an unshared edge; the extra clearance at
+                    // a shared one, when it proves a convex fold.
+                    let strip = if share.is_none() { extend } else { 0.0 };
+                    let fold = if share.is_some() { convex } else { 0.0 };
+                    let wide = strip.max(fold);
+                    if wide <= 0.0 {
+                        continue;
+                    }
+                    let edge = Segment3::new(a, b);
+                    let de = link.lower_bound_to_segment(&edge, *best + wide);
+                    if de - wide >= *best {
+                        continue;
+                    }
+                    if let Some(sh) = share
+                        && fold > 0.0
+                        && neighbour_behind(model, sh.neighbour, &a, &n)
+                    {
+                        let (d, on_link, on_edge) = link.to_segment(&edge, *best + fold);
+                        offer(best, pair, d - fold, on_link, on_edge);
+                    }
+                    if strip <= 0.0 || de - strip >= *best {
                         continue;
                     }
                     let Some(out) = (b - a).cross(&n).try_normalize(1e-12) else {
                         continue;
                     };
-                    let out = out * extend;
+                    let out = out * strip;
                     let (d, on_link, on_strip) = link.to_quad(&[a, b, b + out, a + out], &n, *best);
                     offer(best, pair, d, on_link, on_strip);
                 }
@@ -589,6 +630,22 @@ pub(crate) fn model_nearest(
         }
     }
 }
+
+/// Whether polygon `neighbour` (across a shared edge through `a` of a
+/// polygon with normal `n`) lies behind that polygon's plane, so that the
+/// edge is convex: its centroid more than 1° below the plane as seen from
+/// `a`.
+fn neighbour_behind(model: &SurfaceModel, neighbour: SegmentId, a: &Point3, n: &Vector3) -> bool {
+    let Some(SegmentKind::Polygon(h)) = model.segment(neighbour).map(surface::Segment::kind) else {
+        return false;
+    };
+    let to = h.centroid() - a;
+    to.dot(n) < -FOLD_SINE * to.norm()
+}
+
+/// The sine of the smallest fold a shared edge is convex by, for
+/// [`Extensions::convex_edge`]: 1°.
+const FOLD_SINE: Real = 0.017_452;
 
 #[cfg(test)]
 mod tests {
@@ -681,6 +738,177 @@ mod tests {
         guard.set_object_faces(&[table]);
         let (dq, action) = check(&robot, &mut guard, &model, &q, drop);
         assert_eq!((dq[2], action), (-0.15, GuardAction::Taken));
+    }
+
+    /// Two polygons (not initial segments) meeting at a fold along the line
+    /// x = z = 0, with their shared edge formed there (P§2.6): a top
+    /// (z = 0, x ≤ 0, facing +z) and a side (x = 0, z ≤ 0, facing +x) make
+    /// a convex fold, a floor (z = 0, x ≥ 0) and a wall (x = 0, z ≥ 0) a
+    /// concave one.
+    fn fold(convex: bool) -> SurfaceModel {
+        use surface::testing::{ModelInternals, ShareOutcome};
+        let p = Point3::new;
+        let mut m = SurfaceModel::new(SurfaceConfig::default()).unwrap();
+        let (a, b) = if convex {
+            (
+                m.insert_test_polygon(
+                    &[
+                        p(-0.5, -0.4, 0.0),
+                        p(-0.02, -0.4, 0.0),
+                        p(-0.02, 0.3, 0.0),
+                        p(-0.5, 0.3, 0.0),
+                    ],
+                    200,
+                ),
+                m.insert_test_polygon(
+                    &[
+                        p(0.0, -0.3, -0.8),
+                        p(0.0, 0.4, -0.8),
+                        p(0.0, 0.4, -0.03),
+                        p(0.0, -0.3, -0.03),
+                    ],
+                    200,
+                ),
+            )
+        } else {
+            (
+                m.insert_test_polygon(
+                    &[
+                        p(0.02, -0.3, 0.0),
+                        p(0.6, -0.3, 0.0),
+                        p(0.6, 0.3, 0.0),
+                        p(0.02, 0.3, 0.0),
+                    ],
+                    200,
+                ),
+                m.insert_test_polygon(
+                    &[
+                        p(0.0, -0.3, 0.03),
+                        p(0.0, 0.3, 0.03),
+                        p(0.0, 0.3, 0.4),
+                        p(0.0, -0.3, 0.4),
+                    ],
+                    200,
+                ),
+            )
+        };
+        assert_eq!(m.form_shared_edges(a, b), ShareOutcome::Formed(1));
+        m
+    }
+
+    /// `guard_convex_edge_margin_m` = m: the guard keeps the margin plus m
+    /// from a convex fold of the model (a shared edge), and only the margin
+    /// from a concave fold or an unshared edge. The oracle is the distance
+    /// from point3's centre to the line x = z = 0 (or to the unshared edge's
+    /// line), by hand.
+    #[test]
+    fn convex_edges_are_kept_the_extra_margin_off() {
+        let robot = robot::builtin("point3").unwrap();
+        let rule = |m: Real| FollowConfig {
+            guard_convex_edge_margin_m: m,
+            ..FollowConfig::default()
+        };
+        let edge_distance = |q: &[Real]| q[0].hypot(q[2]);
+        // Convex fold. From (0.07, 0, 0.07), 0.0990 from the edge, a move of
+        // (−0.03, 0, −0.03) ends 0.0566 from it: 0.0366 clear of the sphere,
+        // taken without the rule; with m = 0.025 it must end ≥ 0.02 + 0.02 +
+        // 0.025 = 0.065 off, which half the move does (0.0778).
+        let model = fold(true);
+        let q = [0.07, 0.0, 0.07];
+        let dive = vec![-0.03, 0.0, -0.03];
+        let (dq, action) = check(
+            &robot,
+            &mut Guard::new(&rule(0.0)),
+            &model,
+            &q,
+            dive.clone(),
+        );
+        assert_eq!((dq.clone(), action), (dive.clone(), GuardAction::Taken));
+        let (dq, action) = check(
+            &robot,
+            &mut Guard::new(&rule(0.025)),
+            &model,
+            &q,
+            dive.clone(),
+        );
+        assert_eq!(action, GuardAction::Scaled, "{dq:?}");
+        assert!(
+            (dq[0] + 0.015).abs() < 1e-12 && (dq[2] + 0.015).abs() < 1e-12,
+            "{dq:?}"
+        );
+        let end = [q[0] + dq[0], 0.0, q[2] + dq[2]];
+        assert!(edge_distance(&end) - 0.02 - 0.025 >= 0.02);
+        // Over the top's inside, 0.1 m from the fold, the rule changes
+        // nothing: a drop to 0.045 above the top (0.025 clear) is taken.
+        let q = [-0.1, 0.0, 0.07];
+        let drop = vec![0.0, 0.0, -0.025];
+        let (dq, action) = check(
+            &robot,
+            &mut Guard::new(&rule(0.025)),
+            &model,
+            &q,
+            drop.clone(),
+        );
+        assert_eq!((dq, action), (drop, GuardAction::Taken));
+
+        // Concave fold, m = 0.05: from (0.07, 0, 0.07) to (0.05, 0, 0.05) the
+        // floor and the wall end 0.05 off (0.03 clear): taken. Were the edge
+        // counted (0.0707 off, less 0.05), it would be 0.0007 clear.
+        let model = fold(false);
+        let q = [0.07, 0.0, 0.07];
+        let dive = vec![-0.02, 0.0, -0.02];
+        let (dq, action) = check(
+            &robot,
+            &mut Guard::new(&rule(0.05)),
+            &model,
+            &q,
+            dive.clone(),
+        );
+        assert_eq!((dq, action), (dive, GuardAction::Taken));
+
+        // An unshared edge: the top alone, its edge at x = −0.02, with no
+        // strip past it. From (0.05, 0, 0.08) to (0.03, 0, 0.02) the edge
+        // comes to √(0.05² + 0.02²) = 0.0539 (nearest at the end): 0.0339
+        // clear, taken with m = 0.025 too (counted m nearer, it would be
+        // 0.0089 clear).
+        let mut top = SurfaceModel::new(SurfaceConfig::default()).unwrap();
+        {
+            use surface::testing::ModelInternals;
+            let p = Point3::new;
+            top.insert_test_polygon(
+                &[
+                    p(-0.5, -0.4, 0.0),
+                    p(-0.02, -0.4, 0.0),
+                    p(-0.02, 0.3, 0.0),
+                    p(-0.5, 0.3, 0.0),
+                ],
+                200,
+            );
+        }
+        let no_strip = |m: Real| FollowConfig {
+            guard_edge_extension_m: 0.0,
+            ..rule(m)
+        };
+        let q = [0.05, 0.0, 0.08];
+        let dive = vec![-0.02, 0.0, -0.06];
+        let (dq, action) = check(
+            &robot,
+            &mut Guard::new(&no_strip(0.0)),
+            &top,
+            &q,
+            dive.clone(),
+        );
+        assert_eq!((dq, action), (dive.clone(), GuardAction::Taken));
+        let (dq, action) = check(
+            &robot,
+            &mut Guard::new(&no_strip(0.025)),
+            &top,
+            &q,
+            dive.clone(),
+        );
+        assert_eq!((dq, action), (dive, GuardAction::Taken));
+        let end = [q[0] - 0.02 + 0.02, 0.0, q[2] - 0.06];
+        assert!((edge_distance(&end) - 0.02 - 0.033_852).abs() < 1e-6);
     }
 
     /// point3 (a sphere of radius 0.02) 0.06 above the floor asked to drop
