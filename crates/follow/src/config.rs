@@ -201,8 +201,8 @@ pub struct FollowConfig {
     /// convex fold of the model: a shared edge, of a polygon that is not an
     /// initial segment, whose neighbour lies behind the polygon's plane (0,
     /// the default: no more than from the rest). Under range noise a fitted
-    /// plane tilts and the model's folds lie inside the true edges, by up to
-    /// 20 mm on block2's vertical edges (see [`crate::guard`]). Unshared
+    /// plane tilts and the model's folds lie inside the true edges, by 5–23
+    /// mm on block2's vertical edges (see [`crate::guard`]). Unshared
     /// edges have their strip ([`Self::guard_edge_extension_m`]) instead.
     pub guard_convex_edge_margin_m: Real,
     /// How current edge following cuts slices (P§3.4.3): `thesis` (λ/2

@@ -24,7 +24,7 @@
 //! * at a convex fold of the model (a shared edge whose neighbour lies behind
 //!   the polygon's plane), optionally [`FollowConfig::guard_convex_edge_margin_m`]
 //!   more clearance (off by default): the fold is where two fitted planes
-//!   meet, and under range noise a plane tilted by 0.5–2° put it 5–23 mm
+//!   meet, and under range noise a plane tilted by 0.5–2.6° put it 5–23 mm
 //!   inside the true edge (arm4 on noisy block2, where the last link's tip
 //!   came within 15–19 mm of the true vertical edges beside the −x face).
 //!
