@@ -13,9 +13,9 @@ use numpy::PyArray2;
 use numpy::ndarray::Array2;
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
+use scenario::job::explore::{ExploreOptions, OracleOption};
 use scenario::{LoadedScenario, Scenario};
 use serde::Deserialize;
-use sim::explore_job::{ExploreOptions, OracleOption};
 use sim::follow_job::{DEFAULT_MAX_SETS, FollowRunOptions, FollowSetup};
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -117,19 +117,19 @@ fn job_error(e: &dyn std::fmt::Display, io: bool) -> PyErr {
 
 /// Whether a simulator error is about a file.
 fn is_io(e: &sim::SimError) -> bool {
-    matches!(e, sim::SimError::Record(record::RecordError::File { .. }))
+    matches!(e, sim::SimError::Record(r) if matches!(**r, record::RecordError::File { .. }))
 }
 
 /// The report of a staged explore run folder, when asked for, in the two
-/// steps of `sim::explore_job::Finish`.
+/// steps of `scenario::job::explore::Finish`.
 fn finish_explore(
     report: bool,
-) -> impl FnMut(&record::Staging) -> Result<sim::explore_job::Complete, String> {
+) -> impl FnMut(&record::Staging) -> Result<scenario::job::explore::Complete, String> {
     move |staging| {
         if report {
             report::in_two_steps(staging)
         } else {
-            sim::explore_job::no_files(staging)
+            scenario::job::explore::no_files(staging)
         }
     }
 }

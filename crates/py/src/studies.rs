@@ -12,7 +12,7 @@ use numpy::{PyArray1, PyArray2, PyArrayDescrMethods, PyArrayMethods, PyUntypedAr
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use scenario::Scenario;
-use sim::explore_job::{ExploreOptions, explore_setup};
+use scenario::job::explore::{ExploreOptions, explore_setup};
 use sim::oracle::{MAX_CANDIDATES, candidate_coverage as coverage_of_candidates};
 use std::time::Instant;
 

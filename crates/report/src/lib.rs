@@ -100,7 +100,7 @@ pub type CompleteStaged = Box<dyn FnOnce(&Staging) -> Result<(), String>>;
 
 /// [`draft_staged`], returning the step that completes and writes the page
 /// once the staged `run.json` is final: the two steps an explore job
-/// finishes its folder with (`sim::explore_job::Finish`).
+/// finishes its folder with (`scenario::job::explore::Finish`).
 pub fn in_two_steps(staging: &Staging) -> Result<CompleteStaged, String> {
     let draft = draft_staged(staging).map_err(|e| e.to_string())?;
     Ok(Box::new(move |staging: &Staging| {

@@ -10,7 +10,7 @@
 //! within the joint limits join the pool, seeded, to see how much a denser
 //! pool would add).
 
-use sim::explore_job::{ExploreOptions, explore_setup};
+use scenario::job::explore::{ExploreOptions, explore_setup};
 use sim::oracle::{OraclePool, OracleRule};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

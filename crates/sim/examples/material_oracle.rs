@@ -8,7 +8,7 @@
 //! (default `bridge1`; the C-space model and the LRC of seed 0 from their
 //! default caches).
 
-use sim::explore_job::{ExploreOptions, explore_setup};
+use scenario::job::explore::{ExploreOptions, explore_setup};
 use sim::material_oracle::MaterialPool;
 use std::time::Instant;
 

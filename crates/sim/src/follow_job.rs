@@ -18,7 +18,6 @@
 //! columns are written empty and those times are 0, so every file repeats.
 
 use crate::follow_reach::{AprioriFace, unreachable_faces};
-use crate::rig::bag_event;
 use crate::scan_check::{
     ModelScanConfig, ModelScanScore, ScanIndex, model_to_scan, scan_clearance,
 };
@@ -33,6 +32,7 @@ use record::follow::{FollowSummary, StepTimeStats};
 use record::snapshots::ModelSnapshots;
 use record::{Collision, StepRow, StepTimes};
 use robot::Robot;
+use scenario::job::bag_event;
 use scenario::{LoadedScenario, RobotChoice, is_urdf_name};
 use scene::{PointCloud, PointCloudWorld, Scene, SceneError, World};
 use serde::{Deserialize, Serialize};
@@ -652,7 +652,7 @@ impl FollowSetup {
         stop: &AtomicBool,
         progress: &mut dyn FnMut(&StepRow, &Follower),
     ) -> Result<FollowRun, FollowRunError> {
-        crate::rig::check_stands_at(&hw.joints(), &self.start_joints, start_tolerance)
+        scenario::job::check_stands_at(&hw.joints(), &self.start_joints, start_tolerance)
             .map_err(|message| bad("the robot", message))?;
         self.run_episode_on(hw, None, stop, progress)
     }

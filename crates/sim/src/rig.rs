@@ -205,7 +205,7 @@ const TRUTH_PERIOD_S: Real = 0.001;
 /// scanner pose of its own moment, until the arm rests.
 impl MovingScanner for SimRig {
     fn start_motion(&mut self, motion: &LineMotion) -> Result<(), HwError> {
-        check_stands_at(&self.joints(), &motion.from, 1e-9).map_err(|message| {
+        scenario::job::check_stands_at(&self.joints(), &motion.from, 1e-9).map_err(|message| {
             HwError::Setting {
                 what: "continuous motion".into(),
                 message: format!("the arm {message}"),
@@ -343,64 +343,5 @@ impl SimRig {
             self.bearings_rad(),
             config,
         )?)
-    }
-}
-
-/// An error unless hardware at joints `q` stands at `start`, every joint
-/// within `tolerance` radians: a loop starts from the pose its setup checked.
-pub(crate) fn check_stands_at(q: &[Real], start: &[Real], tolerance: Real) -> Result<(), String> {
-    let there =
-        q.len() == start.len() && q.iter().zip(start).all(|(a, b)| (a - b).abs() <= tolerance);
-    if there {
-        Ok(())
-    } else {
-        Err(format!(
-            "stands at joints {q:?}, not at the run's start joints {start:?} (within {tolerance} rad): a run starts from the pose its setup checked"
-        ))
-    }
-}
-
-fn ns(seconds: Real) -> u64 {
-    (seconds.max(0.0) * 1e9).round() as u64
-}
-
-/// Hand one event of tapped hardware (`hw::script::Tap` around a
-/// `hw::clock::Timed`) to a run's bag, stamped by the robot clock the
-/// hardware runs on: the event's interval is the clock's last.
-pub fn bag_event(
-    bag: &mut record::bag::RunBag,
-    clock: &hw::clock::RobotClock,
-    event: &hw::script::Event,
-) {
-    use hw::script::Event;
-    let (start, end) = clock.last_interval();
-    match event {
-        Event::Moved { reached, .. } => bag.moved(start, end, reached),
-        Event::Scanned(s) => bag.scanned(
-            start,
-            end.saturating_sub(start) as Real * 1e-9,
-            &s.ranges_m,
-            &s.intensities,
-        ),
-        Event::Read(readings) => {
-            let d: Vec<Option<Real>> = readings.iter().map(|r| r.map(|p| p.distance_m)).collect();
-            bag.read(start, &d);
-        }
-        Event::ScannedMoving(s) => {
-            // The motion began `start_s` before the scan (the clock's
-            // interval is the scan's).
-            let began = start.saturating_sub(ns(s.start_s));
-            for j in &s.joints {
-                bag.passed(began + ns(j.t_s), &j.q);
-            }
-            bag.scanned_moving(
-                start,
-                (end.saturating_sub(start) as Real * 1e-9, s.time_increment_s),
-                &s.readings.ranges_m,
-                &s.readings.intensities,
-            );
-        }
-        Event::MotionEnded(q) => bag.rested(end, q),
-        Event::Seeded(_) | Event::MotionStarted(_) | Event::Braked(_) => {}
     }
 }

@@ -64,7 +64,7 @@ pub fn plan_blast(args: &PlanBlastArgs) -> Result<()> {
     }
     config.ga.seed = args.seed;
     let t = std::time::Instant::now();
-    let plan = sim::explore_job::plan_blast_run(&args.run, &config)?;
+    let plan = scenario::job::explore::plan_blast_run(&args.run, &config)?;
     let seconds = t.elapsed().as_secs_f64();
     let mut staged = super::output::Staged::new();
     staged.ensure_dir(&args.out)?;

@@ -1,10 +1,12 @@
 //! `surveyor explore`: AXBAM exploration (Paul ch. 3, 4, 6) in a simulated
-//! world ([`sim::explore_job`]), with its outputs in a folder.
+//! world ([`sim::explore_job`]) or on a ROS 2 robot ([`super::on_robot`]),
+//! with its outputs in a folder.
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use scenario::job::JobError;
+use scenario::job::explore::{ExploreOptions, OracleOption};
 use scenario::{RobotChoice, Scenario};
-use sim::explore_job::{ExploreOptions, OracleOption};
 use std::cell::RefCell;
 use std::path::PathBuf;
 use std::rc::Rc;
@@ -104,7 +106,7 @@ pub struct ExploreArgs {
     #[arg(long)]
     out: PathBuf,
     #[command(flatten)]
-    ros2: super::robot_server::Ros2Flags,
+    ros2: super::on_robot::Ros2Flags,
 }
 
 pub fn explore(args: &ExploreArgs) -> Result<()> {
@@ -144,14 +146,14 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     }
     let options = run_options(args, &loaded, stage_two)?;
     let t = std::time::Instant::now();
-    let (hardware, live) = connect(args, &loaded)?.unzip();
+    let (hardware, live) = super::on_robot::connect_explore(&args.ros2, &loaded)?.unzip();
     let start_tolerance = args
         .ros2
         .start_tolerance(&loaded.scenario.ros2.clone().unwrap_or_default());
     let watcher = live.clone();
     #[allow(clippy::result_large_err)] // the error type of the sim jobs
     let make = |options: &ExploreOptions| job(&loaded, options, hardware, watcher, start_tolerance);
-    let (outcome, blast) = sim::explore_job::explore_with(
+    let (outcome, blast) = scenario::job::explore::explore_with(
         &options,
         &args.out,
         make,
@@ -231,7 +233,7 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
     }
     say_coverage(&outcome)?;
     if let Some(live) = &live {
-        publish_markers(live, &loaded, run)?;
+        super::on_robot::publish_markers(live, &loaded, run)?;
     }
     if let Some(plan) = &blast {
         say!("{}", plan.summary())?;
@@ -262,7 +264,7 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
 
 /// The coverage of the true surfaces, the observable share and the oracle,
 /// when the world has true surfaces.
-fn say_coverage(outcome: &sim::explore_job::ExploreOutcome) -> Result<()> {
+fn say_coverage(outcome: &scenario::job::explore::ExploreOutcome) -> Result<()> {
     if let Some(c) = &outcome.coverage {
         say!(
             "coverage of the true surfaces: A1 {:.1} %, A2 {:.1} %, A3 {:.1} %",
@@ -308,63 +310,24 @@ fn say_coverage(outcome: &sim::explore_job::ExploreOutcome) -> Result<()> {
     Ok(())
 }
 
-/// The live view's viewpoints and discs once the run has them.
-fn publish_markers(
-    live: &RefCell<ros2::LiveView>,
-    loaded: &scenario::LoadedScenario,
-    run: &explore::ExploreRun,
-) -> Result<()> {
-    let (viewpoints, discs) = sim::explore_job::explore_markers(
-        ros2::wall_clock_ns(),
-        run,
-        &loaded.build_robot()?,
-        &loaded.scenario.world_from_base(),
-    )?;
-    let mut view = live.borrow_mut();
-    view.markers(record::bag::topics::VIEWPOINTS, viewpoints);
-    view.markers(record::bag::topics::DISCS, discs);
-    drop(view);
-    super::robot_server::say_live(live)
-}
-
-/// The ROS 2 robot to explore with (`--ros2`), waiting for its first joint
-/// state, and the run's live view; `None` for the simulator.
-fn connect(
-    args: &ExploreArgs,
-    loaded: &scenario::LoadedScenario,
-) -> Result<Option<(ros2::Ros2Hardware, Rc<RefCell<ros2::LiveView>>)>> {
-    if !args.ros2.ros2 {
-        return Ok(None);
-    }
-    let spec = loaded.scenario.scanner.clone().unwrap_or_default();
-    let bearings = sensor::Scanner::new(spec.config)?.bearings_rad().to_vec();
-    args.ros2.open(
-        &loaded.scenario.ros2.clone().unwrap_or_default(),
-        &loaded.build_robot()?,
-        &loaded.scenario.world_from_base(),
-        &bearings,
-    )
-}
-
 /// The exploration of `loaded` under `options`: on `hardware` when given,
 /// else in the simulator.
-#[allow(clippy::result_large_err)] // the error type of the sim jobs
+#[allow(clippy::result_large_err)] // the error type of the jobs
 fn job(
     loaded: &scenario::LoadedScenario,
     options: &ExploreOptions,
     hardware: Option<ros2::Ros2Hardware>,
     live: Option<Rc<RefCell<ros2::LiveView>>>,
     start_tolerance: geom::Real,
-) -> Result<Job, sim::SimError> {
+) -> Result<Job, JobError> {
     Ok(match hardware {
-        Some(hw) => {
-            let mut job =
-                sim::explore_job::HardwareExplore::new(loaded, options, hw, start_tolerance)?;
-            if let Some(live) = live {
-                job = job.judged_by(Box::new(super::robot_server::LiveWatcher(live)));
-            }
-            Job::Hardware(Box::new(job))
-        }
+        Some(hw) => Job::Hardware(Box::new(super::on_robot::explore_job(
+            loaded,
+            options,
+            hw,
+            live,
+            start_tolerance,
+        )?)),
         None => Job::Sim(Box::new(sim::explore_job::SimExplore::new(
             loaded, options,
         )?)),
@@ -374,14 +337,14 @@ fn job(
 /// The exploration of the simulator, or of a ROS 2 robot.
 enum Job {
     Sim(Box<sim::explore_job::SimExplore>),
-    Hardware(Box<sim::explore_job::HardwareExplore<ros2::Ros2Hardware>>),
+    Hardware(Box<scenario::job::explore::HardwareExplore<ros2::Ros2Hardware>>),
 }
 
-impl sim::explore_job::ExploreJob for Job {
+impl scenario::job::explore::ExploreJob for Job {
     fn run_job(
         self,
         progress: &mut dyn FnMut(&record::ViewpointRecord),
-    ) -> Result<sim::explore_job::ExploreOutcome, sim::SimError> {
+    ) -> Result<scenario::job::explore::ExploreOutcome, JobError> {
         match self {
             Self::Sim(j) => j.run(progress),
             Self::Hardware(j) => j.run(progress),

@@ -123,7 +123,7 @@ pub struct FollowArgs {
     #[arg(long, required_unless_present = "print_config")]
     out: Option<PathBuf>,
     #[command(flatten)]
-    ros2: super::robot_server::Ros2Flags,
+    ros2: super::on_robot::Ros2Flags,
 }
 
 /// A live view (`--ros2`) publishes the surface model every this many steps.
@@ -307,7 +307,7 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     let run = run?;
     if let Some(live) = &live {
         live_step(live, &run.episode.end_joints, Some(&run.model));
-        super::robot_server::say_live(live)?;
+        super::on_robot::say_live(live)?;
     }
     let summary = run.summary();
     let collisions = summary

@@ -5,6 +5,7 @@ mod explore;
 mod follow;
 mod maps;
 mod model;
+mod on_robot;
 mod output;
 mod robot_server;
 

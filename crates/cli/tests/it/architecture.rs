@@ -192,3 +192,72 @@ fn each_crate_readme_names_its_dependencies() {
         );
     }
 }
+
+/// `src` without its `//` comments (line and doc comments): what names
+/// items.
+fn code_of(src: &str) -> String {
+    src.lines()
+        .map(|l| l.split("//").next().unwrap_or_default())
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The paths into crate `krate` that `code` names (`krate::…` not preceded
+/// by an identifier character or `::`), one entry per occurrence.
+fn paths_into(code: &str, krate: &str) -> Vec<String> {
+    let needle = format!("{krate}::");
+    let mut out = Vec::new();
+    for (i, _) in code.match_indices(&needle) {
+        let before = code[..i].chars().next_back();
+        let free = before.is_none_or(|c| !(c.is_alphanumeric() || c == '_' || c == ':'));
+        if free {
+            let end = code[i..]
+                .find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':'))
+                .map_or(code.len(), |e| i + e);
+            out.push(code[i..end].to_owned());
+        }
+    }
+    out
+}
+
+#[test]
+fn paths_into_finds_a_crate_path_and_nothing_else() {
+    let code = code_of(
+        "use sim::SimRig; // sim::not_this\nlet x = ros2::sim::y; let z = oursim::q; sim::explore_job::f();",
+    );
+    assert_eq!(
+        paths_into(&code, "sim"),
+        ["sim::SimRig", "sim::explore_job::f"]
+    );
+}
+
+/// Issue 46 acceptance 6: a robot's run is not the simulator's. The
+/// `--ros2` paths of the binary (`commands/on_robot.rs`: the connection,
+/// the live view, the exploration on a ROS 2 robot) name no `sim` item:
+/// the job they run is `scenario::job`'s. `py` has no ROS 2 path (it does
+/// not depend on `ros2`); if it gains one, this test is where to check it.
+#[test]
+fn the_ros2_paths_use_no_sim_type() {
+    let path = root().join("crates/cli/src/commands/on_robot.rs");
+    let code = code_of(&std::fs::read_to_string(&path).unwrap());
+    assert!(
+        code.contains("HardwareExplore"),
+        "{}: moved?",
+        path.display()
+    );
+    let named = paths_into(&code, "sim");
+    assert!(
+        named.is_empty() && !code.contains("use sim"),
+        "{} names simulator items: {named:?}",
+        path.display()
+    );
+    let graph = metadata();
+    assert!(
+        !graph["py"].0.contains("ros2"),
+        "py now depends on ros2: check its ROS 2 path as the binary's is checked here"
+    );
+    // The job a robot runs lives below the simulator.
+    for krate in ["scenario", "explore", "ros2"] {
+        assert!(!graph[krate].0.contains("sim"), "{krate} depends on sim");
+    }
+}

@@ -26,7 +26,7 @@ fn range_readings_in_the_bag_are_the_rig_s_sensor_points() {
         let clock = hw::clock::RobotClock::default();
         let timed = hw::clock::Timed::new(&mut setup.rig, setup.timing.clone(), clock.clone());
         let mut rec = Tap::with_sink(Recorder::new(timed, Vec::new()), |e: &Event| {
-            sim::rig::bag_event(&mut bag, &clock, e);
+            scenario::job::bag_event(&mut bag, &clock, e);
         });
         // Wander around the start, reading at every pose.
         for k in 0..40 {

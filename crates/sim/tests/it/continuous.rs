@@ -224,7 +224,9 @@ fn a_bag_places_moving_scans_where_the_loop_did() {
     let clock = RobotClock::default();
     clock.set_activity(Activity::MovingWhileScanning);
     let timed = Timed::new(rig, timing, clock.clone());
-    let mut hw = Tap::with_sink(timed, |e: &Event| sim::rig::bag_event(&mut bag, &clock, e));
+    let mut hw = Tap::with_sink(timed, |e: &Event| {
+        scenario::job::bag_event(&mut bag, &clock, e);
+    });
     let bearings = hw.bearings_rad().to_vec();
     let mut builder = SweepBuilder::new(&bearings).unwrap();
     let standing = hw.scan().unwrap();

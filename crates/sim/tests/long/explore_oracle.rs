@@ -14,7 +14,8 @@ use crate::shared;
 use explore::{ExploreConfig, ExploreRun};
 use record::explore::OracleComparison;
 use scenario::Scenario;
-use sim::explore_job::{ExploreOptions, OracleOption, explore_setup, run_exploration};
+use scenario::job::explore::{ExploreOptions, OracleOption, explore_setup};
+use sim::explore_job::run_exploration;
 
 /// Options with the C-space model and the oracle cached for the long tests
 /// (`cache`: the oracle's file, one per scenario and configuration: a file

@@ -12,8 +12,9 @@
 
 use hw::{Arm, tilt_sweep};
 use scenario::Scenario;
+use scenario::job::explore::{ExploreOptions, ExploreOutcome};
 use sim::SimRig;
-use sim::explore_job::{ExploreOptions, ExploreOutcome, run_exploration};
+use sim::explore_job::run_exploration;
 use std::sync::Arc;
 
 /// Options with the C-space model cached once for the long tests (each
@@ -91,7 +92,7 @@ fn predicted_gain_ranks_candidates_like_the_gain_their_sweeps_bring() {
         config: Some(config),
         ..cached()
     };
-    let (setup, world) = sim::explore_job::explore_setup(&loaded, &options).unwrap();
+    let (setup, world) = scenario::job::explore::explore_setup(&loaded, &options).unwrap();
     let explore::Setup {
         robot,
         world_from_base: wfb,
@@ -368,7 +369,7 @@ fn stage_two_aims_at_discs_safely_and_lowers_the_material_information() {
     let folder = dir.path().join("run");
     let staging = record::Staging::new(&folder).unwrap();
     let t = std::time::Instant::now();
-    let plan = sim::explore_job::write_run(outcome, &staging).unwrap();
+    let plan = scenario::job::explore::write_run(outcome, &staging).unwrap();
     let seconds = t.elapsed().as_secs_f64();
     staging.commit().unwrap();
     for name in [
@@ -634,7 +635,7 @@ fn exploration_on_a_replayed_session_repeats_the_simulated_run() {
         stage_two: true,
         ..cached()
     };
-    let (setup, world) = sim::explore_job::explore_setup(&loaded, &options).unwrap();
+    let (setup, world) = scenario::job::explore::explore_setup(&loaded, &options).unwrap();
     let scanner = sensor::Scanner::new(setup.scanner).unwrap();
     let rig = SimRig::new(
         setup.robot.clone(),
@@ -668,7 +669,7 @@ fn exploration_on_a_replayed_session_repeats_the_simulated_run() {
         .filter(|e| matches!(e, Event::Scanned(_)))
         .count();
     let script: Script = serde_json::from_str(&serde_json::to_string(&script).unwrap()).unwrap();
-    let (setup, _) = sim::explore_job::explore_setup(&loaded, &options).unwrap();
+    let (setup, _) = scenario::job::explore::explore_setup(&loaded, &options).unwrap();
     let mut replay = Replay::new(script);
     let b = explore::run(
         setup,

@@ -14,7 +14,8 @@
 
 use geom::Real;
 use scenario::Scenario;
-use sim::explore_job::{ExploreOptions, OracleOption, explore_setup, run_exploration};
+use scenario::job::explore::{ExploreOptions, OracleOption, explore_setup};
+use sim::explore_job::run_exploration;
 use sim::material_oracle::{MaterialPool, cache_beside, material_samples};
 use std::path::{Path, PathBuf};
 

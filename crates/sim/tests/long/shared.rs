@@ -8,7 +8,8 @@
 //! Both made the same Stage One, 20 s of a release build each.
 
 use scenario::Scenario;
-use sim::explore_job::{ExploreOptions, ExploreOutcome, run_exploration};
+use scenario::job::explore::{ExploreOptions, ExploreOutcome};
+use sim::explore_job::run_exploration;
 use std::path::Path;
 use std::sync::OnceLock;
 
