@@ -1,18 +1,19 @@
 //! The `hw` traits over a ROS 2 robot: joint states in, joint trajectories
 //! out, scans and range readings in.
 
-use crate::serve::{EXACT_RANGES_TOPIC, SENSE_TOPIC};
+use crate::serve::{CLOCK_TOPIC, EXACT_RANGES_TOPIC, SENSE_TOPIC};
 use crate::{Ros2Error, Ros2Node};
 use geom::{Isometry3, Real};
 use hw::{Arm, HwError, LineScanner, RangeSensors, ScanReadings};
 use record::bag::msg::{
-    Float64MultiArray, Header, JointState, JointTrajectory, JointTrajectoryPoint, LaserScan, Range,
-    StdString, Time,
+    Clock, Float64MultiArray, Header, JointState, JointTrajectory, JointTrajectoryPoint, LaserScan,
+    Range, StdString, Time,
 };
 use robot::Robot;
 use ros2_client::{Publisher, Subscription};
 use scenario::ros2::Ros2Spec;
 use sensor::SensorPoint;
+use std::cell::Cell;
 use std::time::{Duration, Instant};
 
 /// How the driver talks to its robot.
@@ -53,6 +54,10 @@ pub struct Ros2Hardware {
     trajectories: Publisher<JointTrajectory>,
     sense: Option<Publisher<StdString>>,
     exact: Option<Subscription<Float64MultiArray>>,
+    /// The robot's `/clock`, when it publishes one.
+    clock: Subscription<Clock>,
+    /// Its latest time, nanoseconds, and when that came (wall time).
+    robot_now: Cell<Option<(u64, Instant)>>,
     node: Ros2Node,
 }
 
@@ -72,27 +77,42 @@ fn device(message: String) -> HwError {
     }
 }
 
-/// `seconds` from now; a setting that is no duration (negative, not
-/// finite, too long) waits a day rather than panicking.
-fn after(seconds: Real) -> Instant {
-    let day = Duration::from_secs(86_400);
-    let wait = Duration::try_from_secs_f64(seconds).unwrap_or(day).min(day);
-    Instant::now() + wait
+/// A timeout of `seconds` begun now. On a robot that publishes `/clock`
+/// it runs on that clock (`use_sim_time`): a robot running faster or
+/// slower than real time gets its timeouts in its own seconds, and one
+/// whose clock stops advancing times out after `seconds` of wall time
+/// without a new `/clock` message. Without `/clock` it runs on the wall
+/// clock. A setting that is no duration (negative, not finite, too long)
+/// waits a day rather than panicking.
+struct Wait {
+    seconds: Real,
+    wall: Instant,
+    /// The robot's time when the wait began (or when its clock was first
+    /// heard during the wait).
+    robot_from: Cell<Option<u64>>,
 }
 
-fn poll<T>(
-    deadline: Instant,
-    what: &str,
-    mut take: impl FnMut() -> Result<Option<T>, HwError>,
-) -> Result<T, HwError> {
-    loop {
-        if let Some(v) = take()? {
-            return Ok(v);
+/// The longest timeout, seconds.
+const LONGEST_WAIT_S: Real = 86_400.0;
+
+impl Wait {
+    /// Whether the wait is over, the robot's clock standing at
+    /// `robot_now` (its time and when that was heard; `None` without one).
+    fn over(&self, robot_now: Option<(u64, Instant)>) -> bool {
+        let seconds = if self.seconds.is_finite() && self.seconds >= 0.0 {
+            self.seconds.min(LONGEST_WAIT_S)
+        } else {
+            LONGEST_WAIT_S
+        };
+        match robot_now {
+            None => self.wall.elapsed().as_secs_f64() > seconds,
+            Some((now, heard)) => {
+                let from = self.robot_from.get().unwrap_or(now);
+                self.robot_from.set(Some(from));
+                now.saturating_sub(from) as Real * 1e-9 > seconds
+                    || heard.elapsed().as_secs_f64() > seconds
+            }
         }
-        if Instant::now() > deadline {
-            return Err(device(format!("no {what} before the timeout")));
-        }
-        std::thread::sleep(Duration::from_micros(200));
     }
 }
 
@@ -114,6 +134,7 @@ impl Ros2Hardware {
             .map(|k| node.subscription::<Range>(&spec.range_topic(k)))
             .collect::<Result<_, _>>()?;
         let trajectories = node.publisher::<JointTrajectory>(&spec.trajectory_topic)?;
+        let clock = node.clock_subscription::<Clock>(CLOCK_TOPIC)?;
         let (sense, exact) = if config.lockstep {
             (
                 Some(node.publisher::<StdString>(SENSE_TOPIC)?),
@@ -135,12 +156,78 @@ impl Ros2Hardware {
             trajectories,
             sense,
             exact,
+            clock,
+            robot_now: Cell::new(None),
             node,
         };
-        let deadline = after(hw.config.ros2.timeout_s);
-        hw.q = poll(deadline, "joint state", || hw.latest_state())?;
-        hw.wait_for_the_robot(deadline)?;
+        let wait = hw.wait(hw.config.ros2.timeout_s);
+        hw.q = hw.poll(&wait, "joint state", || hw.latest_state())?;
+        hw.wait_for_the_robot(&wait)?;
+        // A robot that publishes a clock is timed on it from the start.
+        if hw.node.publishers_of(&hw.clock) > 0 {
+            hw.poll(&wait, CLOCK_TOPIC, || {
+                hw.hear_the_clock()?;
+                Ok(hw.robot_now.get())
+            })?;
+        }
         Ok(hw)
+    }
+
+    /// The robot's time on its `/clock`, nanoseconds (`None` when it
+    /// publishes none).
+    pub fn robot_clock_ns(&self) -> Result<Option<u64>, HwError> {
+        self.hear_the_clock()?;
+        Ok(self.robot_now.get().map(|(t, _)| t))
+    }
+
+    /// Take the `/clock` messages that came: the newest is the robot's time.
+    fn hear_the_clock(&self) -> Result<(), HwError> {
+        while let Some((c, _)) = self
+            .clock
+            .take()
+            .map_err(|e| device(format!("{CLOCK_TOPIC}: {e:?}")))?
+        {
+            if let Some(t) = c.clock.to_nanos() {
+                self.robot_now.set(Some((t, Instant::now())));
+            }
+        }
+        Ok(())
+    }
+
+    /// A timeout of `seconds` from now, on the robot's clock ([`Wait`]).
+    fn wait(&self, seconds: Real) -> Wait {
+        // A failure to read the clock shows at the next read.
+        let _ = self.hear_the_clock();
+        Wait {
+            seconds,
+            wall: Instant::now(),
+            robot_from: Cell::new(self.robot_now.get().map(|(t, _)| t)),
+        }
+    }
+
+    /// Whether `wait` is over.
+    fn over(&self, wait: &Wait) -> Result<bool, HwError> {
+        self.hear_the_clock()?;
+        Ok(wait.over(self.robot_now.get()))
+    }
+
+    /// What `take` gives, once it gives something, or an error once `wait`
+    /// is over.
+    fn poll<T>(
+        &self,
+        wait: &Wait,
+        what: &str,
+        mut take: impl FnMut() -> Result<Option<T>, HwError>,
+    ) -> Result<T, HwError> {
+        loop {
+            if let Some(v) = take()? {
+                return Ok(v);
+            }
+            if self.over(wait)? {
+                return Err(device(format!("no {what} before the timeout")));
+            }
+            std::thread::sleep(Duration::from_micros(200));
+        }
     }
 
     /// The newest joint state received (in the robot's joint order), if any.
@@ -169,7 +256,7 @@ impl Ros2Hardware {
     /// Wait until the robot's sensors' topics and its command topics match
     /// ours: a message sent before would be lost (ROS 2's default QoS is
     /// volatile), and a lockstep robot's noise would go out of step.
-    fn wait_for_the_robot(&self, deadline: Instant) -> Result<(), HwError> {
+    fn wait_for_the_robot(&self, wait: &Wait) -> Result<(), HwError> {
         let mut missing: Vec<String>;
         loop {
             missing = Vec::new();
@@ -198,7 +285,7 @@ impl Ros2Hardware {
             if missing.is_empty() {
                 return Ok(());
             }
-            if Instant::now() > deadline {
+            if self.over(wait)? {
                 return Err(device(format!(
                     "the robot answers on /joint_states but not on {} (nothing matched before the timeout)",
                     missing.join(", ")
@@ -217,8 +304,8 @@ impl Ros2Hardware {
         Ok(())
     }
 
-    fn deadline(&self) -> Instant {
-        after(self.config.ros2.timeout_s)
+    fn timeout(&self) -> Wait {
+        self.wait(self.config.ros2.timeout_s)
     }
 }
 
@@ -248,7 +335,7 @@ impl Arm for Ros2Hardware {
         self.trajectories
             .publish(msg)
             .map_err(|e| device(format!("{}: {e:?}", self.config.ros2.trajectory_topic)))?;
-        let deadline = after(secs + self.config.ros2.timeout_s);
+        let wait = self.wait(secs + self.config.ros2.timeout_s);
         let tolerance = self.config.tolerance_rad();
         let mut error = far;
         loop {
@@ -263,7 +350,7 @@ impl Arm for Ros2Hardware {
                     return Ok(());
                 }
             }
-            if Instant::now() > deadline {
+            if self.over(&wait)? {
                 return Err(HwError::NotReached { error });
             }
             std::thread::sleep(Duration::from_micros(200));
@@ -285,7 +372,7 @@ impl LineScanner for Ros2Hardware {
         // Scans published before the arm stood here are stale.
         while take(&self.scans)?.is_some() {}
         self.ask("scan".to_owned())?;
-        let scan = poll(self.deadline(), "scan", || take(&self.scans))?;
+        let scan = self.poll(&self.timeout(), "scan", || take(&self.scans))?;
         let (bearings, ranges_m, intensities) = record::bag::scan_rays(&scan);
         if bearings.len() != self.bearings.len() {
             return Err(device(format!(
@@ -328,11 +415,11 @@ impl RangeSensors for Ros2Hardware {
         }
         self.ask("ranges".to_owned())?;
         let frames = self.robot.forward_kinematics(&self.q)?;
-        let deadline = self.deadline();
+        let wait = self.timeout();
         let mut messages = Vec::with_capacity(self.ranges.len());
         for (k, s) in self.ranges.iter().enumerate() {
             let topic = self.config.ros2.range_topic(k);
-            messages.push(poll(deadline, &topic, || {
+            messages.push(self.poll(&wait, &topic, || {
                 s.take()
                     .map(|m| m.map(|(m, _)| m))
                     .map_err(|e| device(format!("{topic}: {e:?}")))
@@ -342,7 +429,7 @@ impl RangeSensors for Ros2Hardware {
         // against its `Range`.
         let exact = match &self.exact {
             Some(s) if !messages.is_empty() => {
-                let e = poll(deadline, EXACT_RANGES_TOPIC, || {
+                let e = self.poll(&wait, EXACT_RANGES_TOPIC, || {
                     s.take()
                         .map(|m| m.map(|(m, _)| m))
                         .map_err(|e| device(format!("{EXACT_RANGES_TOPIC}: {e:?}")))

@@ -19,7 +19,9 @@ mod serve;
 pub use driver::{DriverConfig, Ros2Hardware};
 pub use live::{LiveView, wall_clock_ns};
 pub use node::{Ros2Config, Ros2Node};
-pub use serve::{EXACT_RANGES_TOPIC, SENSE_TOPIC, ServeConfig, ServeStats, serve_robot};
+pub use serve::{
+    CLOCK_TOPIC, EXACT_RANGES_TOPIC, MAX_RATE, SENSE_TOPIC, ServeConfig, ServeStats, serve_robot,
+};
 
 /// What can fail talking ROS 2.
 #[derive(Debug, thiserror::Error)]

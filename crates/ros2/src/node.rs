@@ -171,6 +171,41 @@ impl Ros2Node {
             .history(History::KeepLast { depth: 1 })
     }
 
+    /// A publisher of a clock on `topic` with ROS 2's clock QoS (best
+    /// effort, keep last 1: a late time is worth nothing).
+    pub fn clock_publisher<M: RosMessage>(
+        &mut self,
+        topic: &str,
+    ) -> Result<Publisher<M>, Ros2Error> {
+        let qos = Self::clock_qos();
+        let t = self.topic::<M>(topic, &qos)?;
+        self.node
+            .create_publisher::<M>(&t, Some(qos))
+            .map_err(|e| create(&format!("publisher on {topic}"), e))
+    }
+
+    /// A subscription to a clock on `topic`: best effort, keep last 1, so
+    /// that it matches a robot's `/clock` whether published best effort (as
+    /// ROS 2's clock publishers are) or reliably.
+    pub fn clock_subscription<M: RosMessage + DeserializeOwned + 'static>(
+        &mut self,
+        topic: &str,
+    ) -> Result<Subscription<M>, Ros2Error> {
+        let qos = Self::clock_qos();
+        let t = self.topic::<M>(topic, &qos)?;
+        self.node
+            .create_subscription::<M>(&t, Some(qos))
+            .map_err(|e| create(&format!("subscription to {topic}"), e))
+    }
+
+    /// ROS 2's clock QoS: best effort, volatile, keep last 1.
+    fn clock_qos() -> QosProfile {
+        QosProfile::publisher_default()
+            .reliability_best_effort()
+            .durability(Durability::Volatile)
+            .history(History::KeepLast { depth: 1 })
+    }
+
     /// A subscription to `M` on `topic`.
     pub fn subscription<M: RosMessage + DeserializeOwned + 'static>(
         &mut self,

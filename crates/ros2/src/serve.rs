@@ -38,7 +38,21 @@ pub struct ServeConfig {
     pub lockstep: bool,
     /// Topics and the joints' ROS names (a scenario's `[ros2]` table).
     pub ros2: Ros2Spec,
+    /// Robot seconds per second of wall time (1: real time; at most
+    /// [`MAX_RATE`]): motions, periods and stamps run on the robot's own
+    /// clock, published on [`CLOCK_TOPIC`].
+    pub rate: Real,
 }
+
+/// Where a served robot publishes its clock (`rosgraph_msgs/Clock`, every
+/// turn of its loop): the time of its stamps, which a driver follows for
+/// its timeouts ([`crate::Ros2Hardware`]).
+pub const CLOCK_TOPIC: &str = "/clock";
+
+/// Fastest [`ServeConfig::rate`]: a served robot's loop turns every
+/// `tick_s` of wall time, so its motions move `rate · tick_s ·
+/// joint_speed` a turn.
+pub const MAX_RATE: Real = 100.0;
 
 /// The topic a lockstep robot takes its sensing requests on.
 pub const SENSE_TOPIC: &str = "/surveyor/sense";
@@ -63,6 +77,7 @@ impl Default for ServeConfig {
             finder_range_slack_m: 0.0,
             lockstep: false,
             ros2: Ros2Spec::default(),
+            rate: 1.0,
         }
     }
 }
@@ -226,6 +241,16 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
     } else {
         (None, None)
     };
+    if !(config.rate.is_finite() && config.rate > 0.0 && config.rate <= MAX_RATE) {
+        return Err(Ros2Error::Config {
+            what: "rate".into(),
+            message: format!(
+                "expected robot seconds per wall second in (0, {MAX_RATE}], got {}",
+                config.rate
+            ),
+        });
+    }
+    let clock = node.clock_publisher::<record::bag::msg::Clock>(CLOCK_TOPIC)?;
     let bearings = hw.bearings_rad().to_vec();
     let mut stats = ServeStats::default();
     let mut goals: VecDeque<Vec<Real>> = VecDeque::new();
@@ -233,6 +258,7 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
         .unwrap_or(Duration::from_millis(5))
         .min(Duration::from_secs(1));
     let start = Instant::now();
+    let start_ns = now_ns();
     let mut last = start;
     let (mut next_state, mut next_scan, mut next_range) = (0.0, 0.0, 0.0);
     let mut ready = false;
@@ -252,14 +278,21 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
                 }
             }
         }
+        // The robot's time: `rate` robot seconds per wall second.
         let now = Instant::now();
-        let dt = (now - last).as_secs_f64();
+        let dt = config.rate * (now - last).as_secs_f64();
         last = now;
         let reached = advance(hw, &mut goals, config.joint_speed * dt, &mut stats, log);
-        let t = (now - start).as_secs_f64();
+        let t = config.rate * (now - start).as_secs_f64();
+        let stamp = start_ns.saturating_add((t * 1e9) as u64);
+        clock
+            .publish(record::bag::msg::Clock {
+                clock: record::bag::msg::Time::from_nanos(stamp),
+            })
+            .map_err(|e| transfer(CLOCK_TOPIC, e))?;
         if t >= next_state || reached {
             next_state = t + config.state_period_s;
-            let msg = record::bag::joint_state(now_ns(), &names, &hw.joints());
+            let msg = record::bag::joint_state(stamp, &names, &hw.joints());
             states
                 .publish(msg)
                 .map_err(|e| transfer(&spec.joint_states_topic, e))?;
@@ -313,7 +346,7 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
         if scan_now {
             let s = hw.scan()?;
             let msg = record::bag::laser_scan(
-                now_ns(),
+                stamp,
                 &bearings,
                 &s.ranges_m,
                 &s.intensities,
@@ -327,7 +360,6 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
         }
         if read_now {
             let readings = hw.read_all()?;
-            let stamp = now_ns();
             for (k, (p, r)) in ranges.iter().zip(&readings).enumerate() {
                 let max = robot.range_finders[k].max_range_m + config.finder_range_slack_m;
                 let msg = record::bag::range(stamp, k, max, r.map(|r| r.distance_m));

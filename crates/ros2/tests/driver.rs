@@ -205,3 +205,85 @@ fn the_live_view_reaches_a_subscriber() {
     assert_eq!(cloud.unwrap().width, 1);
     take("/surveyor/discs", &mut || discs.take().unwrap().is_some());
 }
+
+/// Issue 46 acceptance 4's clock: a robot served five times faster than
+/// real time publishes `/clock`, stamps on it and moves on it, and the
+/// driver follows it: a motion of 1 rad at 1 rad/s takes a robot second
+/// (a fifth of one of wall time), and a timeout of 10 s runs out after 10
+/// robot seconds, long before 10 s of wall time.
+#[test]
+fn the_driver_follows_a_faster_robot_s_clock() {
+    let loaded = Scenario::load("bridge1").unwrap();
+    let config = Ros2Config {
+        domain_id: domain(75),
+        loopback_only: true,
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let served = SimRig::with_every_sensor(&loaded, 7).unwrap();
+    let robot = served.robot().clone();
+    let world_from_base = served.world_from_base();
+    let bearings = served.bearings_rad().to_vec();
+    let serve = ServeConfig {
+        joint_speed: 1.0,
+        rate: 5.0,
+        // No scan in this test's time: a scan request must time out.
+        scan_period_s: 1e6,
+        ..ServeConfig::default()
+    };
+    {
+        let stop = Arc::clone(&stop);
+        let robot = robot.clone();
+        std::thread::spawn(move || {
+            let mut rig = served;
+            let mut node = Ros2Node::new("served", &config).unwrap();
+            serve_robot(&mut rig, &robot, &mut node, &serve, &stop, &mut |m| {
+                eprintln!("{m}");
+            })
+            .unwrap();
+        });
+    }
+    let mut driver = Ros2Hardware::new(
+        Ros2Node::new("driver", &config).unwrap(),
+        &robot,
+        &world_from_base,
+        &bearings,
+        DriverConfig {
+            ros2: scenario::ros2::Ros2Spec {
+                joint_speed: 1.0,
+                timeout_s: 10.0,
+                ..scenario::ros2::Ros2Spec::default()
+            },
+            lockstep: false,
+        },
+    )
+    .unwrap();
+    // The served robot's /clock is heard from the start.
+    let before = driver
+        .robot_clock_ns()
+        .unwrap()
+        .expect("the robot's /clock");
+    let wall = std::time::Instant::now();
+    let mut q = driver.joints();
+    q[0] += 1.0;
+    driver.move_to(&q).unwrap();
+    let robot_s = (driver.robot_clock_ns().unwrap().unwrap() - before) as f64 * 1e-9;
+    let wall_s = wall.elapsed().as_secs_f64();
+    assert!(
+        robot_s >= 0.98,
+        "1 rad at 1 rad/s in {robot_s} robot seconds"
+    );
+    assert!(
+        wall_s < 0.6 * robot_s,
+        "{wall_s} s of wall time for {robot_s} robot seconds at 5 times real time"
+    );
+    // No scan comes: the timeout is the robot's 10 s.
+    let before = driver.robot_clock_ns().unwrap().unwrap();
+    let wall = std::time::Instant::now();
+    let e = driver.scan().unwrap_err().to_string();
+    let robot_s = (driver.robot_clock_ns().unwrap().unwrap() - before) as f64 * 1e-9;
+    let wall_s = wall.elapsed().as_secs_f64();
+    assert!(e.contains("no scan before the timeout"), "{e}");
+    assert!(robot_s >= 10.0, "timed out after {robot_s} robot seconds");
+    assert!(wall_s < 10.0, "timed out after {wall_s} s of wall time");
+    stop.store(true, Ordering::Relaxed);
+}

@@ -40,6 +40,11 @@ pub struct SimRobotArgs {
     /// in-process run (surveyor's own driver in lockstep).
     #[arg(long)]
     lockstep: bool,
+    /// Robot seconds per second of wall time: the arm moves, the sensors
+    /// sense and the stamps and `/clock` run this much faster than real time
+    /// (at most 100; a driver following `/clock` times out on it).
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    rate: Real,
     /// Stop after this many seconds (default: run until Ctrl-C).
     #[arg(long = "for", allow_negative_numbers = true)]
     duration_s: Option<Real>,
@@ -56,6 +61,13 @@ pub fn sim_robot(a: &SimRobotArgs) -> Result<()> {
         && !(d.is_finite() && d > 0.0 && d <= 7.0 * 86_400.0)
     {
         bail!("--for {d}: expected more than 0 and at most a week of seconds");
+    }
+    if !(a.rate.is_finite() && a.rate > 0.0 && a.rate <= ros2::MAX_RATE) {
+        bail!(
+            "--rate {}: expected robot seconds per wall second above 0 and at most {}",
+            a.rate,
+            ros2::MAX_RATE
+        );
     }
     let loaded = Scenario::load(&a.scenario)?;
     let mut rig = match &a.robot {
@@ -81,6 +93,7 @@ pub fn sim_robot(a: &SimRobotArgs) -> Result<()> {
         finder_range_slack_m: 10.0 * rig.range_noise_sigma_m(),
         lockstep: a.lockstep,
         ros2: loaded.scenario.ros2.clone().unwrap_or_default(),
+        rate: a.rate,
         // A lockstep robot answers each request at once.
         tick_s: if a.lockstep {
             0.0005

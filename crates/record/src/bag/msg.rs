@@ -370,6 +370,22 @@ impl Marker {
     pub const TRIANGLE_LIST: i32 = 11;
 }
 
+/// `rosgraph_msgs/msg/Clock`: the time of a robot or a simulator on
+/// `/clock`, which nodes with `use_sim_time` follow instead of their own
+/// clock.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Clock {
+    /// The robot's time now.
+    pub clock: Time,
+}
+
+impl RosMessage for Clock {
+    const TYPE: &'static str = "rosgraph_msgs/msg/Clock";
+    fn definition() -> String {
+        with_dependencies("builtin_interfaces/Time clock\n", &[D_TIME])
+    }
+}
+
 /// `std_msgs/msg/String`.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct StdString {
