@@ -912,8 +912,8 @@ fn bad_bags_are_refused_by_name() {
     assert!(left.is_empty(), "{left:?}");
 }
 
-/// `sim-robot`: without `--ros2` (the one transport), with a speed or a
-/// duration out of range, with a `ROS_DOMAIN_ID` that is no domain, or an
+/// `sim-robot`: without `--ros2` (the one transport), with a speed, a
+/// duration or a rate out of range, with a `ROS_DOMAIN_ID` that is no domain, or an
 /// unknown scenario: a clear error before any DDS traffic.
 #[test]
 fn sim_robot_refuses_what_it_cannot_serve() {
@@ -940,6 +940,19 @@ fn sim_robot_refuses_what_it_cannot_serve() {
         ],
         &["--for -1"],
     );
+    for rate in ["0", "-2", "101", "NaN"] {
+        support::fails_with(
+            &[
+                "sim-robot",
+                "--scenario",
+                "bridge1",
+                "--ros2",
+                "--rate",
+                rate,
+            ],
+            &[&format!("--rate {rate}"), "at most 100"],
+        );
+    }
     support::fails_with(
         &[
             "sim-robot",
