@@ -15,8 +15,10 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 /// How a served robot behaves.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ServeConfig {
-    /// Speed of the fastest joint of every motion, rad/s (m/s for
-    /// prismatic joints): trajectories run at it, whatever their times.
+    /// Speed of the fastest joint of a one-point trajectory, rad/s (m/s for
+    /// prismatic joints), whatever its time; a trajectory of several points
+    /// follows their times (a point not timed after its predecessor runs at
+    /// this speed).
     pub joint_speed: Real,
     /// Between joint-state messages, seconds (a state is also published
     /// the moment a trajectory point is reached).
@@ -64,6 +66,22 @@ pub const SENSE_TOPIC: &str = "/surveyor/sense";
 /// turns on differences that small, so a run driving a simulated robot
 /// over ROS 2 could not be the in-process run without it.
 pub const EXACT_RANGES_TOPIC: &str = "/surveyor/ranges";
+
+impl ServeConfig {
+    /// An error unless the rate is above 0 and at most [`MAX_RATE`].
+    pub fn check(&self) -> Result<(), Ros2Error> {
+        if self.rate.is_finite() && self.rate > 0.0 && self.rate <= MAX_RATE {
+            return Ok(());
+        }
+        Err(Ros2Error::Config {
+            what: "rate".into(),
+            message: format!(
+                "expected robot seconds per wall second in (0, {MAX_RATE}], got {}",
+                self.rate
+            ),
+        })
+    }
+}
 
 impl Default for ServeConfig {
     fn default() -> Self {
@@ -166,45 +184,106 @@ pub fn exact_readings(
     }
 }
 
-/// Move `hw` up to `reach` (radians of its fastest joint) toward the first
-/// of `goals`; whether it got there (the goal is then dropped). A pose the
-/// hardware refuses ends the trajectory.
-fn advance<H: Arm>(
-    hw: &mut H,
-    goals: &mut VecDeque<Vec<Real>>,
-    reach: Real,
-    stats: &mut ServeStats,
-    log: &mut dyn FnMut(&str),
-) -> bool {
-    let Some(goal) = goals.front() else {
-        return false;
-    };
-    let q = hw.joints();
-    let far = q
-        .iter()
-        .zip(goal)
-        .map(|(a, b)| (b - a).abs())
-        .fold(0.0, Real::max);
-    let (next, arrived) = if far <= reach {
-        (goal.clone(), true)
-    } else {
-        let s = reach / far;
-        (
-            q.iter().zip(goal).map(|(a, b)| a + s * (b - a)).collect(),
-            false,
-        )
-    };
-    if let Err(e) = hw.move_to(&next) {
-        stats.refused += 1;
-        log(&format!("trajectory stopped: {e}"));
-        goals.clear();
-        false
-    } else {
-        if arrived {
-            goals.pop_front();
+/// A trajectory under way: where the last segment began (robot time,
+/// seconds, and joints) and the points still ahead, each with the robot
+/// time it is due.
+#[derive(Debug, Default)]
+struct Execution {
+    from: (Real, Vec<Real>),
+    ahead: VecDeque<(Real, Vec<Real>)>,
+}
+
+impl Execution {
+    /// The execution of `points` received at robot time `now` with the arm
+    /// at `q`. A trajectory of one point is a move there at `joint_speed`
+    /// (its fastest joint), whatever its time; the points of a longer one
+    /// are due at their `time_from_start` after `now` (as a `ros2_control`
+    /// joint trajectory controller takes them), a point whose time is not
+    /// after its predecessor's at `joint_speed` after it.
+    fn new(
+        points: Vec<Vec<Real>>,
+        times_s: &[Real],
+        now: Real,
+        q: Vec<Real>,
+        joint_speed: Real,
+    ) -> Self {
+        let timed = points.len() > 1;
+        let mut ahead = VecDeque::with_capacity(points.len());
+        let (mut t, mut at) = (now, q.clone());
+        for (p, &after) in points.into_iter().zip(times_s) {
+            let far = at
+                .iter()
+                .zip(&p)
+                .map(|(a, b)| (b - a).abs())
+                .fold(0.0, Real::max);
+            t = if timed && now + after > t {
+                now + after
+            } else {
+                t + far / joint_speed
+            };
+            at.clone_from(&p);
+            ahead.push_back((t, p));
         }
-        arrived
+        Self {
+            from: (now, q),
+            ahead,
+        }
     }
+
+    /// Where the arm is due at robot time `t`, and whether a point was
+    /// reached on the way (those are then dropped); `None` when nothing is
+    /// under way.
+    fn at(&mut self, t: Real) -> Option<(Vec<Real>, bool)> {
+        let mut reached = false;
+        while let Some((due, _)) = self.ahead.front()
+            && *due <= t
+        {
+            if let Some(point) = self.ahead.pop_front() {
+                self.from = point;
+            }
+            reached = true;
+        }
+        let Some((due, q1)) = self.ahead.front() else {
+            return reached.then(|| (self.from.1.clone(), true));
+        };
+        let (t0, q0) = &self.from;
+        let s = if *due > *t0 {
+            ((t - t0) / (due - t0)).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let q = q0.iter().zip(q1).map(|(a, b)| a + s * (b - a)).collect();
+        Some((q, reached))
+    }
+}
+
+/// The execution of `trajectory` received at robot time `t` by `hw` (the
+/// robot of `names`, its joints' ROS names), or why not.
+fn execution_of<H: Arm>(
+    trajectory: &JointTrajectory,
+    names: &[String],
+    robot: &str,
+    hw: &H,
+    t: Real,
+    config: &ServeConfig,
+) -> Result<Execution, String> {
+    let points = waypoints(trajectory, names, robot, &hw.joints())?;
+    let times: Vec<Real> = trajectory
+        .points
+        .iter()
+        .map(|p| {
+            p.time_from_start
+                .to_nanos()
+                .map_or(0.0, |ns| ns as Real * 1e-9)
+        })
+        .collect();
+    Ok(Execution::new(
+        points,
+        &times,
+        t,
+        hw.joints(),
+        config.joint_speed,
+    ))
 }
 
 /// Serve `hw` (the hardware of `robot`) on `node` until `stop` is raised:
@@ -213,9 +292,11 @@ fn advance<H: Arm>(
 /// and each range finder's reading every `range_period_s` on
 /// `/range/finder_k` (when it has any), and execute each
 /// `trajectory_msgs/JointTrajectory` sent to the trajectory topic: its
-/// points in turn, on a straight joint-space line at `joint_speed`, a new
-/// trajectory replacing the one under way (as a `ros2_control` trajectory
-/// controller does). A point the hardware refuses ends the trajectory
+/// points in turn, on straight joint-space lines, a one-point trajectory at
+/// `joint_speed`, a longer one on its points' times ([`ServeConfig`]), a
+/// new trajectory replacing the one under way (as a `ros2_control`
+/// trajectory controller does). Everything runs on the robot's clock,
+/// `rate` times real time, published on [`CLOCK_TOPIC`]. A point the hardware refuses ends the trajectory
 /// there; `log` hears why.
 pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
     hw: &mut H,
@@ -241,35 +322,34 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
     } else {
         (None, None)
     };
-    if !(config.rate.is_finite() && config.rate > 0.0 && config.rate <= MAX_RATE) {
-        return Err(Ros2Error::Config {
-            what: "rate".into(),
-            message: format!(
-                "expected robot seconds per wall second in (0, {MAX_RATE}], got {}",
-                config.rate
-            ),
-        });
-    }
+    config.check()?;
     let clock = node.clock_publisher::<record::bag::msg::Clock>(CLOCK_TOPIC)?;
     let bearings = hw.bearings_rad().to_vec();
     let mut stats = ServeStats::default();
-    let mut goals: VecDeque<Vec<Real>> = VecDeque::new();
+    let mut execution = Execution::default();
     let tick = Duration::try_from_secs_f64(config.tick_s)
         .unwrap_or(Duration::from_millis(5))
         .min(Duration::from_secs(1));
     let start = Instant::now();
     let start_ns = now_ns();
-    let mut last = start;
     let (mut next_state, mut next_scan, mut next_range) = (0.0, 0.0, 0.0);
     let mut ready = false;
     while !stop.load(Ordering::Relaxed) {
-        while let Some((t, _)) = commands
+        // The robot's time: `rate` robot seconds per wall second.
+        let t = config.rate * start.elapsed().as_secs_f64();
+        let stamp = start_ns.saturating_add((t * 1e9) as u64);
+        clock
+            .publish(record::bag::msg::Clock {
+                clock: record::bag::msg::Time::from_nanos(stamp),
+            })
+            .map_err(|e| transfer(CLOCK_TOPIC, e))?;
+        while let Some((trajectory, _)) = commands
             .take()
             .map_err(|e| transfer(&spec.trajectory_topic, e))?
         {
-            match waypoints(&t, &names, &robot.name, &hw.joints()) {
-                Ok(points) => {
-                    goals = points.into();
+            match execution_of(&trajectory, &names, &robot.name, hw, t, config) {
+                Ok(e) => {
+                    execution = e;
                     stats.trajectories += 1;
                 }
                 Err(why) => {
@@ -278,18 +358,17 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
                 }
             }
         }
-        // The robot's time: `rate` robot seconds per wall second.
-        let now = Instant::now();
-        let dt = config.rate * (now - last).as_secs_f64();
-        last = now;
-        let reached = advance(hw, &mut goals, config.joint_speed * dt, &mut stats, log);
-        let t = config.rate * (now - start).as_secs_f64();
-        let stamp = start_ns.saturating_add((t * 1e9) as u64);
-        clock
-            .publish(record::bag::msg::Clock {
-                clock: record::bag::msg::Time::from_nanos(stamp),
-            })
-            .map_err(|e| transfer(CLOCK_TOPIC, e))?;
+        let mut reached = false;
+        if let Some((q, arrived)) = execution.at(t) {
+            reached = arrived;
+            if let Err(e) = hw.move_to(&q) {
+                // A pose the hardware refuses ends the trajectory.
+                stats.refused += 1;
+                log(&format!("trajectory stopped: {e}"));
+                execution = Execution::default();
+                reached = false;
+            }
+        }
         if t >= next_state || reached {
             next_state = t + config.state_period_s;
             let msg = record::bag::joint_state(stamp, &names, &hw.joints());
@@ -398,6 +477,47 @@ mod tests {
                 .collect(),
             ..JointTrajectory::default()
         }
+    }
+
+    #[test]
+    fn a_trajectory_runs_on_its_times_and_a_single_point_at_the_joint_speed() {
+        use super::Execution;
+        let close = |got: Option<(Vec<f64>, bool)>, want: &[f64], reached: bool| {
+            let (q, r) = got.unwrap();
+            assert_eq!(r, reached, "{q:?}");
+            for (a, b) in q.iter().zip(want) {
+                assert!((a - b).abs() < 1e-12, "{q:?} against {want:?}");
+            }
+        };
+        // Two points due 1 s and 3 s after t = 10, from (0, 0).
+        let mut e = Execution::new(
+            vec![vec![1.0, 0.0], vec![1.0, 2.0]],
+            &[1.0, 3.0],
+            10.0,
+            vec![0.0, 0.0],
+            0.5,
+        );
+        close(e.at(10.5), &[0.5, 0.0], false);
+        close(e.at(11.0), &[1.0, 0.0], true);
+        close(e.at(12.0), &[1.0, 1.0], false);
+        close(e.at(13.5), &[1.0, 2.0], true);
+        assert!(e.at(14.0).is_none());
+        // One point: at 0.5 rad/s, 2 rad take 4 s whatever its time.
+        let mut e = Execution::new(vec![vec![2.0, 0.0]], &[0.1], 0.0, vec![0.0, 0.0], 0.5);
+        close(e.at(1.0), &[0.5, 0.0], false);
+        close(e.at(4.0), &[2.0, 0.0], true);
+        // A point not timed after its predecessor runs at the joint speed:
+        // 2 rad at 0.5 rad/s after the first point's 1 s.
+        let mut e = Execution::new(
+            vec![vec![1.0, 0.0], vec![1.0, 2.0]],
+            &[1.0, 0.5],
+            0.0,
+            vec![0.0, 0.0],
+            0.5,
+        );
+        // (The first point was passed on the way: reached.)
+        close(e.at(3.0), &[1.0, 1.0], true);
+        close(e.at(5.0), &[1.0, 2.0], true);
     }
 
     #[test]

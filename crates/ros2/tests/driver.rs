@@ -287,3 +287,133 @@ fn the_driver_follows_a_faster_robot_s_clock() {
     assert!(wall_s < 10.0, "timed out after {wall_s} s of wall time");
     stop.store(true, Ordering::Relaxed);
 }
+
+/// A served robot runs a trajectory of several points on their times (as
+/// a `ros2_control` joint trajectory controller does), on its own clock:
+/// at 5 times real time, the joint states it stamps follow the
+/// piecewise-linear path of the points' times, and it takes the
+/// trajectory's 3 s of robot time from leaving the start to the goal.
+#[test]
+fn a_served_robot_follows_a_trajectory_s_times() {
+    use record::bag::msg::{JointState, JointTrajectory, JointTrajectoryPoint, Time};
+    let loaded = Scenario::load("bridge1").unwrap();
+    let config = Ros2Config {
+        domain_id: domain(100),
+        loopback_only: true,
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let served = SimRig::with_every_sensor(&loaded, 7).unwrap();
+    let robot = served.robot().clone();
+    let start = served.joints();
+    let serve = ServeConfig {
+        joint_speed: 10.0,
+        rate: 5.0,
+        state_period_s: 0.02,
+        ..ServeConfig::default()
+    };
+    {
+        let stop = Arc::clone(&stop);
+        let robot = robot.clone();
+        std::thread::spawn(move || {
+            let mut rig = served;
+            let mut node = Ros2Node::new("served", &config).unwrap();
+            serve_robot(&mut rig, &robot, &mut node, &serve, &stop, &mut |m| {
+                eprintln!("{m}");
+            })
+            .unwrap();
+        });
+    }
+    let spec = scenario::ros2::Ros2Spec::default();
+    let mut node = Ros2Node::new("planner", &config).unwrap();
+    let states = node
+        .subscription::<JointState>(&spec.joint_states_topic)
+        .unwrap();
+    let commands = node
+        .publisher::<JointTrajectory>(&spec.trajectory_topic)
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while node.subscriptions_of(&commands) == 0 || node.publishers_of(&states) == 0 {
+        assert!(
+            t0.elapsed().as_secs() < 30,
+            "the served robot never matched"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let names: Vec<String> = robot.joint_names().iter().map(|&n| n.to_owned()).collect();
+    // Joint 1 by 0.5 rad in 1 s, then joint 2 by 1 rad in the next 2 s.
+    let mid: Vec<f64> = start
+        .iter()
+        .enumerate()
+        .map(|(i, q)| if i == 0 { q + 0.5 } else { *q })
+        .collect();
+    let goal: Vec<f64> = mid
+        .iter()
+        .enumerate()
+        .map(|(i, q)| if i == 1 { q + 1.0 } else { *q })
+        .collect();
+    let path = |t: f64| -> Vec<f64> {
+        let (a, b, s) = if t <= 1.0 {
+            (&start, &mid, t.max(0.0))
+        } else {
+            (&mid, &goal, ((t - 1.0) / 2.0).min(1.0))
+        };
+        a.iter().zip(b).map(|(x, y)| x + s * (y - x)).collect()
+    };
+    let point = |q: &[f64], s: f64| JointTrajectoryPoint {
+        positions: q.to_vec(),
+        time_from_start: Time::from_nanos((s * 1e9) as u64),
+        ..JointTrajectoryPoint::default()
+    };
+    commands
+        .publish(JointTrajectory {
+            joint_names: names.clone(),
+            points: vec![point(&mid, 1.0), point(&goal, 3.0)],
+            ..JointTrajectory::default()
+        })
+        .unwrap();
+    // Every state until the goal, by its stamp.
+    let mut seen: Vec<(f64, Vec<f64>)> = Vec::new();
+    let t0 = std::time::Instant::now();
+    loop {
+        assert!(t0.elapsed().as_secs() < 30, "the goal was never reached");
+        let Some((js, _)) = states.take().unwrap() else {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+            continue;
+        };
+        let q: Vec<f64> = names
+            .iter()
+            .map(|n| js.position[js.name.iter().position(|x| x == n).unwrap()])
+            .collect();
+        let t = js.header.stamp.to_nanos().unwrap() as f64 * 1e-9;
+        let at_goal = q == goal;
+        seen.push((t, q));
+        if at_goal {
+            break;
+        }
+    }
+    // When the robot took the trajectory: from the first state on the
+    // way, joint 1 having moved at 0.5 rad/s since.
+    let first = seen.iter().position(|(_, q)| *q != start).unwrap();
+    let (t1, q1) = &seen[first];
+    let t_took = t1 - (q1[0] - start[0]) / 0.5;
+    let t_goal = seen.last().unwrap().0;
+    // The goal is stamped in the first turn of the loop at or after 3 s.
+    let took = t_goal - t_took;
+    assert!(
+        (3.0 - 1e-6..3.2).contains(&took),
+        "the trajectory took {took} robot seconds"
+    );
+    let moving = &seen[first..seen.len() - 1];
+    assert!(moving.len() > 5, "{} states on the way", moving.len());
+    for (t, q) in moving {
+        let want = path(t - t_took);
+        let error = q
+            .iter()
+            .zip(&want)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        // Each state is the position due at its own stamp.
+        assert!(error < 1e-6, "at {} s: {q:?} against {want:?}", t - t_took);
+    }
+    stop.store(true, Ordering::Relaxed);
+}
