@@ -161,6 +161,19 @@ pub struct FollowConfig {
     /// [`Self::reposition_steps`]; the larger of it and
     /// [`Self::joint_limit_gain`]).
     pub reposition_gain: Real,
+    /// How many goals in a row the progress check must give up, none of
+    /// its checks in between finding the robot moved, before a
+    /// repositioning (see [`Self::reposition_steps`]) may start (our
+    /// addition, issue 45). 0 or 1 (the default 0): at the first give-up.
+    /// A robot whose joint on its limit holds it gives up goal after goal
+    /// without moving (arm4 on block2: 50 in a row, one every 11 steps);
+    /// the ordinary give-ups of a run that moves on come one at a time.
+    pub reposition_after_give_ups: u32,
+    /// How many joints must lie in the outer tenth of their ranges for a
+    /// repositioning (see [`Self::reposition_steps`]) to start (our
+    /// addition, issue 45); 0 or 1 (the default 1): one. arm4 stalled on
+    /// block2 with its yaw and a wrist roll both on their limits.
+    pub reposition_joints_near_limit: u32,
     /// The joint-limit term keeps links off (our addition, issue 45): its
     /// null-space motion `α(I − J⁺J)z_j` loses, within the null space, the
     /// part that would bring a link within the influence distance closer
@@ -237,6 +250,8 @@ impl Default for FollowConfig {
             joint_limit_yield: 0.0,
             reposition_steps: 0,
             reposition_gain: 0.01,
+            reposition_after_give_ups: 0,
+            reposition_joints_near_limit: 1,
             joint_limit_keeps_links_off: false,
             link_margin_m: 0.05,
             guard: true,

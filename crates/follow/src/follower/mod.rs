@@ -240,6 +240,9 @@ struct Progress {
     reposition_left: u32,
     /// The step before which no new repositioning starts.
     reposition_after: u64,
+    /// Goals given up since a progress check last found the robot moved
+    /// (`FollowConfig::reposition_after_give_ups`).
+    give_ups_in_a_row: u32,
 }
 
 /// A direction with an optional step limit (P§3.4.3, P§3.4.5).
@@ -341,6 +344,7 @@ impl Follower {
                 watched: Vec::new(),
                 reposition_left: 0,
                 reposition_after: 0,
+                give_ups_in_a_row: 0,
             },
             last_points: Vec::new(),
             sensed,
