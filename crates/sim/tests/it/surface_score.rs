@@ -434,7 +434,7 @@ fn block2_has_eight_corners_off_the_table_and_four_between_arm4s_faces() {
     // arm4's count: the +x face and the 45° chamfer left out as well.
     let given = [
         Vector3::new(1.0, 0.0, 0.0),
-        Vector3::new(1.0, 0.0, 1.0).normalize(),
+        Vector3::new(Real::sqrt(0.5), 0.0, Real::sqrt(0.5)),
     ];
     let resting = not_resting_on(0.0);
     let counted = |f: &TrueFace| {
