@@ -145,9 +145,10 @@ pub struct FollowConfig {
     /// How far the joint-limit term yields to link avoidance (our addition):
     /// the term is scaled by `1 − yield·w`, `w` the largest weight eq. 5
     /// gives any link ([`crate::actuator::largest_link_weight`]: 1 at the
-    /// model, 0 beyond the influence distance). 0 (the default) takes the
-    /// term whole; 1 leaves the null space to link avoidance wherever a link
-    /// touches the model (measured in the crate README: not better).
+    /// model, 0 beyond the influence distance). 0 takes the term whole; 1
+    /// (the default since issue 45's repositioning; before, 0) leaves the
+    /// null space to link avoidance wherever a link touches the model (with
+    /// a steady `joint_limit_gain` of 0.01 not better, crate README).
     pub joint_limit_yield: Real,
     /// Repositioning before giving up (our addition to P§3.4.7, issue 45):
     /// when the progress check would give the goal up on a robot with joints
@@ -155,20 +156,36 @@ pub struct FollowConfig {
     /// its range, the follower first spends this many steps with the
     /// joint-limit term at [`Self::reposition_gain`] (and no new
     /// repositioning starts until twice that many steps after it ended).
-    /// 0 (the default) gives up at once, as P§3.4.7.
+    /// 0 gives up at once, as P§3.4.7; the default is 100, and
+    /// [`Self::reposition_after_give_ups`] and
+    /// [`Self::reposition_joints_near_limit`] say when it starts.
     pub reposition_steps: u32,
     /// The joint-limit gain while repositioning (see
     /// [`Self::reposition_steps`]; the larger of it and
-    /// [`Self::joint_limit_gain`]).
+    /// [`Self::joint_limit_gain`]); default 0.05.
     pub reposition_gain: Real,
+    /// How many goals in a row the progress check must give up, none of
+    /// its checks in between finding the robot moved, before a
+    /// repositioning (see [`Self::reposition_steps`]) may start (our
+    /// addition, issue 45); 0 or 1: at the first give-up; default 10.
+    /// A robot whose joints on their limits hold it gives up goal after
+    /// goal without moving (arm4 on block2: rows of up to 25, one every 11
+    /// steps); most give-ups of a run that moves on come one or a few at a
+    /// time.
+    pub reposition_after_give_ups: u32,
+    /// How many joints must lie in the outer tenth of their ranges for a
+    /// repositioning (see [`Self::reposition_steps`]) to start (our
+    /// addition, issue 45); 0 or 1: one; default 2. arm4 stalled on
+    /// block2 with its yaw and a wrist roll both on their limits.
+    pub reposition_joints_near_limit: u32,
     /// The joint-limit term keeps links off (our addition, issue 45): its
     /// null-space motion `α(I − J⁺J)z_j` loses, within the null space, the
     /// part that would bring a link within the influence distance closer
     /// than its radius plus [`Self::link_margin_m`] from the model in one
     /// step, or a link already within that any closer (to first order; see
     /// [`crate::actuator::actuator_change_bounded`]). Pudney's link-distance
-    /// term is taken as it is. `false` (the default) takes the joint-limit
-    /// term whole: repositioning (`reposition_steps`) at a raised gain then
+    /// term is taken as it is. `true` by default; `false` takes the
+    /// joint-limit term whole: repositioning (`reposition_steps`) at a raised gain then
     /// pushed arm4's last link onto block2's edge between the chamfer and
     /// the +y face until the safety guard held it at its margin, where the
     /// model's chamfer ended up to 6 mm short of the true edge (14.2 mm
@@ -234,10 +251,12 @@ impl Default for FollowConfig {
             damping: 1e-3,
             task_share: 0.15,
             joint_limit_gain: 0.0,
-            joint_limit_yield: 0.0,
-            reposition_steps: 0,
-            reposition_gain: 0.01,
-            joint_limit_keeps_links_off: false,
+            joint_limit_yield: 1.0,
+            reposition_steps: 100,
+            reposition_gain: 0.05,
+            reposition_after_give_ups: 10,
+            reposition_joints_near_limit: 2,
+            joint_limit_keeps_links_off: true,
             link_margin_m: 0.05,
             guard: true,
             guard_margin_m: 0.02,

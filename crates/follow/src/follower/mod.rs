@@ -240,6 +240,9 @@ struct Progress {
     reposition_left: u32,
     /// The step before which no new repositioning starts.
     reposition_after: u64,
+    /// Goals given up since a progress check last found the robot moved
+    /// (`FollowConfig::reposition_after_give_ups`).
+    give_ups_in_a_row: u32,
 }
 
 /// A direction with an optional step limit (P§3.4.3, P§3.4.5).
@@ -341,6 +344,7 @@ impl Follower {
                 watched: Vec::new(),
                 reposition_left: 0,
                 reposition_after: 0,
+                give_ups_in_a_row: 0,
             },
             last_points: Vec::new(),
             sensed,
@@ -633,13 +637,24 @@ impl Follower {
                     + n.z * self.jacobian[(2, k)]
             }));
         }
+        // The joint-limit term, for robots with joints to spare (point3's
+        // three joints have no null space to take it in). While
+        // repositioning before a give-up (P§3.4.7, `reposition_steps`) the
+        // gain is at least `reposition_gain`.
+        let repositioning = self.progress.reposition_left > 0;
+        if repositioning {
+            self.progress.reposition_left -= 1;
+        }
+        let joint_term =
+            self.robot.dof() > 3 && (self.config.joint_limit_gain > 0.0 || repositioning);
         // The bounds on the joint-limit term (`joint_limit_keeps_links_off`):
         // every link within the influence distance may come at most as far
         // closer as it is beyond its radius plus the link margin (a velocity
         // damper at one step's scale), so no link is brought within the
         // margin by it and none already within it closer.
+        // Only while the term acts: it is zero otherwise.
         let mut bounds = Vec::new();
-        if self.config.joint_limit_keeps_links_off {
+        if self.config.joint_limit_keeps_links_off && joint_term {
             for p in proximities {
                 if p.distance <= 0.0 {
                     continue;
@@ -669,18 +684,10 @@ impl Follower {
             switches,
             &self.config,
         );
-        // The joint-limit term, for robots with joints to spare (point3's
-        // three joints have no null space to take it in).
-        // It yields to link avoidance where a link is near the model
-        // (`joint_limit_yield`): there the null space is the links'.
-        // While repositioning before a give-up (P§3.4.7,
-        // `reposition_steps`) the gain is at least `reposition_gain`.
-        let repositioning = self.progress.reposition_left > 0;
-        if repositioning {
-            self.progress.reposition_left -= 1;
-        }
+        // The joint-limit term yields to link avoidance where a link is near
+        // the model (`joint_limit_yield`): there the null space is the links'.
         let mut z_bounded = nalgebra::DVector::zeros(dof);
-        if self.robot.dof() > 3 && (self.config.joint_limit_gain > 0.0 || repositioning) {
+        if joint_term {
             let w = largest_link_weight(self.config.objective, proximities, switches, &self.config);
             let share = 1.0 - self.config.joint_limit_yield * w;
             let gradient = if repositioning {

@@ -190,48 +190,195 @@ fn point3_completes_noisy_cube_block1_and_block2() {
     }
 }
 
+/// Issue 45 acceptance 4 under noise: point3 on block2 with range noise
+/// σ = λ/5, seeds 1–3, forms shared edges along ≥ 85 % of the true edges
+/// and corner vertices at ≥ 6 of its 8 corners (90.9, 97.3, 98.6 % and 6,
+/// 7, 8 on 2026-11-29); noise-free it is `point3_completes_block2_with_its_folds`.
+#[test]
+#[ignore = "whole runs: release profile, run by .ci/run"]
+fn point3_keeps_block2s_folds_under_noise() {
+    for seed in 1..=3 {
+        let run = run_noisy("block2", "point3", Some(0.01), seed);
+        let score = run.score.as_ref().expect("a built-in scene is scored");
+        println!(
+            "point3 / block2 σ 0.01 seed {seed}: {} sets, shared edges {:.1} %, corners {} of {}",
+            run.episode.rows.len(),
+            100.0 * score.edge_coverage,
+            score.corners_found,
+            score.corners.len()
+        );
+        assert!(run.judgement.collisions.is_empty(), "seed {seed}");
+        assert_eq!(score.corners.len(), 8);
+        assert!(
+            score.edge_coverage >= 0.85,
+            "seed {seed}: shared edges {:.1} %",
+            100.0 * score.edge_coverage
+        );
+        assert!(
+            score.corners_found >= 6,
+            "seed {seed}: corners {}",
+            score.corners_found
+        );
+    }
+}
+
 /// Issue 24 acceptance 1, where it holds: arm4 (its unreachable faces given
 /// a priori, as `surveyor follow` gives them) completes the cube and block1
 /// noise-free by every criterion, its links at least 20 mm from the true
 /// scene at every pose and along every motion (27 and 23 mm, 2026-11-27).
+///
+/// Issue 45 acceptance 2 asks them to stay no worse than before it: each
+/// keeps at least its figures of b2ef547 (2026-11-29, `run.json`: true
+/// clearance 27.0 and 22.8 mm, lowest counted face 100.0 and 99.7 %,
+/// shared edges 100.0 and 98.5 %) and at most its sets per square metre
+/// modelled (1279.5 and 2285.9), each rounded outward in the last place.
 #[test]
 #[ignore = "whole runs: release profile, run by .ci/run"]
 fn arm4_completes_the_cube_and_block1_clear() {
-    for (scene, pudney) in [("cube", 779), ("block1", 1120)] {
+    let before = [
+        ("cube", 779, 0.0270, 0.999, 0.999, 1279.6),
+        ("block1", 1120, 0.0227, 0.996, 0.985, 2286.0),
+    ];
+    for (scene, pudney, floor, face, edges, per_m2) in before {
         let run = run_noisy(scene, "arm4", None, 1);
         assert_complete(&run, pudney);
         let clearance = run.judgement.min_clearance_m.expect("a scene is judged");
-        println!("arm4 / {scene}: min clearance {:.1} mm", 1000.0 * clearance);
-        assert!(clearance >= 0.02, "{scene}: {clearance} m");
-    }
-}
-
-/// Issue 24 acceptance 1's other runs, arm4 on block2 noise-free and on the
-/// three scenes under range noise σ = λ/5 (seeds 1–3): none touches the
-/// scene, which is all that is asserted; the rest of acceptance 1 does not
-/// hold on every run (crate `follow`'s README counts it), so it is printed.
-#[test]
-#[ignore = "whole runs: release profile, run by .ci/run"]
-fn arm4_never_touches_the_blocks() {
-    let mut runs = vec![("block2", None, 1)];
-    for scene in ["cube", "block1", "block2"] {
-        for seed in 1..=3 {
-            runs.push((scene, Some(0.01), seed));
-        }
-    }
-    for (scene, noise, seed) in runs {
-        let run = run_noisy(scene, "arm4", noise, seed);
         let score = run.score.as_ref().expect("a built-in scene is scored");
         let lowest = score
             .faces
             .iter()
             .map(|f| f.within_lambda_fraction)
             .fold(1.0, f64::min);
+        let sets_per_m2 = run.episode.rows.len() as f64 / score.modelled_m2;
         println!(
-            "arm4 / {scene} σ {noise:?} seed {seed}: {} sets, {:?}, min clearance {:?} m, lowest face {:.1} %, shared edges {:.1} %, corners {} of {}",
+            "arm4 / {scene}: min clearance {:.1} mm, lowest face {:.1} %, {sets_per_m2:.1} sets/m²",
+            1000.0 * clearance,
+            100.0 * lowest
+        );
+        assert!(clearance >= 0.02, "{scene}: {clearance} m");
+        assert!(clearance >= floor, "{scene}: {clearance} m");
+        assert!(lowest >= face, "{scene}: a face at {lowest}");
+        assert!(
+            score.edge_coverage >= edges,
+            "{scene}: {}",
+            score.edge_coverage
+        );
+        assert!(sets_per_m2 <= per_m2, "{scene}: {sets_per_m2} sets/m²");
+    }
+}
+
+/// Issue 45 acceptance 1: arm4 on block2 (the +x face and the +x chamfer
+/// given a priori, as `surveyor follow` gives them), noise-free and under
+/// range noise σ = λ/5 (seeds 1–3), ends by its own rule without a contact
+/// and at least 20 mm from the true scene; noise-free every counted face
+/// (each ≥ 98 % reachable by `sim::follow_reach`) is ≥ 95 % within λ,
+/// shared edges ≥ 90 % and corner vertices at ≥ 3 of the 4 corners between
+/// counted faces (the issue's "6 of 8" is point3's count, where all eight
+/// are between counted faces: `tests/it/surface_score.rs`); noisy, every
+/// counted face ≥ 90 % and shared edges ≥ 80 %; and no more faces given a
+/// priori than the two. Noise-free, the yaw and a wrist roll sit on their
+/// limits from step 2507 and, before the follower repositioned
+/// (`reposition_steps`, issue 45), the +y face ended at 46.9 % and the −x
+/// face at 70.8 %; now 5366 sets, every face 100 %, edges 98.1 %, 3 of 4,
+/// 29.9 mm (2026-11-29).
+#[test]
+#[ignore = "whole runs: release profile, run by .ci/run"]
+fn arm4_completes_block2_clear() {
+    for (noise, seed) in [(None, 1), (Some(0.01), 1), (Some(0.01), 2), (Some(0.01), 3)] {
+        let run = run_noisy("block2", "arm4", noise, seed);
+        let score = run.score.as_ref().expect("a built-in scene is scored");
+        let lowest = score
+            .faces
+            .iter()
+            .map(|f| f.within_lambda_fraction)
+            .fold(1.0, f64::min);
+        let clearance = run.judgement.min_clearance_m.expect("a scene is judged");
+        println!(
+            "arm4 / block2 σ {noise:?} seed {seed}: {} sets, {:?}, min clearance {:.1} mm, lowest face {:.1} %, shared edges {:.1} %, corners {} of {}",
             run.episode.rows.len(),
             run.episode.end,
-            run.judgement.min_clearance_m,
+            1000.0 * clearance,
+            100.0 * lowest,
+            100.0 * score.edge_coverage,
+            score.corners_found,
+            score.corners.len()
+        );
+        assert_eq!(
+            run.episode.end,
+            RunEnd::Follower(Termination::SurfaceComplete),
+            "seed {seed}: the run must end by the algorithm's own rule"
+        );
+        assert!(
+            run.judgement.collisions.is_empty(),
+            "seed {seed}: contacts {:?}",
+            run.judgement.collisions
+        );
+        assert!(clearance >= 0.02, "seed {seed}: {clearance} m");
+        assert_eq!(
+            run.a_priori_faces.len(),
+            2,
+            "the +x face and the +x chamfer"
+        );
+        assert_eq!(score.faces.len(), 5);
+        let (faces, edges) = if noise.is_none() {
+            (0.95, 0.90)
+        } else {
+            (0.90, 0.80)
+        };
+        assert!(
+            lowest >= faces,
+            "seed {seed}: a face at {:.1} %",
+            100.0 * lowest
+        );
+        assert!(
+            score.edge_coverage >= edges,
+            "seed {seed}: shared edges along {:.1} %",
+            100.0 * score.edge_coverage
+        );
+        if noise.is_none() {
+            assert_eq!(score.corners.len(), 4);
+            assert!(score.corners_found >= 3, "corners {}", score.corners_found);
+        }
+    }
+}
+
+/// Issue 24 acceptance 1's other runs, arm4 on the cube and block1 under
+/// range noise σ = λ/5 (seeds 1–3; block2's are in
+/// [`arm4_completes_block2_clear`]): none touches the scene. Issue 45
+/// acceptance 2 asks them to stay no worse than before it on any figure:
+/// each run keeps at least its figures of b2ef547 (2026-11-29, `run.json`:
+/// its end, true clearance, lowest counted face within λ, shared edges,
+/// corners) and at most its sets per square metre modelled, each rounded
+/// outward in the last place shown. Repositioning (`reposition_steps`)
+/// leaves all six unchanged. block1 seed 1 ran to the 20 000-set budget
+/// then, and seed 3 left a face at 57.8 %: floors, not acceptance 1.
+#[test]
+#[ignore = "whole runs: release profile, run by .ci/run"]
+fn arm4_keeps_the_noisy_cube_and_block1_figures() {
+    // (scene, seed, own end, clearance m, lowest face, edges, corners, sets/m²)
+    let before = [
+        ("cube", 1, true, 0.0261, 0.999, 0.999, 2, 1701.0),
+        ("cube", 2, true, 0.0118, 0.999, 0.999, 2, 1937.1),
+        ("cube", 3, true, 0.0265, 0.999, 0.987, 2, 2116.0),
+        ("block1", 1, false, 0.0297, 0.999, 0.999, 2, 7043.0),
+        ("block1", 2, true, 0.0316, 0.999, 0.999, 2, 2074.0),
+        ("block1", 3, true, 0.0315, 0.577, 0.984, 2, 2356.0),
+    ];
+    for (scene, seed, own_end, clearance, face, edges, corners, per_m2) in before {
+        let run = run_noisy(scene, "arm4", Some(0.01), seed);
+        let score = run.score.as_ref().expect("a built-in scene is scored");
+        let lowest = score
+            .faces
+            .iter()
+            .map(|f| f.within_lambda_fraction)
+            .fold(1.0, f64::min);
+        let min_clearance = run.judgement.min_clearance_m.expect("a scene is judged");
+        let sets_per_m2 = run.episode.rows.len() as f64 / score.modelled_m2;
+        println!(
+            "arm4 / {scene} σ 0.01 seed {seed}: {} sets, {:?}, min clearance {:.1} mm, lowest face {:.1} %, shared edges {:.1} %, corners {} of {}, {sets_per_m2:.0} sets/m²",
+            run.episode.rows.len(),
+            run.episode.end,
+            1000.0 * min_clearance,
             100.0 * lowest,
             100.0 * score.edge_coverage,
             score.corners_found,
@@ -242,7 +389,32 @@ fn arm4_never_touches_the_blocks() {
             "{scene} seed {seed}: contacts {:?}",
             run.judgement.collisions
         );
-        assert!(run.judgement.min_clearance_m.is_some_and(|d| d > 0.0));
+        if own_end {
+            assert_eq!(
+                run.episode.end,
+                RunEnd::Follower(Termination::SurfaceComplete),
+                "{scene} seed {seed}"
+            );
+        }
+        assert!(
+            min_clearance >= clearance,
+            "{scene} seed {seed}: {min_clearance} m"
+        );
+        assert!(lowest >= face, "{scene} seed {seed}: a face at {lowest}");
+        assert!(
+            score.edge_coverage >= edges,
+            "{scene} seed {seed}: shared edges {}",
+            score.edge_coverage
+        );
+        assert!(
+            score.corners_found >= corners,
+            "{scene} seed {seed}: corners {}",
+            score.corners_found
+        );
+        assert!(
+            sets_per_m2 <= per_m2,
+            "{scene} seed {seed}: {sets_per_m2} sets/m²"
+        );
     }
 }
 
