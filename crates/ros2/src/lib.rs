@@ -6,7 +6,7 @@
 //! |---|---|
 //! | [`Ros2Config`] | domain id (`ROS_DOMAIN_ID`) and loopback-only discovery |
 //! | [`Ros2Node`] | a ROS 2 node over RustDDS, publishers and subscriptions of `record::bag::msg` types with ROS 2's default QoS |
-//! | [`serve_robot`], [`ServeConfig`] | any hardware served as a ROS 2 robot: `/joint_states`, `/scan`, `Range`s, and `JointTrajectory` executed at a joint speed |
+//! | [`serve_robot`], [`ServeConfig`] | any hardware served as a ROS 2 robot: `/joint_states`, `/scan`, `Range`s, and `JointTrajectory` executed (one point at a joint speed, several on their times), its time on `/clock` |
 //! | [`Ros2Hardware`], [`DriverConfig`] | the `hw` traits over a ROS 2 robot: trajectories out, joint states, scans and ranges in (lockstep with `sim-robot`, or the next ones a real robot publishes) |
 //! | [`LiveView`] | what a run builds, published as it goes: `/tf`, sweeps, viewpoint, disc and surface-model markers |
 //! | [`Ros2Error`] | what can fail |
@@ -20,7 +20,8 @@ pub use driver::{DriverConfig, Ros2Hardware};
 pub use live::{LiveView, wall_clock_ns};
 pub use node::{Ros2Config, Ros2Node};
 pub use serve::{
-    CLOCK_TOPIC, EXACT_RANGES_TOPIC, MAX_RATE, SENSE_TOPIC, ServeConfig, ServeStats, serve_robot,
+    CLOCK_PERIOD_S, CLOCK_TOPIC, EXACT_RANGES_TOPIC, MAX_RATE, SENSE_TOPIC, ServeConfig,
+    ServeStats, serve_robot,
 };
 
 /// What can fail talking ROS 2.

@@ -47,9 +47,14 @@ pub struct ServeConfig {
 }
 
 /// Where a served robot publishes its clock (`rosgraph_msgs/Clock`, every
-/// turn of its loop): the time of its stamps, which a driver follows for
-/// its timeouts ([`crate::Ros2Hardware`]).
+/// [`CLOCK_PERIOD_S`] of robot time): the time of its stamps, which a
+/// driver follows for its timeouts ([`crate::Ros2Hardware`]).
 pub const CLOCK_TOPIC: &str = "/clock";
+
+/// Robot seconds between two `/clock` messages of a served robot (at most
+/// one a turn of its loop): a lockstep robot turns every 0.5 ms, and a
+/// clock that fine would only load the DDS link.
+pub const CLOCK_PERIOD_S: Real = 0.005;
 
 /// Fastest [`ServeConfig::rate`]: a served robot's loop turns every
 /// `tick_s` of wall time, so its motions move `rate · tick_s ·
@@ -296,8 +301,9 @@ fn execution_of<H: Arm>(
 /// `joint_speed`, a longer one on its points' times ([`ServeConfig`]), a
 /// new trajectory replacing the one under way (as a `ros2_control`
 /// trajectory controller does). Everything runs on the robot's clock,
-/// `rate` times real time, published on [`CLOCK_TOPIC`]. A point the hardware refuses ends the trajectory
-/// there; `log` hears why.
+/// `rate` times real time, published on [`CLOCK_TOPIC`] every
+/// [`CLOCK_PERIOD_S`] of it. A point the hardware refuses ends the
+/// trajectory there; `log` hears why.
 pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
     hw: &mut H,
     robot: &Robot,
@@ -332,17 +338,20 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
         .min(Duration::from_secs(1));
     let start = Instant::now();
     let start_ns = now_ns();
-    let (mut next_state, mut next_scan, mut next_range) = (0.0, 0.0, 0.0);
+    let (mut next_state, mut next_scan, mut next_range, mut next_clock) = (0.0, 0.0, 0.0, 0.0);
     let mut ready = false;
     while !stop.load(Ordering::Relaxed) {
         // The robot's time: `rate` robot seconds per wall second.
         let t = config.rate * start.elapsed().as_secs_f64();
         let stamp = start_ns.saturating_add((t * 1e9) as u64);
-        clock
-            .publish(record::bag::msg::Clock {
-                clock: record::bag::msg::Time::from_nanos(stamp),
-            })
-            .map_err(|e| transfer(CLOCK_TOPIC, e))?;
+        if t >= next_clock {
+            next_clock = t + CLOCK_PERIOD_S;
+            clock
+                .publish(record::bag::msg::Clock {
+                    clock: record::bag::msg::Time::from_nanos(stamp),
+                })
+                .map_err(|e| transfer(CLOCK_TOPIC, e))?;
+        }
         while let Some((trajectory, _)) = commands
             .take()
             .map_err(|e| transfer(&spec.trajectory_topic, e))?

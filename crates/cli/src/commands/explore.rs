@@ -151,7 +151,6 @@ pub fn explore(args: &ExploreArgs) -> Result<()> {
         .ros2
         .start_tolerance(&loaded.scenario.ros2.clone().unwrap_or_default());
     let watcher = live.clone();
-    #[allow(clippy::result_large_err)] // the error type of the sim jobs
     let make = |options: &ExploreOptions| job(&loaded, options, hardware, watcher, start_tolerance);
     let (outcome, blast) = scenario::job::explore::explore_with(
         &options,
@@ -312,7 +311,6 @@ fn say_coverage(outcome: &scenario::job::explore::ExploreOutcome) -> Result<()> 
 
 /// The exploration of `loaded` under `options`: on `hardware` when given,
 /// else in the simulator.
-#[allow(clippy::result_large_err)] // the error type of the jobs
 fn job(
     loaded: &scenario::LoadedScenario,
     options: &ExploreOptions,

@@ -207,7 +207,6 @@ pub fn connect_explore(
 /// The exploration of `loaded` under `options` on the ROS 2 robot `hw`,
 /// which must stand at the scenario's start joints (within
 /// `start_tolerance` radians), watched by the run's `live` view.
-#[allow(clippy::result_large_err)] // the error type of the jobs
 pub fn explore_job(
     loaded: &scenario::LoadedScenario,
     options: &ExploreOptions,
