@@ -255,13 +255,21 @@ impl RobotClock {
 
 /// Any hardware on a [`RobotClock`] (see the module docs); it answers as
 /// the hardware alone would.
+///
+/// Hardware with a clock of its own ([`Arm::clock_ns`]: a robot over a
+/// link) is timed on it instead of the model: each call takes the time
+/// the robot's clock ran during it, a continuous motion the time from its
+/// start to its rest. What the loop does between calls, the robot standing
+/// still, is counted as the loop says ([`RobotClock::stand`]), so a robot
+/// run faster than real time is timed as it would be in real time.
 #[derive(Debug)]
 pub struct Timed<H> {
     inner: H,
     timing: RobotTiming,
     clock: RobotClock,
-    /// The continuous motion under way and when it began, nanoseconds.
-    motion: Option<(u64, LineMotion)>,
+    /// The continuous motion under way, when it began, nanoseconds, and
+    /// the hardware's clock then (when it has one).
+    motion: Option<(u64, LineMotion, Option<u64>)>,
 }
 
 impl<H> Timed<H> {
@@ -284,6 +292,29 @@ impl<H> Timed<H> {
     pub fn into_inner(self) -> H {
         self.inner
     }
+
+    /// The hardware timed, borrowed.
+    pub fn inner(&self) -> &H {
+        &self.inner
+    }
+}
+
+/// Seconds from `h0` to `h1` on a hardware clock.
+fn seconds_between(h0: u64, h1: Option<u64>) -> Real {
+    h1.map_or(0.0, |h1| h1.saturating_sub(h0) as Real * 1e-9)
+}
+
+impl<H: Arm> Timed<H> {
+    /// `call` on the hardware, timed on its own clock when it has one
+    /// (`None` then leaves the timing to the model).
+    fn measured<T>(
+        &mut self,
+        call: impl FnOnce(&mut H) -> Result<T, HwError>,
+    ) -> Result<(T, Option<Real>), HwError> {
+        let h0 = self.inner.clock_ns();
+        let v = call(&mut self.inner)?;
+        Ok((v, h0.map(|h0| seconds_between(h0, self.inner.clock_ns()))))
+    }
 }
 
 impl<H: Arm> Arm for Timed<H> {
@@ -292,10 +323,15 @@ impl<H: Arm> Arm for Timed<H> {
     }
 
     /// The motion is timed from where the arm stands to the goal: its
-    /// profile (the event's interval), then the settling allowance.
+    /// profile (the event's interval), then the settling allowance; on a
+    /// clock of the hardware's, the time the call took.
     fn move_to(&mut self, q: &[Real]) -> Result<(), HwError> {
         let from = self.inner.joints();
-        self.inner.move_to(q)?;
+        let ((), measured) = self.measured(|h| h.move_to(q))?;
+        if let Some(d) = measured {
+            self.clock.pass(d);
+            return Ok(());
+        }
         let d = self.timing.limits.duration_s(&from, q);
         let (start, end) = self.clock.pass(d);
         if d > 0.0 {
@@ -306,14 +342,14 @@ impl<H: Arm> Arm for Timed<H> {
     }
 }
 
-impl<H: LineScanner> LineScanner for Timed<H> {
+impl<H: Arm + LineScanner> LineScanner for Timed<H> {
     fn bearings_rad(&self) -> &[Real] {
         self.inner.bearings_rad()
     }
 
     fn scan(&mut self) -> Result<ScanReadings, HwError> {
-        let scan = self.inner.scan()?;
-        self.clock.pass(self.timing.scan_time_s);
+        let (scan, measured) = self.measured(LineScanner::scan)?;
+        self.clock.pass(measured.unwrap_or(self.timing.scan_time_s));
         Ok(scan)
     }
 
@@ -340,25 +376,32 @@ fn cannot_move_scanning() -> HwError {
 /// A continuous motion on the clock: each scan ends `scan_time` after its
 /// first beam (the event's interval is the scan's), and the motion's
 /// end, the time its profile takes and then the settling allowance, with
-/// the last scan's end if that is later.
-impl<H: LineScanner> MovingScanner for Timed<H> {
+/// the last scan's end if that is later. On a clock of the hardware's the
+/// motion takes the time from its start to the arm's rest, the loop's work
+/// between its scans included (the arm moved on meanwhile).
+impl<H: Arm + LineScanner> MovingScanner for Timed<H> {
     fn start_motion(&mut self, motion: &LineMotion) -> Result<(), HwError> {
+        let h0 = self.inner.clock_ns();
         let inner = self.inner.moving().ok_or_else(cannot_move_scanning)?;
         inner.start_motion(motion)?;
-        self.motion = Some((self.clock.now_ns(), motion.clone()));
+        self.motion = Some((self.clock.now_ns(), motion.clone(), h0));
         Ok(())
     }
 
     fn next_scan(&mut self) -> Result<Option<MovingScan>, HwError> {
         let inner = self.inner.moving().ok_or_else(cannot_move_scanning)?;
         let scan = inner.next_scan()?;
-        let (t0, motion) = self.motion.as_ref().ok_or_else(|| HwError::Script {
+        let (t0, motion, h0) = self.motion.as_ref().ok_or_else(|| HwError::Script {
             message: "a scan of a continuous motion asked before the motion began".into(),
         })?;
+        // The time the hardware's clock ran since the motion began.
+        let measured = h0.map(|h0| t0 + ns(seconds_between(h0, self.inner.clock_ns())));
         if let Some(s) = &scan {
             let start = t0 + ns(s.start_s);
+            let end = start + ns(self.timing.scan_time_s);
             self.clock
-                .pass_until(start, start + ns(self.timing.scan_time_s));
+                .pass_until(start, measured.unwrap_or(end).max(end));
+            self.clock.with(|s| s.last = (start, end));
         } else {
             let d = motion.duration_s();
             let end = t0 + ns(d);
@@ -368,7 +411,11 @@ impl<H: LineScanner> MovingScanner for Timed<H> {
                 end
             };
             let now = self.clock.now_ns();
-            self.clock.pass_until(*t0, settled.max(now));
+            let (end, rest) = match measured {
+                Some(m) => (m, m),
+                None => (end, settled),
+            };
+            self.clock.pass_until(*t0, rest.max(now));
             self.clock.with(|s| s.last = (*t0, end.max(*t0)));
             self.motion = None;
         }
@@ -378,17 +425,22 @@ impl<H: LineScanner> MovingScanner for Timed<H> {
     fn brake(&mut self) -> Result<LineMotion, HwError> {
         let inner = self.inner.moving().ok_or_else(cannot_move_scanning)?;
         let braked = inner.brake()?;
-        if let Some((_, m)) = &mut self.motion {
+        if let Some((_, m, _)) = &mut self.motion {
             m.clone_from(&braked);
         }
         Ok(braked)
     }
+
+    fn brake_lag_s(&mut self) -> Real {
+        self.inner.moving().map_or(0.0, MovingScanner::brake_lag_s)
+    }
 }
 
-impl<H: RangeSensors> RangeSensors for Timed<H> {
+impl<H: Arm + RangeSensors> RangeSensors for Timed<H> {
     fn read_all(&mut self) -> Result<Vec<Option<SensorPoint>>, HwError> {
-        let readings = self.inner.read_all()?;
-        self.clock.pass(self.timing.reading_period_s);
+        let (readings, measured) = self.measured(RangeSensors::read_all)?;
+        self.clock
+            .pass(measured.unwrap_or(self.timing.reading_period_s));
         Ok(readings)
     }
 }

@@ -92,18 +92,26 @@ impl LineMotion {
     /// (seconds): every multiple of [`JOINT_STATE_PERIOD_S`] from the last
     /// at or before `t0` to the first at or after `t1`.
     pub fn samples(&self, t0: Real, t1: Real) -> Vec<JointSample> {
-        let p = JOINT_STATE_PERIOD_S;
-        let (a, b) = ((t0 / p).floor() as i64, (t1 / p).ceil() as i64);
-        (a..=b.max(a))
-            .map(|m| {
-                let t = m as Real * p;
-                JointSample {
-                    t_s: t,
-                    q: self.at(t),
-                }
-            })
-            .collect()
+        sampled(t0, t1, JOINT_STATE_PERIOD_S, |t| self.at(t))
     }
+}
+
+/// The joints `at(t)` of an arm sampled every `period_s` seconds from the
+/// last multiple of it at or before `t0` to the first at or after `t1`.
+pub fn sampled(
+    t0: Real,
+    t1: Real,
+    period_s: Real,
+    mut at: impl FnMut(Real) -> Vec<Real>,
+) -> Vec<JointSample> {
+    let p = period_s;
+    let (a, b) = ((t0 / p).floor() as i64, (t1 / p).ceil() as i64);
+    (a..=b.max(a))
+        .map(|m| {
+            let t = m as Real * p;
+            JointSample { t_s: t, q: at(t) }
+        })
+        .collect()
 }
 
 /// A scan taken while the arm moved.
@@ -146,6 +154,14 @@ pub trait MovingScanner {
     /// motion as the arm now runs it. Its scans until the arm rests still
     /// come from [`MovingScanner::next_scan`].
     fn brake(&mut self) -> Result<LineMotion, HwError>;
+    /// Seconds of the motion, at most, from the end of the scan
+    /// [`MovingScanner::next_scan`] returned last to the moment a brake
+    /// asked after it takes hold: 0 (the default) for hardware that brakes
+    /// on the spot, more for a robot on a link, which states what it
+    /// measured. [`scan_line`]'s guard looks that much further ahead.
+    fn brake_lag_s(&mut self) -> Real {
+        0.0
+    }
 }
 
 impl<T: MovingScanner + ?Sized> MovingScanner for &mut T {
@@ -159,6 +175,10 @@ impl<T: MovingScanner + ?Sized> MovingScanner for &mut T {
 
     fn brake(&mut self) -> Result<LineMotion, HwError> {
         (**self).brake()
+    }
+
+    fn brake_lag_s(&mut self) -> Real {
+        (**self).brake_lag_s()
     }
 }
 
@@ -216,18 +236,25 @@ pub fn scan_line<R: LineScanner + ?Sized>(
     builder: &mut SweepBuilder,
     guard: &mut StepGuard<'_>,
 ) -> Result<ScannedLine, HwError> {
-    let horizon = |m: &LineMotion, t: Real| m.braked(t + scan_time_s).end();
-    if !guard(&motion.from, &horizon(motion, 0.0), builder) {
+    let hw = rig.moving().ok_or_else(|| HwError::Setting {
+        what: "continuous motion".into(),
+        message: "this hardware cannot scan while the arm moves; use stop-and-go motion".into(),
+    })?;
+    // Where the arm rests if it runs one more scan, and the hardware's
+    // lag, before it brakes.
+    let horizon =
+        |m: &LineMotion, t: Real, lag: Real| m.braked(t + scan_time_s + lag.max(0.0)).end();
+    if !guard(
+        &motion.from,
+        &horizon(motion, 0.0, hw.brake_lag_s()),
+        builder,
+    ) {
         return Ok(ScannedLine {
             scans: 0,
             reached: motion.from.clone(),
             completed: false,
         });
     }
-    let hw = rig.moving().ok_or_else(|| HwError::Setting {
-        what: "continuous motion".into(),
-        message: "this hardware cannot scan while the arm moves; use stop-and-go motion".into(),
-    })?;
     hw.start_motion(motion)?;
     let mut running = motion.clone();
     let (mut scans, mut braked) = (0, false);
@@ -237,7 +264,11 @@ pub fn scan_line<R: LineScanner + ?Sized>(
         let now = scan.start_s + scan_time_s;
         if !braked
             && now < running.duration_s()
-            && !guard(&running.at(now), &horizon(&running, now), builder)
+            && !guard(
+                &running.at(now),
+                &horizon(&running, now, hw.brake_lag_s()),
+                builder,
+            )
         {
             running = hw.brake()?;
             braked = true;

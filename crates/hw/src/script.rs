@@ -162,6 +162,10 @@ impl<H: Arm, S: Sink> Arm for Tap<H, S> {
         });
         Ok(())
     }
+
+    fn clock_ns(&self) -> Option<u64> {
+        self.inner.clock_ns()
+    }
 }
 
 impl<H: LineScanner, S: Sink> LineScanner for Tap<H, S> {
@@ -223,6 +227,10 @@ impl<H: LineScanner, S: Sink> MovingScanner for Tap<H, S> {
         self.running = Some(braked.clone());
         self.sink.event(&Event::Braked(braked.clone()));
         Ok(braked)
+    }
+
+    fn brake_lag_s(&mut self) -> Real {
+        self.inner.moving().map_or(0.0, MovingScanner::brake_lag_s)
     }
 }
 

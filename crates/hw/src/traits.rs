@@ -11,6 +11,13 @@ pub trait Arm {
     fn joints(&self) -> Vec<Real>;
     /// Move to `q` and wait until there; errors leave the arm where it was.
     fn move_to(&mut self, q: &[Real]) -> Result<(), HwError>;
+    /// The robot's own clock, nanoseconds, where it keeps one that the
+    /// loop should be timed on (a robot over a link: its `/clock`, or the
+    /// wall clock of real time); `None` (the default) for hardware timed
+    /// by the model of [`crate::clock`] (a simulator in process).
+    fn clock_ns(&self) -> Option<u64> {
+        None
+    }
 }
 
 /// One 2-D scan as a scanner reports it, in bearing order.
@@ -81,6 +88,20 @@ pub trait LineScanner {
     fn moving(&mut self) -> Option<&mut dyn crate::motion::MovingScanner> {
         None
     }
+    /// One scan taken while the arm went along `path` (its joints over
+    /// time), beam `i` measured `start_s + i · time_increment_s` seconds
+    /// into it, each from the scanner pose of its own moment: what a
+    /// simulator serving a moving robot measures (`surveyor sim-robot`).
+    /// `None` (the default) for a scanner that measures where the arm is.
+    fn scan_along(
+        &mut self,
+        path: &[crate::motion::JointSample],
+        start_s: Real,
+        time_increment_s: Real,
+    ) -> Option<Result<ScanReadings, HwError>> {
+        let _ = (path, start_s, time_increment_s);
+        None
+    }
 }
 
 /// Single-point range finders mounted on the robot.
@@ -99,6 +120,10 @@ impl<T: Arm + ?Sized> Arm for &mut T {
     fn move_to(&mut self, q: &[Real]) -> Result<(), HwError> {
         (**self).move_to(q)
     }
+
+    fn clock_ns(&self) -> Option<u64> {
+        (**self).clock_ns()
+    }
 }
 
 impl<T: LineScanner + ?Sized> LineScanner for &mut T {
@@ -116,6 +141,15 @@ impl<T: LineScanner + ?Sized> LineScanner for &mut T {
 
     fn moving(&mut self) -> Option<&mut dyn crate::motion::MovingScanner> {
         (**self).moving()
+    }
+
+    fn scan_along(
+        &mut self,
+        path: &[crate::motion::JointSample],
+        start_s: Real,
+        time_increment_s: Real,
+    ) -> Option<Result<ScanReadings, HwError>> {
+        (**self).scan_along(path, start_s, time_increment_s)
     }
 }
 

@@ -4,16 +4,19 @@
 use crate::serve::{CLOCK_TOPIC, EXACT_RANGES_TOPIC, SENSE_TOPIC};
 use crate::{Ros2Error, Ros2Node};
 use geom::{Isometry3, Real};
+use hw::motion::{JOINT_STATE_PERIOD_S, JointSample, LineMotion, MovingScan, MovingScanner};
 use hw::{Arm, HwError, LineScanner, RangeSensors, ScanReadings};
 use record::bag::msg::{
     Clock, Float64MultiArray, Header, JointState, JointTrajectory, JointTrajectoryPoint, LaserScan,
     Range, StdString, Time,
 };
 use robot::Robot;
+use robot::timing::MotionLimits;
 use ros2_client::{Publisher, Subscription};
 use scenario::ros2::Ros2Spec;
 use sensor::SensorPoint;
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
+use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 /// How the driver talks to its robot.
@@ -27,6 +30,12 @@ pub struct DriverConfig {
     /// robot publishes, and wait for each motion to end exactly on its goal
     /// (a simulated arm gets there; the tolerance is for real ones).
     pub lockstep: bool,
+    /// The joints' velocity and acceleration limits each motion is timed
+    /// within (`None`: the robot's own, [`MotionLimits::of`]). Without
+    /// lockstep every motion goes out as a trajectory of its profile
+    /// within them; a lockstep robot is sent the goal alone, at the
+    /// `joint_speed` of `ros2`.
+    pub limits: Option<MotionLimits>,
 }
 
 impl DriverConfig {
@@ -58,7 +67,55 @@ pub struct Ros2Hardware {
     clock: Subscription<Clock>,
     /// Its latest time, nanoseconds, and when that came (wall time).
     robot_now: Cell<Option<(u64, Instant)>>,
+    /// The joint states received lately, stamped (robot time, ns), oldest
+    /// first: a scan taken while the arm moved is placed between them.
+    states_heard: RefCell<VecDeque<(u64, Vec<Real>)>>,
+    /// The stamp of the joint state that showed the arm at the goal of its
+    /// last motion: a scan begun before it is stale.
+    arrived_ns: u64,
+    /// The continuous motion under way.
+    moving: Option<Moving>,
+    /// The limits motions are timed within.
+    limits: MotionLimits,
+    /// Robot seconds from a scan's end to a brake asked after it taking
+    /// hold, the most measured so far ([`MovingScanner::brake_lag_s`]).
+    brake_lag_s: Real,
     node: Ros2Node,
+}
+
+/// A continuous motion on a ROS 2 robot.
+#[derive(Debug)]
+struct Moving {
+    /// The motion as the arm runs it (braked, once it is).
+    motion: LineMotion,
+    /// When it began on the robot's clock (its trajectory's stamp), ns.
+    t0_ns: u64,
+    /// When the scan returned last ended (its first beam and the scan
+    /// time), ns.
+    last_end_ns: Option<u64>,
+}
+
+/// Robot seconds between sending a timed motion and its start (the
+/// trajectory's header stamp): the time to reach the robot, with room.
+const MOTION_LEAD_S: Real = 0.02;
+
+/// Joint states the driver keeps (at 100 Hz, 20 s of them): a moving scan
+/// needs those of its own 0.1 s.
+const STATES_KEPT: usize = 2000;
+
+/// Messages of the joint-state and scan topics DDS keeps for the driver
+/// until it takes them: a motion's every state and scan, while the loop
+/// works on one scan (the default QoS keeps 10).
+const TOPIC_DEPTH: usize = 1000;
+
+/// Nanoseconds of `seconds` (0 for less).
+fn ns(seconds: Real) -> u64 {
+    (seconds.max(0.0) * 1e9).round() as u64
+}
+
+/// Seconds from `t0_ns` to `t_ns` (negative before it).
+fn seconds_from(t0_ns: u64, t_ns: u64) -> Real {
+    (i128::from(t_ns) - i128::from(t0_ns)) as Real * 1e-9
 }
 
 impl std::fmt::Debug for Ros2Hardware {
@@ -128,8 +185,9 @@ impl Ros2Hardware {
     ) -> Result<Self, Ros2Error> {
         let spec = &config.ros2;
         let names = crate::ros_joint_names(spec, robot)?;
-        let states = node.subscription::<JointState>(&spec.joint_states_topic)?;
-        let scans = node.subscription::<LaserScan>(&spec.scan_topic)?;
+        let states =
+            node.subscription_keeping::<JointState>(&spec.joint_states_topic, TOPIC_DEPTH)?;
+        let scans = node.subscription_keeping::<LaserScan>(&spec.scan_topic, TOPIC_DEPTH)?;
         let ranges = (0..robot.range_finders.len())
             .map(|k| node.subscription::<Range>(&spec.range_topic(k)))
             .collect::<Result<_, _>>()?;
@@ -143,6 +201,10 @@ impl Ros2Hardware {
         } else {
             (None, None)
         };
+        let limits = config
+            .limits
+            .clone()
+            .unwrap_or_else(|| MotionLimits::of(robot));
         let mut hw = Self {
             robot: robot.clone(),
             world_from_base: *world_from_base,
@@ -158,6 +220,11 @@ impl Ros2Hardware {
             exact,
             clock,
             robot_now: Cell::new(None),
+            states_heard: RefCell::new(VecDeque::new()),
+            arrived_ns: 0,
+            moving: None,
+            limits,
+            brake_lag_s: MOTION_LEAD_S,
             node,
         };
         let wait = hw.wait(hw.config.ros2.timeout_s);
@@ -178,6 +245,16 @@ impl Ros2Hardware {
     pub fn robot_clock_ns(&self) -> Result<Option<u64>, HwError> {
         self.hear_the_clock()?;
         Ok(self.robot_now.get().map(|(t, _)| t))
+    }
+
+    /// The robot's time now, nanoseconds: its `/clock` where it publishes
+    /// one, the wall clock otherwise (a robot in real time stamps on it).
+    fn robot_now_ns(&self) -> Result<u64, HwError> {
+        self.hear_the_clock()?;
+        Ok(self
+            .robot_now
+            .get()
+            .map_or_else(crate::serve::now_ns, |(t, _)| t))
     }
 
     /// Take the `/clock` messages that came: the newest is the robot's time.
@@ -230,8 +307,14 @@ impl Ros2Hardware {
         }
     }
 
-    /// The newest joint state received (in the robot's joint order), if any.
+    /// The newest joint state received (in the robot's joint order), if
+    /// any; every state received is kept with its stamp.
     fn latest_state(&self) -> Result<Option<Vec<Real>>, HwError> {
+        Ok(self.latest_stamped()?.map(|(_, q)| q))
+    }
+
+    /// [`Ros2Hardware::latest_state`] with its stamp (robot time, ns).
+    fn latest_stamped(&self) -> Result<Option<(u64, Vec<Real>)>, HwError> {
         let mut latest = None;
         while let Some((js, _)) = self
             .states
@@ -248,9 +331,77 @@ impl Ros2Hardware {
                 })?;
                 q.push(js.position.get(i).copied().unwrap_or(Real::NAN));
             }
-            latest = Some(q);
+            let stamp = js.header.stamp.to_nanos().unwrap_or(0);
+            let mut heard = self.states_heard.borrow_mut();
+            heard.push_back((stamp, q.clone()));
+            while heard.len() > STATES_KEPT {
+                heard.pop_front();
+            }
+            latest = Some((stamp, q));
         }
         Ok(latest)
+    }
+
+    /// The joint states from the last stamped at or before `from_ns` to
+    /// the first at or after `to_ns`, once one at or after it has come.
+    fn states_over(&self, from_ns: u64, to_ns: u64) -> Option<Vec<(u64, Vec<Real>)>> {
+        let heard = self.states_heard.borrow();
+        let last = heard.iter().position(|(t, _)| *t >= to_ns)?;
+        let first = heard.iter().rposition(|(t, _)| *t <= from_ns).unwrap_or(0);
+        Some(heard.range(first..=last).cloned().collect())
+    }
+
+    /// Wait until the arm reports it stands within the tolerance of `q`
+    /// (or the timeout of `wait`), and take where it stands.
+    fn settle_at(&mut self, q: &[Real], wait: &Wait) -> Result<(), HwError> {
+        let tolerance = self.config.tolerance_rad();
+        let mut error = Real::INFINITY;
+        loop {
+            if let Some((stamp, now)) = self.latest_stamped()? {
+                error = now
+                    .iter()
+                    .zip(q)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, Real::max);
+                self.q = now;
+                if error <= tolerance {
+                    self.arrived_ns = stamp;
+                    return Ok(());
+                }
+            }
+            if self.over(wait)? {
+                return Err(HwError::NotReached { error });
+            }
+            std::thread::sleep(Duration::from_micros(200));
+        }
+    }
+
+    /// Send the arm along `motion` from `from_s` seconds into it on,
+    /// `from_s` due at `stamp_ns` on the robot's clock: one trajectory of
+    /// the motion's joints every [`JOINT_STATE_PERIOD_S`] and at its end.
+    fn send_motion(&self, motion: &LineMotion, stamp_ns: u64, from_s: Real) -> Result<(), HwError> {
+        let d = motion.duration_s();
+        let mut times: Vec<Real> = (1..)
+            .map(|k| k as Real * JOINT_STATE_PERIOD_S)
+            .skip_while(|&t| t <= from_s)
+            .take_while(|&t| t < d)
+            .collect();
+        times.push(d.max(from_s));
+        let msg = JointTrajectory {
+            header: Header::new(stamp_ns, ""),
+            joint_names: self.names.clone(),
+            points: times
+                .iter()
+                .map(|&t| JointTrajectoryPoint {
+                    positions: motion.at(t),
+                    time_from_start: Time::from_nanos(ns(t - from_s)),
+                    ..JointTrajectoryPoint::default()
+                })
+                .collect(),
+        };
+        self.trajectories
+            .publish(msg)
+            .map_err(|e| device(format!("{}: {e:?}", self.config.ros2.trajectory_topic)))
     }
 
     /// Wait until the robot's sensors' topics and its command topics match
@@ -316,6 +467,14 @@ impl Arm for Ros2Hardware {
 
     fn move_to(&mut self, q: &[Real]) -> Result<(), HwError> {
         self.robot.check_joints(q)?;
+        if !self.config.lockstep {
+            // The motion's profile within the joints' limits.
+            let motion = LineMotion::new(&self.limits, &self.q, q);
+            let t0 = self.robot_now_ns()? + ns(MOTION_LEAD_S);
+            self.send_motion(&motion, t0, 0.0)?;
+            let wait = self.wait(MOTION_LEAD_S + motion.duration_s() + self.config.ros2.timeout_s);
+            return self.settle_at(q, &wait);
+        }
         let far = self
             .q
             .iter()
@@ -336,25 +495,16 @@ impl Arm for Ros2Hardware {
             .publish(msg)
             .map_err(|e| device(format!("{}: {e:?}", self.config.ros2.trajectory_topic)))?;
         let wait = self.wait(secs + self.config.ros2.timeout_s);
-        let tolerance = self.config.tolerance_rad();
-        let mut error = far;
-        loop {
-            if let Some(now) = self.latest_state()? {
-                error = now
-                    .iter()
-                    .zip(q)
-                    .map(|(a, b)| (a - b).abs())
-                    .fold(0.0, Real::max);
-                self.q = now;
-                if error <= tolerance {
-                    return Ok(());
-                }
-            }
-            if self.over(&wait)? {
-                return Err(HwError::NotReached { error });
-            }
-            std::thread::sleep(Duration::from_micros(200));
+        self.settle_at(q, &wait)
+    }
+
+    /// The robot's clock, unless the robot is a lockstep simulator (a run
+    /// on it is then the in-process run, timed by the same model).
+    fn clock_ns(&self) -> Option<u64> {
+        if self.config.lockstep {
+            return None;
         }
+        self.robot_now_ns().ok()
     }
 }
 
@@ -369,10 +519,17 @@ impl LineScanner for Ros2Hardware {
                 .map(|m| m.map(|(m, _)| m))
                 .map_err(|e| device(format!("{}: {e:?}", self.config.ros2.scan_topic)))
         };
-        // Scans published before the arm stood here are stale.
-        while take(&self.scans)?.is_some() {}
+        // Scans begun before the arm stood here are stale.
         self.ask("scan".to_owned())?;
-        let scan = self.poll(&self.timeout(), "scan", || take(&self.scans))?;
+        let arrived = self.arrived_ns;
+        let scan = self.poll(&self.timeout(), "scan", || {
+            while let Some(scan) = take(&self.scans)? {
+                if scan.header.stamp.to_nanos().unwrap_or(0) >= arrived {
+                    return Ok(Some(scan));
+                }
+            }
+            Ok(None)
+        })?;
         let (bearings, ranges_m, intensities) = record::bag::scan_rays(&scan);
         if bearings.len() != self.bearings.len() {
             return Err(device(format!(
@@ -393,6 +550,164 @@ impl LineScanner for Ros2Hardware {
         // A real robot has no seed; a lockstep simulator reseeds (a failure
         // to ask shows in the next request).
         let _ = self.ask(format!("seed {seed}"));
+    }
+
+    /// A robot whose scanner runs free while its arm follows a timed
+    /// trajectory; a lockstep simulator scans only when asked, so it
+    /// cannot.
+    fn moving(&mut self) -> Option<&mut dyn MovingScanner> {
+        if self.config.lockstep || self.bearings.is_empty() {
+            None
+        } else {
+            Some(self)
+        }
+    }
+}
+
+fn not_moving() -> HwError {
+    HwError::Setting {
+        what: "continuous motion".into(),
+        message: "a scan or a brake asked before a motion began".into(),
+    }
+}
+
+/// A continuous motion over ROS 2: the motion goes out as one
+/// `JointTrajectory` of its joints every 10 ms, stamped to begin
+/// [`MOTION_LEAD_S`] ahead on the robot's clock; each `LaserScan` begun
+/// while it runs comes back with the joint states around its beams
+/// (`time_increment` apart from the header's stamp); braking sends the
+/// braked rest of the profile, stamped where it departs from the motion.
+impl MovingScanner for Ros2Hardware {
+    fn start_motion(&mut self, motion: &LineMotion) -> Result<(), HwError> {
+        let tolerance = self.config.tolerance_rad().max(1e-9);
+        scenario::job::check_stands_at(&self.q, &motion.from, tolerance).map_err(|message| {
+            HwError::Setting {
+                what: "continuous motion".into(),
+                message: format!("the arm {message}"),
+            }
+        })?;
+        self.robot.check_joints(&motion.to)?;
+        let t0 = self.robot_now_ns()? + ns(MOTION_LEAD_S);
+        self.send_motion(motion, t0, 0.0)?;
+        self.moving = Some(Moving {
+            motion: motion.clone(),
+            t0_ns: t0,
+            last_end_ns: None,
+        });
+        Ok(())
+    }
+
+    fn next_scan(&mut self) -> Result<Option<MovingScan>, HwError> {
+        let now = self.robot_now_ns()?;
+        let m = self.moving.as_mut().ok_or_else(not_moving)?;
+        if let Some(end) = m.last_end_ns {
+            // The loop worked on the last scan until now: a brake asked
+            // then would have taken hold a lead later.
+            let lag = seconds_from(end, now) + MOTION_LEAD_S;
+            self.brake_lag_s = self.brake_lag_s.max(lag);
+        }
+        let (t0, d) = (m.t0_ns, m.motion.duration_s());
+        let t_end = t0 + ns(d);
+        let topic = self.config.ros2.scan_topic.clone();
+        let wait = self.wait(d + self.config.ros2.timeout_s);
+        let mut scan_time = 0.1;
+        loop {
+            while let Some((scan, _)) = self
+                .scans
+                .take()
+                .map_err(|e| device(format!("{topic}: {e:?}")))?
+            {
+                let stamp = scan.header.stamp.to_nanos().unwrap_or(0);
+                if Real::from(scan.scan_time) > 0.0 {
+                    scan_time = Real::from(scan.scan_time);
+                }
+                if stamp < t0 {
+                    continue;
+                }
+                if stamp >= t_end {
+                    return self.rest();
+                }
+                return self.moving_scan(&scan, stamp).map(Some);
+            }
+            // A scanner that fell silent: the arm has rested once the
+            // robot's time is a scan past the motion's end.
+            if self.robot_now_ns()? >= t_end + ns(2.0 * scan_time) {
+                return self.rest();
+            }
+            if self.over(&wait)? {
+                return Err(device(format!("no {topic} before the timeout")));
+            }
+            std::thread::sleep(Duration::from_micros(200));
+        }
+    }
+
+    fn brake(&mut self) -> Result<LineMotion, HwError> {
+        let now = self.robot_now_ns()?;
+        let m = self.moving.as_ref().ok_or_else(not_moving)?;
+        let tb = seconds_from(m.t0_ns, now + ns(MOTION_LEAD_S)).max(0.0);
+        let braked = m.motion.braked(tb);
+        let t0 = m.t0_ns;
+        if braked.duration_s() > tb && braked != m.motion {
+            self.send_motion(&braked, t0 + ns(tb), tb)?;
+        }
+        if let Some(m) = &mut self.moving {
+            m.motion = braked.clone();
+        }
+        Ok(braked)
+    }
+
+    fn brake_lag_s(&mut self) -> Real {
+        self.brake_lag_s
+    }
+}
+
+impl Ros2Hardware {
+    /// The scan `scan`, begun at `stamp` (ns) during the motion under way,
+    /// with the joint states around its beams, once they have come.
+    fn moving_scan(&mut self, scan: &LaserScan, stamp: u64) -> Result<MovingScan, HwError> {
+        let m = self.moving.as_mut().ok_or_else(not_moving)?;
+        let t0 = m.t0_ns;
+        let (bearings, ranges_m, intensities) = record::bag::scan_rays(scan);
+        if bearings.len() != self.bearings.len() {
+            return Err(device(format!(
+                "{}: {} rays, the scanner has {}",
+                self.config.ros2.scan_topic,
+                bearings.len(),
+                self.bearings.len()
+            )));
+        }
+        let increment = Real::from(scan.time_increment).max(0.0);
+        let last = stamp + ns(increment * bearings.len().saturating_sub(1) as Real);
+        m.last_end_ns = Some(stamp + ns(Real::from(scan.scan_time)));
+        let wait = self.timeout();
+        let around = self.poll(&wait, &self.config.ros2.joint_states_topic, || {
+            self.latest_stamped()?;
+            Ok(self.states_over(stamp, last))
+        })?;
+        Ok(MovingScan {
+            readings: ScanReadings {
+                ranges_m,
+                intensities,
+                truth_materials: None,
+            },
+            start_s: seconds_from(t0, stamp),
+            time_increment_s: increment,
+            joints: around
+                .into_iter()
+                .map(|(t, q)| JointSample {
+                    t_s: seconds_from(t0, t),
+                    q,
+                })
+                .collect(),
+        })
+    }
+
+    /// The motion under way is over: wait for the arm to report its rest.
+    fn rest(&mut self) -> Result<Option<MovingScan>, HwError> {
+        let m = self.moving.take().ok_or_else(not_moving)?;
+        let wait = self.timeout();
+        self.settle_at(&m.motion.end(), &wait)?;
+        Ok(None)
     }
 }
 

@@ -41,6 +41,9 @@ impl Ros2Config {
 }
 
 /// A ROS 2 node: one DDS participant, publishers and subscriptions with
+/// Messages ROS 2's default QoS keeps.
+const DEFAULT_DEPTH: usize = 10;
+
 /// ROS 2's default QoS (reliable, volatile, keep last 10).
 pub struct Ros2Node {
     node: Node,
@@ -103,7 +106,9 @@ impl Ros2Node {
         let qos = QosProfile::publisher_default()
             .reliability_reliable(WhenFull::DEFAULT)
             .durability(Durability::Volatile)
-            .history(History::KeepLast { depth: 10 });
+            .history(History::KeepLast {
+                depth: DEFAULT_DEPTH,
+            });
         Ok(Self { node, qos })
     }
 
@@ -211,9 +216,22 @@ impl Ros2Node {
         &mut self,
         topic: &str,
     ) -> Result<Subscription<M>, Ros2Error> {
+        self.subscription_keeping(topic, DEFAULT_DEPTH)
+    }
+
+    /// A subscription to `M` on `topic` that keeps the last `depth`
+    /// messages until they are taken (the default QoS keeps 10: a reader
+    /// that needs every joint state of a motion while it works on a scan
+    /// keeps more).
+    pub fn subscription_keeping<M: RosMessage + DeserializeOwned + 'static>(
+        &mut self,
+        topic: &str,
+        depth: usize,
+    ) -> Result<Subscription<M>, Ros2Error> {
+        let qos = self.qos.clone().history(History::KeepLast { depth });
         let t = self.topic::<M>(topic, &self.qos)?;
         self.node
-            .create_subscription::<M>(&t, Some(self.qos.clone()))
+            .create_subscription::<M>(&t, Some(qos))
             .map_err(|e| create(&format!("subscription to {topic}"), e))
     }
 }

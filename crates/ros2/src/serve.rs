@@ -4,7 +4,7 @@
 
 use crate::{Ros2Error, Ros2Node};
 use geom::Real;
-use hw::{Arm, LineScanner, RangeSensors};
+use hw::{Arm, HwError, LineScanner, RangeSensors};
 use record::bag::msg::JointTrajectory;
 use robot::Robot;
 use scenario::ros2::Ros2Spec;
@@ -189,89 +189,147 @@ pub fn exact_readings(
     }
 }
 
-/// A trajectory under way: where the last segment began (robot time,
-/// seconds, and joints) and the points still ahead, each with the robot
-/// time it is due.
+/// The arm's path on the robot's clock: straight joint-space segments
+/// between timed knots (robot seconds), those of the trajectory under way
+/// ahead and, behind the arm, the last [`PATH_MEMORY_S`] of where it went,
+/// so that a scan can cast each beam from where the arm was at its moment.
 #[derive(Debug, Default)]
 struct Execution {
-    from: (Real, Vec<Real>),
-    ahead: VecDeque<(Real, Vec<Real>)>,
+    /// `(due, joints, a trajectory point)`, in time order.
+    knots: VecDeque<(Real, Vec<Real>, bool)>,
+    /// The robot time the arm was last moved to ([`Execution::at`]).
+    last_t: Real,
 }
 
+/// Robot seconds of the arm's past path a served robot keeps.
+const PATH_MEMORY_S: Real = 2.0;
+
 impl Execution {
-    /// The execution of `points` received at robot time `now` with the arm
-    /// at `q`. A trajectory of one point is a move there at `joint_speed`
-    /// (its fastest joint), whatever its time; the points of a longer one
-    /// are due at their `time_from_start` after `now` (as a `ros2_control`
-    /// joint trajectory controller takes them), a point whose time is not
-    /// after its predecessor's at `joint_speed` after it.
-    fn new(
+    /// The arm standing at `q` from robot time `t`.
+    fn standing(t: Real, q: Vec<Real>) -> Self {
+        Self {
+            knots: VecDeque::from([(t, q, false)]),
+            last_t: t,
+        }
+    }
+
+    /// Where the path has the arm at robot time `t` (before its first
+    /// knot at that knot, after its last at the last).
+    fn position(&self, t: Real) -> Vec<Real> {
+        let after = self.knots.partition_point(|k| k.0 <= t);
+        match (
+            after.checked_sub(1).map(|i| &self.knots[i]),
+            self.knots.get(after),
+        ) {
+            (Some((t0, q0, _)), Some((t1, q1, _))) => {
+                let s = if t1 > t0 {
+                    ((t - t0) / (t1 - t0)).clamp(0.0, 1.0)
+                } else {
+                    1.0
+                };
+                q0.iter().zip(q1).map(|(a, b)| a + s * (b - a)).collect()
+            }
+            (Some((_, q, _)), None) | (None, Some((_, q, _))) => q.clone(),
+            (None, None) => Vec::new(),
+        }
+    }
+
+    /// Take the trajectory of `points` received at robot time `now`, to
+    /// begin at `begin` (its header's stamp; now when that is past or
+    /// unset). Until it begins the path under way goes on (a `ros2_control`
+    /// joint trajectory controller replaces the old trajectory from the new
+    /// one's start); then a trajectory of one point is a move there at
+    /// `joint_speed` (its fastest joint), whatever its time, and the points
+    /// of a longer one are due at their `time_from_start` after `begin`, a
+    /// point whose time is not after its predecessor's at `joint_speed`
+    /// after it.
+    fn replace(
+        &mut self,
         points: Vec<Vec<Real>>,
         times_s: &[Real],
-        now: Real,
-        q: Vec<Real>,
+        (now, begin): (Real, Option<Real>),
         joint_speed: Real,
-    ) -> Self {
+    ) {
+        let begin = begin.map_or(now, |b| b.max(now));
+        let here = self.position(begin);
+        while self.knots.back().is_some_and(|k| k.0 >= begin) {
+            self.knots.pop_back();
+        }
+        self.knots.push_back((begin, here.clone(), false));
         let timed = points.len() > 1;
-        let mut ahead = VecDeque::with_capacity(points.len());
-        let (mut t, mut at) = (now, q.clone());
+        let (mut t, mut at) = (begin, here);
         for (p, &after) in points.into_iter().zip(times_s) {
             let far = at
                 .iter()
                 .zip(&p)
                 .map(|(a, b)| (b - a).abs())
                 .fold(0.0, Real::max);
-            t = if timed && now + after > t {
-                now + after
+            t = if timed && begin + after > t {
+                begin + after
             } else {
                 t + far / joint_speed
             };
             at.clone_from(&p);
-            ahead.push_back((t, p));
-        }
-        Self {
-            from: (now, q),
-            ahead,
+            self.knots.push_back((t, p, true));
         }
     }
 
-    /// Where the arm is due at robot time `t`, and whether a point was
-    /// reached on the way (those are then dropped); `None` when nothing is
-    /// under way.
+    /// Where the arm is due at robot time `t`, and whether a trajectory
+    /// point was reached since the last call; `None` when it was at rest
+    /// already then. Knots older than [`PATH_MEMORY_S`] are forgotten.
     fn at(&mut self, t: Real) -> Option<(Vec<Real>, bool)> {
-        let mut reached = false;
-        while let Some((due, _)) = self.ahead.front()
-            && *due <= t
-        {
-            if let Some(point) = self.ahead.pop_front() {
-                self.from = point;
-            }
-            reached = true;
+        let since = std::mem::replace(&mut self.last_t, t);
+        let end = self.knots.back().map_or(Real::NEG_INFINITY, |k| k.0);
+        let reached = self.knots.iter().any(|k| k.2 && k.0 > since && k.0 <= t);
+        let q = self.position(t);
+        while self.knots.len() > 1 && self.knots[1].0 < t - PATH_MEMORY_S {
+            self.knots.pop_front();
         }
-        let Some((due, q1)) = self.ahead.front() else {
-            return reached.then(|| (self.from.1.clone(), true));
+        (end > since || reached).then_some((q, reached))
+    }
+
+    /// Put `hw` where the arm is due at robot time `t`; whether it reached
+    /// a trajectory point since the last step. A pose the hardware refuses
+    /// ends the trajectory there (the error says why).
+    fn step<H: Arm>(&mut self, t: Real, hw: &mut H) -> Result<bool, HwError> {
+        let Some((q, reached)) = self.at(t) else {
+            return Ok(false);
         };
-        let (t0, q0) = &self.from;
-        let s = if *due > *t0 {
-            ((t - t0) / (due - t0)).clamp(0.0, 1.0)
-        } else {
-            1.0
-        };
-        let q = q0.iter().zip(q1).map(|(a, b)| a + s * (b - a)).collect();
-        Some((q, reached))
+        if let Err(e) = hw.move_to(&q) {
+            *self = Self::standing(t, hw.joints());
+            return Err(e);
+        }
+        Ok(reached)
+    }
+
+    /// The arm's joints every `period_s` from `t0` to `t1` (robot time).
+    fn samples(&self, t0: Real, t1: Real, period_s: Real) -> Vec<hw::motion::JointSample> {
+        hw::motion::sampled(t0, t1, period_s, |t| self.position(t))
     }
 }
 
+/// Robot seconds between the poses a scan's beams are cast from (each
+/// beam's pose is interpolated between them).
+const BEAM_POSE_PERIOD_S: Real = 0.001;
+
 /// The execution of `trajectory` received at robot time `t` by `hw` (the
-/// robot of `names`, its joints' ROS names), or why not.
-fn execution_of<H: Arm>(
+/// robot of `names`, its joints' ROS names), into `execution`, or why not.
+/// A header stamp the robot's clock (which began at `start_ns`) has not
+/// passed is when the trajectory begins.
+fn take_trajectory<H: Arm>(
+    execution: &mut Execution,
     trajectory: &JointTrajectory,
-    names: &[String],
-    robot: &str,
+    (names, robot): (&[String], &str),
     hw: &H,
-    t: Real,
+    (t, start_ns): (Real, u64),
     config: &ServeConfig,
-) -> Result<Execution, String> {
+) -> Result<(), String> {
+    let begin = trajectory
+        .header
+        .stamp
+        .to_nanos()
+        .filter(|&ns| ns > 0)
+        .map(|ns| (i128::from(ns) - i128::from(start_ns)) as Real * 1e-9);
     let points = waypoints(trajectory, names, robot, &hw.joints())?;
     let times: Vec<Real> = trajectory
         .points
@@ -282,13 +340,86 @@ fn execution_of<H: Arm>(
                 .map_or(0.0, |ns| ns as Real * 1e-9)
         })
         .collect();
-    Ok(Execution::new(
-        points,
-        &times,
-        t,
-        hw.joints(),
-        config.joint_speed,
-    ))
+    execution.replace(points, &times, (t, begin), config.joint_speed);
+    Ok(())
+}
+
+/// A served robot's scanner running free: a scan every period, published
+/// once its last beam is measured, each beam cast from where the arm was
+/// at its moment (hardware that cannot cast so scans where the arm is).
+struct FreeScanner {
+    /// When the next scan begins, robot seconds.
+    next_s: Real,
+    /// Between beams (as a `LaserScan` states it, float32), seconds.
+    increment_s: Real,
+    /// From a scan's first beam to its last, seconds.
+    window_s: Real,
+    period_s: Real,
+    range_m: (Real, Real),
+    bearings: Vec<Real>,
+    start_ns: u64,
+}
+
+impl FreeScanner {
+    fn new(config: &ServeConfig, bearings: &[Real], start_ns: u64) -> Self {
+        let increment_s =
+            sensor::float32(hw::motion::time_increment_s(config.scan_period_s, bearings));
+        Self {
+            next_s: 0.0,
+            increment_s,
+            window_s: bearings.len().saturating_sub(1) as Real * increment_s,
+            period_s: config.scan_period_s,
+            range_m: config.scan_range_m,
+            bearings: bearings.to_vec(),
+            start_ns,
+        }
+    }
+
+    /// The next scan whose last beam robot time `t` has passed, if any (a
+    /// scan begun longer ago than half the path kept is skipped: a loop
+    /// that stalled).
+    fn scan_due<H: LineScanner>(
+        &mut self,
+        t: Real,
+        hw: &mut H,
+        execution: &Execution,
+    ) -> Result<Option<record::bag::msg::LaserScan>, Ros2Error> {
+        while !self.bearings.is_empty() && t >= self.next_s + self.window_s {
+            let begun = self.next_s;
+            self.next_s += self.period_s;
+            if t - begun > PATH_MEMORY_S / 2.0 {
+                continue;
+            }
+            let path = execution.samples(begun, begun + self.window_s, BEAM_POSE_PERIOD_S);
+            let (s, dt) = match hw.scan_along(&path, begun, self.increment_s) {
+                Some(s) => (s?, self.increment_s),
+                None => (hw.scan()?, 0.0),
+            };
+            let stamp = self.start_ns.saturating_add((begun * 1e9) as u64);
+            return Ok(Some(self.message(stamp, &s, dt)));
+        }
+        Ok(None)
+    }
+
+    /// The `LaserScan` of `s`, begun at `stamp_ns`, its beams `dt`
+    /// seconds apart.
+    fn message(
+        &self,
+        stamp_ns: u64,
+        s: &hw::ScanReadings,
+        dt: Real,
+    ) -> record::bag::msg::LaserScan {
+        let mut msg = record::bag::laser_scan(
+            stamp_ns,
+            &self.bearings,
+            &s.ranges_m,
+            &s.intensities,
+            self.range_m,
+            self.period_s,
+        );
+        msg.time_increment = dt as f32;
+        msg
+    }
 }
 
 /// Serve `hw` (the hardware of `robot`) on `node` until `stop` is raised:
@@ -332,13 +463,14 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
     let clock = node.clock_publisher::<record::bag::msg::Clock>(CLOCK_TOPIC)?;
     let bearings = hw.bearings_rad().to_vec();
     let mut stats = ServeStats::default();
-    let mut execution = Execution::default();
+    let mut execution = Execution::standing(0.0, hw.joints());
     let tick = Duration::try_from_secs_f64(config.tick_s)
         .unwrap_or(Duration::from_millis(5))
         .min(Duration::from_secs(1));
     let start = Instant::now();
     let start_ns = now_ns();
-    let (mut next_state, mut next_scan, mut next_range, mut next_clock) = (0.0, 0.0, 0.0, 0.0);
+    let mut free = FreeScanner::new(config, &bearings, start_ns);
+    let (mut next_state, mut next_range, mut next_clock) = (0.0, 0.0, 0.0);
     let mut ready = false;
     while !stop.load(Ordering::Relaxed) {
         // The robot's time: `rate` robot seconds per wall second.
@@ -356,28 +488,27 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
             .take()
             .map_err(|e| transfer(&spec.trajectory_topic, e))?
         {
-            match execution_of(&trajectory, &names, &robot.name, hw, t, config) {
-                Ok(e) => {
-                    execution = e;
-                    stats.trajectories += 1;
-                }
+            let taken = take_trajectory(
+                &mut execution,
+                &trajectory,
+                (&names, &robot.name),
+                hw,
+                (t, start_ns),
+                config,
+            );
+            match taken {
+                Ok(()) => stats.trajectories += 1,
                 Err(why) => {
                     stats.refused += 1;
                     log(&format!("trajectory refused: {why}"));
                 }
             }
         }
-        let mut reached = false;
-        if let Some((q, arrived)) = execution.at(t) {
-            reached = arrived;
-            if let Err(e) = hw.move_to(&q) {
-                // A pose the hardware refuses ends the trajectory.
-                stats.refused += 1;
-                log(&format!("trajectory stopped: {e}"));
-                execution = Execution::default();
-                reached = false;
-            }
-        }
+        let reached = execution.step(t, hw).unwrap_or_else(|e| {
+            stats.refused += 1;
+            log(&format!("trajectory stopped: {e}"));
+            false
+        });
         if t >= next_state || reached {
             next_state = t + config.state_period_s;
             let msg = record::bag::joint_state(stamp, &names, &hw.joints());
@@ -386,11 +517,16 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
                 .map_err(|e| transfer(&spec.joint_states_topic, e))?;
             stats.states += 1;
         }
-        let mut scan_now = !config.lockstep && !bearings.is_empty() && t >= next_scan;
-        let mut read_now = !config.lockstep && !ranges.is_empty() && t >= next_range;
-        if scan_now {
-            next_scan = t + config.scan_period_s;
+        while !config.lockstep
+            && let Some(msg) = free.scan_due(t, hw, &execution)?
+        {
+            scans
+                .publish(msg)
+                .map_err(|e| transfer(&spec.scan_topic, e))?;
+            stats.scans += 1;
         }
+        let mut scan_now = false;
+        let mut read_now = !config.lockstep && !ranges.is_empty() && t >= next_range;
         if read_now {
             next_range = t + config.range_period_s;
         }
@@ -405,7 +541,7 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
                     || exact.as_ref().is_none_or(|p| node.subscriptions_of(p) > 0));
         }
         let request = match &requests {
-            Some(r) if ready && !scan_now && !read_now => r
+            Some(r) if ready && !read_now => r
                 .take()
                 .map_err(|e| transfer(SENSE_TOPIC, e))?
                 .map(|(m, _)| m.data),
@@ -432,15 +568,7 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
             )),
         }
         if scan_now {
-            let s = hw.scan()?;
-            let msg = record::bag::laser_scan(
-                stamp,
-                &bearings,
-                &s.ranges_m,
-                &s.intensities,
-                config.scan_range_m,
-                config.scan_period_s,
-            );
+            let msg = free.message(stamp, &hw.scan()?, 0.0);
             scans
                 .publish(msg)
                 .map_err(|e| transfer(&spec.scan_topic, e))?;
@@ -498,35 +626,62 @@ mod tests {
                 assert!((a - b).abs() < 1e-12, "{q:?} against {want:?}");
             }
         };
+        let run = |points: Vec<Vec<f64>>, times: &[f64], now: f64, begin: Option<f64>| {
+            let mut e = Execution::standing(now, vec![0.0, 0.0]);
+            e.replace(points, times, (now, begin), 0.5);
+            e
+        };
         // Two points due 1 s and 3 s after t = 10, from (0, 0).
-        let mut e = Execution::new(
+        let mut e = run(
             vec![vec![1.0, 0.0], vec![1.0, 2.0]],
             &[1.0, 3.0],
             10.0,
-            vec![0.0, 0.0],
-            0.5,
+            None,
         );
         close(e.at(10.5), &[0.5, 0.0], false);
         close(e.at(11.0), &[1.0, 0.0], true);
         close(e.at(12.0), &[1.0, 1.0], false);
+        // Where the arm was, and where it is due.
+        assert_eq!(e.position(10.5), vec![0.5, 0.0]);
+        assert_eq!(e.position(12.5), vec![1.0, 1.5]);
         close(e.at(13.5), &[1.0, 2.0], true);
         assert!(e.at(14.0).is_none());
+        // What is older than the memory is forgotten.
+        assert_eq!(e.position(10.5), vec![1.0, 0.0]);
         // One point: at 0.5 rad/s, 2 rad take 4 s whatever its time.
-        let mut e = Execution::new(vec![vec![2.0, 0.0]], &[0.1], 0.0, vec![0.0, 0.0], 0.5);
+        let mut e = run(vec![vec![2.0, 0.0]], &[0.1], 0.0, None);
         close(e.at(1.0), &[0.5, 0.0], false);
         close(e.at(4.0), &[2.0, 0.0], true);
         // A point not timed after its predecessor runs at the joint speed:
         // 2 rad at 0.5 rad/s after the first point's 1 s.
-        let mut e = Execution::new(
-            vec![vec![1.0, 0.0], vec![1.0, 2.0]],
-            &[1.0, 0.5],
-            0.0,
-            vec![0.0, 0.0],
-            0.5,
-        );
+        let mut e = run(vec![vec![1.0, 0.0], vec![1.0, 2.0]], &[1.0, 0.5], 0.0, None);
         // (The first point was passed on the way: reached.)
         close(e.at(3.0), &[1.0, 1.0], true);
         close(e.at(5.0), &[1.0, 2.0], true);
+        // A trajectory stamped to begin later: the one under way runs on
+        // until then (here 1 s of the move to (2, 0) at 0.5 rad/s), and
+        // the new one's times count from its stamp. A stamp already past
+        // begins now.
+        let mut e = run(vec![vec![2.0, 0.0]], &[0.0], 0.0, None);
+        close(e.at(0.5), &[0.25, 0.0], false);
+        e.replace(
+            vec![vec![0.5, 0.0], vec![0.5, 1.0]],
+            &[0.5, 1.5],
+            (0.5, Some(1.0)),
+            0.5,
+        );
+        close(e.at(1.0), &[0.5, 0.0], false);
+        close(e.at(1.5), &[0.5, 0.0], true);
+        close(e.at(2.0), &[0.5, 0.5], false);
+        let mut e = run(vec![vec![2.0, 0.0]], &[0.0], 0.0, None);
+        e.replace(
+            vec![vec![0.0, 0.0], vec![0.0, 1.0]],
+            &[1.0, 2.0],
+            (1.0, Some(0.2)),
+            0.5,
+        );
+        close(e.at(1.5), &[0.25, 0.0], false);
+        close(e.at(3.0), &[0.0, 1.0], true);
     }
 
     #[test]

@@ -56,6 +56,7 @@ fn pair(scenario: &str, domain: u16) -> (Ros2Hardware, SimRig, Arc<AtomicBool>) 
                 ..scenario::ros2::Ros2Spec::default()
             },
             lockstep: true,
+            limits: None,
         },
     )
     .unwrap();
@@ -254,6 +255,7 @@ fn the_driver_follows_a_faster_robot_s_clock() {
                 ..scenario::ros2::Ros2Spec::default()
             },
             lockstep: false,
+            limits: None,
         },
     )
     .unwrap();

@@ -273,6 +273,14 @@ impl SimExplore {
         })
     }
 
+    /// The same exploration with the simulated scanner's scans beginning
+    /// `phase_s` seconds into each continuous motion
+    /// ([`SimRig::set_scan_phase_s`]).
+    pub fn with_scan_phase_s(mut self, phase_s: Real) -> Result<Self, SimError> {
+        self.rig.set_scan_phase_s(phase_s)?;
+        Ok(self)
+    }
+
     /// Run it; `progress` sees each viewpoint's record as it completes.
     pub fn run(
         self,

@@ -5,7 +5,7 @@
 
 use crate::SimError;
 use geom::{Isometry3, Real};
-use hw::motion::{LineMotion, MovingScan, MovingScanner};
+use hw::motion::{JointSample, LineMotion, MovingScan, MovingScanner};
 use hw::{Arm, HwError, LineScanner, RangeSensors, ScanReadings};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -30,6 +30,9 @@ pub struct SimRig {
     range_noise_sigma_m: Real,
     /// The continuous motion under way and the scans taken on it.
     motion: Option<(LineMotion, usize)>,
+    /// When a continuous motion's first scan begins, seconds after its
+    /// start ([`SimRig::set_scan_phase_s`]).
+    scan_phase_s: Real,
 }
 
 impl SimRig {
@@ -71,6 +74,7 @@ impl SimRig {
             rng: ChaCha8Rng::seed_from_u64(seed),
             range_noise_sigma_m: 0.0,
             motion: None,
+            scan_phase_s: 0.0,
         })
     }
 
@@ -95,6 +99,27 @@ impl SimRig {
             });
         }
         self.range_noise_sigma_m = sigma_m;
+        Ok(())
+    }
+
+    /// Begin each continuous motion's scans `phase_s` seconds after its
+    /// start (0 by default: the first scan begins with the motion). A real
+    /// scanner runs free, so its scans begin at any moment of their
+    /// period when a motion starts (`surveyor sim-robot`'s do); a run's
+    /// choices are sensitive to it. An error unless `phase_s` is in
+    /// `[0, scan_time)`.
+    pub fn set_scan_phase_s(&mut self, phase_s: Real) -> Result<(), SimError> {
+        let period = self
+            .scanner
+            .as_ref()
+            .map_or(0.0, |s| s.config().scan_time_s);
+        if !(phase_s >= 0.0 && phase_s < period) {
+            return Err(SimError::InvalidArgument {
+                what: "scan phase".into(),
+                message: format!("{phase_s} s: expected seconds in [0, {period}) (the scan time)"),
+            });
+        }
+        self.scan_phase_s = phase_s;
         Ok(())
     }
 
@@ -193,6 +218,29 @@ impl LineScanner for SimRig {
             None
         }
     }
+
+    /// Each beam cast from the scanner pose of its moment on `path`
+    /// ([`robot::moving::beam_poses`]).
+    fn scan_along(
+        &mut self,
+        path: &[JointSample],
+        start_s: Real,
+        time_increment_s: Real,
+    ) -> Option<Result<ScanReadings, HwError>> {
+        let scanner = self.scanner.as_ref()?;
+        let poses = robot::moving::beam_poses(
+            &self.robot,
+            &self.world_from_base,
+            path,
+            start_s,
+            time_increment_s,
+            scanner.ray_count(),
+        );
+        Some(poses.map_err(HwError::from).map(|poses| {
+            let scan = scanner.scan_posed(self.world.as_ref(), &poses, &mut self.rng);
+            ScanReadings::of_simulated(&scan).in_float32()
+        }))
+    }
 }
 
 /// Seconds between the poses a moving scan's beams are cast from (each
@@ -223,7 +271,7 @@ impl MovingScanner for SimRig {
             message: "a scan asked before a motion began".into(),
         })?;
         let scan_time = scanner.config().scan_time_s;
-        let start = *k as Real * scan_time;
+        let start = *k as Real * scan_time + self.scan_phase_s;
         if start >= motion.duration_s() {
             let end = motion.end();
             self.motion = None;
@@ -239,29 +287,15 @@ impl MovingScanner for SimRig {
             scanner.bearings_rad(),
         ));
         let last = start + (n.max(1) - 1) as Real * dt;
-        let truth: Vec<robot::moving::JointSample> = {
-            let (a, b) = (
-                (start / TRUTH_PERIOD_S).floor() as i64,
-                (last / TRUTH_PERIOD_S).ceil() as i64,
-            );
-            (a..=b.max(a))
-                .map(|m| {
-                    let t = m as Real * TRUTH_PERIOD_S;
-                    robot::moving::JointSample {
-                        t_s: t,
-                        q: motion.at(t),
-                    }
-                })
-                .collect()
-        };
-        let poses =
-            robot::moving::beam_poses(&self.robot, &self.world_from_base, &truth, start, dt, n)?;
-        let scan = scanner.scan_posed(self.world.as_ref(), &poses, &mut self.rng);
+        let truth = hw::motion::sampled(start, last, TRUTH_PERIOD_S, |t| motion.at(t));
         let joints = motion.samples(start, last);
         let now = motion.at(start + scan_time);
+        let readings = self
+            .scan_along(&truth, start, dt)
+            .ok_or(HwError::NoScanner)??;
         self.posture.move_to(&self.robot, &now)?;
         Ok(Some(MovingScan {
-            readings: ScanReadings::of_simulated(&scan).in_float32(),
+            readings,
             start_s: start,
             time_increment_s: dt,
             joints,

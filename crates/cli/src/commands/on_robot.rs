@@ -52,6 +52,7 @@ impl Ros2Flags {
         let driver = ros2::DriverConfig {
             ros2: spec.clone(),
             lockstep: self.lockstep,
+            limits: None,
         };
         note!(
             "waiting for {}'s joint states on ROS 2 domain {}{}",
@@ -112,6 +113,7 @@ impl Ros2Flags {
         ros2::DriverConfig {
             ros2: spec.clone(),
             lockstep: self.lockstep,
+            limits: None,
         }
         .tolerance_rad()
     }

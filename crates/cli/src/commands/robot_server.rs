@@ -94,12 +94,15 @@ pub fn sim_robot(a: &SimRobotArgs) -> Result<()> {
         lockstep: a.lockstep,
         ros2: loaded.scenario.ros2.clone().unwrap_or_default(),
         rate: a.rate,
-        // A lockstep robot answers each request at once.
+        // A lockstep robot answers each request at once; one faster than
+        // real time turns as often in its own seconds as one in real time.
         tick_s: if a.lockstep {
             0.0005
         } else {
-            ros2::ServeConfig::default().tick_s
+            (ros2::ServeConfig::default().tick_s / a.rate.max(1.0)).max(0.0005)
         },
+        // Joint states at 100 Hz, as most arms publish them.
+        state_period_s: 0.01,
         ..ros2::ServeConfig::default()
     };
     let stop = Arc::new(AtomicBool::new(false));

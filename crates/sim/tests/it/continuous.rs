@@ -42,50 +42,54 @@ fn off_the_walls(p: &Point3) -> Real {
         .fold(Real::INFINITY, Real::min)
 }
 
-/// The DENSO turns its base and its wrist's two joints through 2 rad each
-/// at their limit of 1 rad/s (and 2 rad/s²), scanning all along: 25 scans,
-/// each beam 0.1 ms after the one before, so a scan's last beam is 0.067
-/// rad of each joint's turn after its first.
-/// Placed at the pose of their moment (joint states every 10 ms,
-/// interpolated), every point lies on the walls within 5σ of the scanner's
-/// noise, at 0.8σ root mean square. Placed at the pose of the scan's
-/// stamp, as a scan taken standing is, the same points lie 1.4σ off root
-/// mean square, 65 of them beyond 4σ and up to 0.22 m: the test tells the
-/// two placements apart.
-#[test]
-fn beams_placed_at_their_moment_lie_on_the_walls_and_whole_scans_do_not() {
-    let robot = robot::builtin("denso-vm6083").unwrap();
+/// The motion of the tests below: the DENSO turns its base and its
+/// wrist's two joints through 2 rad each at their limit of 1 rad/s (and
+/// 2 rad/s²), in 2.5 s; and the scanner without its materials' range bias.
+fn turning_motion() -> (LineMotion, ScannerConfig) {
+    let q0 = vec![-1.0, -0.3, 1.9, 0.0, -0.8, 0.0];
+    let q1 = vec![1.0, -0.3, 1.9, 2.0, 1.2, 0.0];
+    let motion = LineMotion::new(&MotionLimits::uniform(6, 1.0, 2.0), &q0, &q1);
+    assert!((motion.duration_s() - 2.5).abs() < 1e-12);
     let config = ScannerConfig {
         material_range_bias: false,
         ..ScannerConfig::default()
     };
-    let noise = config.noise;
-    let q0 = vec![-1.0, -0.3, 1.9, 0.0, -0.8, 0.0];
-    let q1 = vec![1.0, -0.3, 1.9, 2.0, 1.2, 0.0];
-    let mut rig = SimRig::new(
+    (motion, config)
+}
+
+/// The DENSO in the room at the start of [`turning_motion`], seed 7.
+fn rig_in_the_room(robot: &robot::Robot, q0: &[Real], config: ScannerConfig) -> SimRig {
+    SimRig::new(
         robot.clone(),
         Arc::new(World::Mesh(room())),
         Isometry3::identity(),
-        &q0,
+        q0,
         Some(Scanner::new(config).unwrap()),
         7,
     )
-    .unwrap();
-    let motion = LineMotion::new(&MotionLimits::uniform(6, 1.0, 2.0), &q0, &q1);
-    assert!((motion.duration_s() - 2.5).abs() < 1e-12);
-    let bearings = rig.bearings_rad().to_vec();
-    let (mut moving, mut whole) = (
-        SweepBuilder::new(&bearings).unwrap(),
-        SweepBuilder::new(&bearings).unwrap(),
-    );
+    .unwrap()
+}
+
+/// Every point of `scans`, placed at the pose of its beam's moment and at
+/// the pose of its scan's stamp, as its distance off the walls in σ of the
+/// scanner's noise at its range; asserts the first lie on the walls within
+/// the noise (none beyond 5σ, 0.8σ root mean square) and the second do
+/// not (1.3σ or more root mean square, more than 50 beyond 4σ).
+fn moments_place_on_the_walls_and_stamps_do_not(
+    robot: &robot::Robot,
+    scans: &[hw::motion::MovingScan],
+    bearings: &[Real],
+    noise: &sensor::RangeNoise,
+) {
     let world = Isometry3::identity();
-    let arm = rig.moving().unwrap();
-    arm.start_motion(&motion).unwrap();
-    let mut scans = 0;
-    while let Some(scan) = arm.next_scan().unwrap() {
-        place_moving_scan(&robot, &world, &scan, &mut moving).unwrap();
+    let (mut moving, mut whole) = (
+        SweepBuilder::new(bearings).unwrap(),
+        SweepBuilder::new(bearings).unwrap(),
+    );
+    for scan in scans {
+        place_moving_scan(robot, &world, scan, &mut moving).unwrap();
         let at_stamp = robot::moving::beam_poses(
-            &robot,
+            robot,
             &world,
             &scan.joints,
             scan.start_s,
@@ -97,11 +101,7 @@ fn beams_placed_at_their_moment_lie_on_the_walls_and_whole_scans_do_not() {
         whole
             .push_scan_posed(&at_stamp, &r.ranges_m, &r.intensities, None)
             .unwrap();
-        scans += 1;
     }
-    assert_eq!(scans, 25);
-    // The arm rests at the end of the line.
-    assert_eq!(hw::Arm::joints(&rig), q1);
     let off = |b: SweepBuilder| -> Vec<(Real, Real)> {
         let sweep = b.finish().unwrap();
         sweep
@@ -110,8 +110,7 @@ fn beams_placed_at_their_moment_lie_on_the_walls_and_whole_scans_do_not() {
             .map(|p| (off_the_walls(&p.point), noise.sigma_m(p.range_m())))
             .collect()
     };
-    let moving = off(moving);
-    let whole = off(whole);
+    let (moving, whole) = (off(moving), off(whole));
     assert!(moving.len() > 5_000, "{} points", moving.len());
     // Root mean square of the distance in σ: about 1 for points off by
     // noise alone.
@@ -123,6 +122,113 @@ fn beams_placed_at_their_moment_lie_on_the_walls_and_whole_scans_do_not() {
     assert!(rms(&moving) < 1.0, "{}", rms(&moving));
     assert!(rms(&whole) > 1.3, "{}", rms(&whole));
     assert!(beyond(&whole, 4.0) > 50, "{}", beyond(&whole, 4.0));
+}
+
+/// [`turning_motion`] scanning all along: 25 scans, each beam 0.1 ms
+/// after the one before, so a scan's last beam is 0.067 rad of each
+/// joint's turn after its first.
+/// Placed at the pose of their moment (joint states every 10 ms,
+/// interpolated), every point lies on the walls within 5σ of the scanner's
+/// noise, at 0.8σ root mean square. Placed at the pose of the scan's
+/// stamp, as a scan taken standing is, the same points lie 1.4σ off root
+/// mean square, 65 of them beyond 4σ and up to 0.22 m: the test tells the
+/// two placements apart.
+#[test]
+fn beams_placed_at_their_moment_lie_on_the_walls_and_whole_scans_do_not() {
+    let robot = robot::builtin("denso-vm6083").unwrap();
+    let (motion, config) = turning_motion();
+    let noise = config.noise;
+    let mut rig = rig_in_the_room(&robot, &motion.from, config);
+    let bearings = rig.bearings_rad().to_vec();
+    let arm = rig.moving().unwrap();
+    arm.start_motion(&motion).unwrap();
+    let mut scans = Vec::new();
+    while let Some(scan) = arm.next_scan().unwrap() {
+        scans.push(scan);
+    }
+    assert_eq!(scans.len(), 25);
+    // The arm rests at the end of the line.
+    assert_eq!(hw::Arm::joints(&rig), motion.to);
+    moments_place_on_the_walls_and_stamps_do_not(&robot, &scans, &bearings, &noise);
+}
+
+/// The same motion on the same rig served as a ROS 2 robot (`surveyor
+/// sim-robot`, issue 46) at 5 times real time on its `/clock`, its scanner
+/// running free (a scan every 0.1 s, each beam cast from where the arm was
+/// at its moment), driven through the driver's continuous motion: the
+/// motion goes out as one timed trajectory, and each scan comes back with
+/// the joint states around it (here every 10 ms of robot time). The
+/// points placed by the driver lie on the walls as they do in process, and
+/// placed whole they do not; the arm rests at the end of the line, and
+/// the motion takes its 2.5 s of robot time (with the driver's 0.05 s
+/// lead and the robot's 10 ms ticks), half a second of wall time.
+#[test]
+fn over_ros2_moving_scans_land_on_the_walls() {
+    use ros2::{DriverConfig, Ros2Config, Ros2Hardware, Ros2Node, ServeConfig, serve_robot};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let robot = robot::builtin("denso-vm6083").unwrap();
+    let (motion, config) = turning_motion();
+    let noise = config.noise;
+    let served = rig_in_the_room(&robot, &motion.from, config);
+    let bearings = served.bearings_rad().to_vec();
+    let ros = Ros2Config {
+        domain_id: 60 + (std::process::id() % 40) as u16,
+        loopback_only: true,
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let serve = ServeConfig {
+        rate: 5.0,
+        tick_s: 0.002,
+        state_period_s: 0.01,
+        scan_range_m: (config.min_range_m, config.max_range_m),
+        ..ServeConfig::default()
+    };
+    {
+        let (stop, robot) = (Arc::clone(&stop), robot.clone());
+        std::thread::spawn(move || {
+            let mut rig = served;
+            let mut node = Ros2Node::new("served", &ros).unwrap();
+            serve_robot(&mut rig, &robot, &mut node, &serve, &stop, &mut |m| {
+                eprintln!("{m}");
+            })
+            .unwrap();
+        });
+    }
+    let mut driver = Ros2Hardware::new(
+        Ros2Node::new("driver", &ros).unwrap(),
+        &robot,
+        &Isometry3::identity(),
+        &bearings,
+        DriverConfig {
+            ros2: scenario::ros2::Ros2Spec {
+                timeout_s: 10.0,
+                ..scenario::ros2::Ros2Spec::default()
+            },
+            lockstep: false,
+            limits: None,
+        },
+    )
+    .unwrap();
+    let before = driver.robot_clock_ns().unwrap().unwrap();
+    let wall = std::time::Instant::now();
+    let arm = driver.moving().unwrap();
+    arm.start_motion(&motion).unwrap();
+    let mut scans = Vec::new();
+    while let Some(scan) = arm.next_scan().unwrap() {
+        scans.push(scan);
+    }
+    let robot_s = (driver.robot_clock_ns().unwrap().unwrap() - before) as Real * 1e-9;
+    let wall_s = wall.elapsed().as_secs_f64();
+    stop.store(true, Ordering::Relaxed);
+    // A scan begins every 0.1 s of the free-running scanner, so 24 or 25
+    // begin within the motion's 2.5 s.
+    assert!((24..=25).contains(&scans.len()), "{} scans", scans.len());
+    for (a, b) in hw::Arm::joints(&driver).iter().zip(&motion.to) {
+        assert!((a - b).abs() < 1e-9, "rests at {a}, not {b}");
+    }
+    assert!((2.5..2.8).contains(&robot_s), "{robot_s} robot seconds");
+    assert!(wall_s < 0.3 * robot_s, "{wall_s} s of wall time");
+    moments_place_on_the_walls_and_stamps_do_not(&robot, &scans, &bearings, &noise);
 }
 
 /// A guard that refuses after five scans brakes the arm at once: it comes
