@@ -2,5 +2,6 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may panic
 
 mod explore;
+mod over_ros2;
 #[path = "../support/mod.rs"]
 mod support;
