@@ -12,6 +12,11 @@
 //! ([`follow::place_tool`] from several start guesses, then
 //! [`plan::contact::min_clearance`]). A pose is all it asks: whether the
 //! follower finds a path there is the run's business.
+//!
+//! A follow job's setup gives the faces a robot cannot reach a priori
+//! ([`unreachable_faces`], [`super::follow::FollowSetup::from_scenario`]):
+//! the scene is the scenario's, known before the run as Pudney knew his
+//! objects' occluded faces, so this needs no simulator.
 
 use geom::{Isometry3, Point3, Real, UnitVector3, Vector3};
 use plan::contact::min_clearance;
@@ -19,8 +24,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use robot::Robot;
 use scene::Scene;
-pub use scene::faces::face_outline;
-use scene::faces::{TrueFace, triangle_samples, true_faces};
+use scene::faces::{TrueFace, face_outline, triangle_samples, true_faces};
 use serde::Serialize;
 
 /// How [`face_reachability`] tests.
