@@ -16,7 +16,7 @@ use pyo3::prelude::*;
 use scenario::job::explore::{ExploreOptions, OracleOption};
 use scenario::{LoadedScenario, Scenario};
 use serde::Deserialize;
-use sim::follow_job::{DEFAULT_MAX_SETS, FollowRunOptions, FollowSetup};
+use sim::follow_job::{DEFAULT_MAX_SETS, FollowRunOptions, SimFollow};
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
@@ -275,7 +275,7 @@ pub fn _follow(
         .to_toml()
         .map_err(|e| scenario_error(&e))?;
     py.detach(|| {
-        let setup = FollowSetup::from_scenario(&loaded, &options)?;
+        let setup = SimFollow::from_scenario(&loaded, &options)?;
         let stop = AtomicBool::new(false);
         sim::follow_job::follow(
             setup,

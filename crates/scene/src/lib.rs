@@ -11,6 +11,7 @@
 //! | [`bvh`] | the binned-SAH bounding-volume hierarchy behind every query |
 //! | [`wide`] | its four-wide collapse, with SIMD box tests, for triangle ray casting |
 //! | [`primitives`] | (re-exported from `geom`) closed meshes of boxes, prisms, I-beams, cylinders |
+//! | [`faces`] | [`faces::true_faces`]: a mesh scene's planar faces (coplanar triangles joined by their edges), [`faces::face_outline`] |
 //! | [`sampling`] | uniform area samples of the true surfaces, for coverage metrics |
 //! | [`io`] | OBJ / STL / PLY meshes, PLY / PCD / text clouds, PLY output |
 //! | [`material`] | [`Material`], the default table, [`MaterialId`] |
@@ -20,6 +21,7 @@ pub mod bvh;
 pub mod cloud;
 pub mod cloud_world;
 pub mod error;
+pub mod faces;
 pub mod fixtures;
 pub mod io;
 pub mod material;

@@ -1,12 +1,12 @@
 //! Which faces of a built-in surface-following scene a robot can bring its
-//! control point to (`sim::follow_reach`), from arm4's post beside it or
+//! control point to (`scenario::job::reach`), from arm4's post beside it or
 //! from a mount above it:
 //! `cargo run --release -p sim --example follow_reach -- block1 [post|above]`.
 
 use geom::{Isometry3, Real, Translation3, UnitQuaternion, Vector3};
 use scenario::Scenario;
+use scenario::job::reach::{ReachConfig, face_reachability};
 use sim::follow_job::{ARM4_BASE_XYZ, ARM4_SEED};
-use sim::follow_reach::{ReachConfig, face_reachability};
 use sim::surface_score::not_resting_on;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -6,7 +6,7 @@
 //! |---|---|
 //! | [`rig`] | [`SimRig`]: the `hw` traits over a ground-truth world |
 //! | [`explore_job`] | [`explore_job::SimExplore`]: a scenario's exploration on a [`SimRig`], judged by [`explore_job::ExploreJudge`]; [`scenario::job::explore::write_run`] stages its run folder with the blast plan |
-//! | [`follow_job`] | [`follow_job::FollowSetup`]: a scenario's or a scene file's surface following on a [`SimRig`], judged by [`follow_job::FollowJudge`]; [`follow_job::FollowRun::write`] |
+//! | [`follow_job`] | [`follow_job::SimFollow`]: a scenario's or a scene file's surface following (the job of `scenario::job::follow`) on a [`SimRig`], judged by [`follow_job::FollowJudge`] and scored; [`follow_job::follow`] writes its run folder |
 //! | [`scan_job`] | the `surveyor scan` job as library calls |
 //! | [`metrics`] | [`metrics::coverage`], [`metrics::accuracy`], [`metrics::CoverageTracker`] against the ground truth |
 //! | [`surface_score`] | [`surface_score::score_surface_model`]: a surface model against the true faces, edges and corners |
@@ -17,7 +17,6 @@
 
 pub mod explore_job;
 pub mod follow_job;
-pub mod follow_reach;
 pub mod material_oracle;
 pub mod metrics;
 pub mod oracle;

@@ -4,7 +4,7 @@
 //!
 //! The truth is a [`Scene`]'s triangles grouped into [`TrueFace`]s: maximal
 //! sets of coplanar triangles connected through shared edges
-//! ([`true_faces`]). The caller says which faces count (e.g. not the faces
+//! ([`true_faces`], of `scene::faces`). The caller says which faces count (e.g. not the faces
 //! resting on the table, [`not_resting_on`]); [`score_surface_model`] then
 //! reports, against a [`SurfaceModel`]:
 //!
@@ -26,19 +26,14 @@
 use crate::SimError;
 use crate::metrics::DistanceStats;
 use geom::polygon2;
-use geom::{Aabb, PlaneFrame, Point2, Point3, Real, Segment3, UnitVector3, Vector3, unit};
+use geom::{Aabb, PlaneFrame, Point2, Point3, Real, Segment3, UnitVector3};
 use rayon::prelude::*;
-use scene::{FaceId, ObjectId, Scene};
+use scene::Scene;
+pub use scene::faces::{TrueFace, not_resting_on, true_faces};
+use scene::faces::{VertexKey, group_faces, mesh_topology, triangle_samples};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use surface::{SegmentId, SurfaceModel};
-
-/// Triangles whose normals differ by less than this are coplanar when they share
-/// an edge (radians; 0.01°).
-const COPLANAR_RAD: Real = 1.745e-4;
-
-/// Vertices closer than this are welded when grouping triangles (metres).
-const WELD_M: Real = 1e-7;
 
 /// Most samples one scoring may take (faces and edges together); a finer
 /// spacing over a larger area is refused.
@@ -105,170 +100,6 @@ impl SurfaceScoreConfig {
         }
         Ok(())
     }
-}
-
-/// A true planar face: a maximal set of coplanar scene triangles connected
-/// through shared edges.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct TrueFace {
-    /// Index in the list [`true_faces`] returns.
-    pub id: usize,
-    /// Outward unit normal (area-weighted mean of its triangles').
-    pub normal: UnitVector3,
-    /// Plane offset: `normal · x = offset` on the face.
-    pub offset: Real,
-    /// Scene triangle indices.
-    pub triangles: Vec<u32>,
-    /// Area, m².
-    pub area_m2: Real,
-    /// The scene object of its first triangle.
-    pub object: ObjectId,
-    /// Bounding box.
-    pub bounds: Aabb,
-}
-
-/// Welded-vertex key.
-type VKey = [i64; 3];
-
-fn vkey(p: &Point3) -> VKey {
-    // Coordinates are within scene::MAX_COORDINATE_M (1e7 m): / 1e-7 fits i64.
-    #[allow(clippy::cast_possible_truncation)]
-    let k = |c: Real| (c / WELD_M).round() as i64;
-    [k(p.x), k(p.y), k(p.z)]
-}
-
-/// The mesh's welded topology: per triangle its vertex keys; per undirected
-/// edge the triangles using it.
-struct Topology {
-    tri_keys: Vec<[VKey; 3]>,
-    edges: BTreeMap<(VKey, VKey), Vec<u32>>,
-    normals: Vec<Option<UnitVector3>>,
-}
-
-fn topology(scene: &Scene) -> Topology {
-    let mesh = scene.mesh();
-    let mut tri_keys = Vec::with_capacity(mesh.len());
-    let mut edges: BTreeMap<(VKey, VKey), Vec<u32>> = BTreeMap::new();
-    let mut normals = Vec::with_capacity(mesh.len());
-    for (t, tri) in mesh.iter_triangles().enumerate() {
-        let keys = [vkey(&tri.a), vkey(&tri.b), vkey(&tri.c)];
-        let n = tri.normal();
-        normals.push(n);
-        if n.is_some() {
-            for (a, b) in [(0, 1), (1, 2), (2, 0)] {
-                let (ka, kb) = (keys[a], keys[b]);
-                let e = if ka <= kb { (ka, kb) } else { (kb, ka) };
-                #[allow(clippy::cast_possible_truncation)]
-                edges.entry(e).or_default().push(t as u32);
-            }
-        }
-        tri_keys.push(keys);
-    }
-    Topology {
-        tri_keys,
-        edges,
-        normals,
-    }
-}
-
-fn find(parent: &mut [usize], mut i: usize) -> usize {
-    while parent[i] != i {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    i
-}
-
-/// Group triangles into faces; returns the faces and each triangle's face.
-fn group_faces(scene: &Scene, topo: &Topology) -> (Vec<TrueFace>, Vec<Option<usize>>) {
-    let mesh = scene.mesh();
-    let n = mesh.len();
-    let mut parent: Vec<usize> = (0..n).collect();
-    let cos_tol = COPLANAR_RAD.cos();
-    for tris in topo.edges.values() {
-        for (i, &a) in tris.iter().enumerate() {
-            for &b in &tris[i + 1..] {
-                let (Some(na), Some(nb)) = (topo.normals[a as usize], topo.normals[b as usize])
-                else {
-                    continue;
-                };
-                if na.dot(&nb) >= cos_tol {
-                    let (ra, rb) = (find(&mut parent, a as usize), find(&mut parent, b as usize));
-                    if ra != rb {
-                        parent[ra.max(rb)] = ra.min(rb);
-                    }
-                }
-            }
-        }
-    }
-    let mut root_face: HashMap<usize, usize> = HashMap::new();
-    let mut members: Vec<Vec<u32>> = Vec::new();
-    let mut tri_face = vec![None; n];
-    for (t, slot) in tri_face.iter_mut().enumerate() {
-        if topo.normals[t].is_none() {
-            continue;
-        }
-        let r = find(&mut parent, t);
-        let f = *root_face.entry(r).or_insert_with(|| {
-            members.push(Vec::new());
-            members.len() - 1
-        });
-        #[allow(clippy::cast_possible_truncation)]
-        members[f].push(t as u32);
-        *slot = Some(f);
-    }
-    let faces = members
-        .into_iter()
-        .enumerate()
-        .map(|(id, triangles)| {
-            let mut nsum = Vector3::zeros();
-            let mut csum = Vector3::zeros();
-            let mut area = 0.0;
-            let mut bounds = Aabb::empty();
-            for &t in &triangles {
-                let tri = mesh.triangle(t as usize);
-                let a = tri.area();
-                nsum += tri
-                    .normal()
-                    .map_or(Vector3::zeros(), |n| n.into_inner() * a);
-                csum += tri.centroid().coords * a;
-                area += a;
-                for p in [tri.a, tri.b, tri.c] {
-                    bounds.grow(&p);
-                }
-            }
-            let normal = unit(nsum).unwrap_or_else(|| {
-                topo.normals[triangles[0] as usize].unwrap_or_else(Vector3::z_axis)
-            });
-            let centroid = csum / area.max(Real::MIN_POSITIVE);
-            TrueFace {
-                id,
-                normal,
-                offset: normal.dot(&centroid),
-                object: scene.triangle_object(FaceId(triangles[0])),
-                triangles,
-                area_m2: area,
-                bounds,
-            }
-        })
-        .collect();
-    (faces, tri_face)
-}
-
-/// The scene's true planar faces: maximal sets of coplanar triangles (normals
-/// within 0.01°) connected through shared edges (vertices welded within
-/// 10⁻⁷ m), in order of their first triangle. Degenerate triangles belong to
-/// no face.
-pub fn true_faces(scene: &Scene) -> Vec<TrueFace> {
-    group_faces(scene, &topology(scene)).0
-}
-
-/// A face predicate for [`score_surface_model`] that drops the faces resting on
-/// a horizontal support at height `z`: those facing down (normal within 1° of
-/// −z) whose highest point is within 1 mm of `z` (the bottom of an object
-/// standing on the table). Every other face counts.
-pub fn not_resting_on(z: Real) -> impl Fn(&TrueFace) -> bool {
-    move |f: &TrueFace| !(f.normal.z < -(1f64.to_radians().cos()) && f.bounds.max.z <= z + 1e-3)
 }
 
 /// Coverage of one counted face.
@@ -419,28 +250,6 @@ fn is_on(
     near(centroid) || vertices.iter().any(near)
 }
 
-/// Stratified uniform samples of a triangle: the centroids of its `k²`
-/// congruent sub-triangles, `k = ⌈√(area / spacing²)⌉`; each stands for
-/// `area / k²`.
-pub(crate) fn triangle_samples(tri: &geom::Triangle, spacing: Real, out: &mut Vec<(Point3, Real)>) {
-    let area = tri.area();
-    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-    let k = ((area / (spacing * spacing)).sqrt().ceil() as usize).max(1);
-    let kf = k as Real;
-    let w = area / (kf * kf);
-    let (ab, ac) = (tri.b - tri.a, tri.c - tri.a);
-    for i in 0..k {
-        for j in 0..k - i {
-            let (u, v) = ((i as Real + 1.0 / 3.0) / kf, (j as Real + 1.0 / 3.0) / kf);
-            out.push((tri.a + ab * u + ac * v, w));
-            if i + j + 2 <= k {
-                let (u, v) = ((i as Real + 2.0 / 3.0) / kf, (j as Real + 2.0 / 3.0) / kf);
-                out.push((tri.a + ab * u + ac * v, w));
-            }
-        }
-    }
-}
-
 /// The weighted mean of `(value, weight)` pairs; `empty` when the weights sum
 /// to zero (area- or length-weighted fractions of faces, edges, polygons).
 pub(crate) fn weighted_mean(
@@ -479,7 +288,7 @@ pub fn score_surface_model(
     cfg.validate()?;
     let lambda = cfg.lambda_m;
     let cos_mu = cfg.mu_deg.to_radians().cos();
-    let topo = topology(scene);
+    let topo = mesh_topology(scene);
     let (faces, tri_face) = group_faces(scene, &topo);
     let counts: Vec<bool> = faces.iter().map(counted).collect();
 
@@ -618,8 +427,8 @@ pub fn score_surface_model(
 
     // True edges between counted faces with a dihedral angle above μ.
     let mut true_edges: BTreeMap<(usize, usize), Vec<Segment3>> = BTreeMap::new();
-    let mut vertex_faces: BTreeMap<VKey, (Point3, BTreeSet<usize>)> = BTreeMap::new();
-    for (t, keys) in topo.tri_keys.iter().enumerate() {
+    let mut vertex_faces: BTreeMap<VertexKey, (Point3, BTreeSet<usize>)> = BTreeMap::new();
+    for (t, keys) in topo.triangle_keys.iter().enumerate() {
         let Some(f) = tri_face[t] else { continue };
         let tri = scene.mesh().triangle(t);
         for (k, p) in keys.iter().zip([tri.a, tri.b, tri.c]) {

@@ -1,5 +1,7 @@
 //! `surveyor follow`: Pudney's surface following (P ch. 3) in a simulated
-//! world, one episode ([`sim::follow_job`]), with its outputs in a folder.
+//! world, one episode ([`sim::follow_job`]), or on a ROS 2 robot
+//! (`--ros2`, [`super::on_robot::follow_job`]), with its outputs in a
+//! folder.
 
 use super::output::{config_toml, load_config};
 use anyhow::{Context, Result, bail};
@@ -7,11 +9,15 @@ use clap::Args;
 use follow::{GapTargetRule, RunEnd, SliceLineRule, SliceRule};
 use geom::Real;
 use indicatif::{ProgressBar, ProgressStyle};
-use scenario::{RobotChoice, Scenario};
-use sim::follow_job::{
-    DEFAULT_MAX_SETS, FollowRunConfig, FollowRunOptions, FollowSetup, StartPose,
+use record::follow::FollowSummary;
+use scenario::job::follow::{
+    DEFAULT_MAX_SETS, FollowRun, FollowRunConfig, FollowRunOptions, FollowSetup, ScanFigures,
+    StartPose, SurfaceFigures, check_follow_out, follow_with,
 };
-use std::path::PathBuf;
+use scenario::{RobotChoice, Scenario};
+use serde::Serialize;
+use sim::follow_job::SimFollow;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -126,25 +132,6 @@ pub struct FollowArgs {
     ros2: super::on_robot::Ros2Flags,
 }
 
-/// A live view (`--ros2`) publishes the surface model every this many steps.
-const LIVE_MODEL_EVERY: u64 = 25;
-
-/// The live view of a step: the arm's frames at `q`, and `model` when given.
-fn live_step(
-    live: &std::cell::RefCell<ros2::LiveView>,
-    q: &[Real],
-    model: Option<&surface::SurfaceModel>,
-) {
-    let mut view = live.borrow_mut();
-    view.frames(q);
-    if let Some(model) = model {
-        view.markers(
-            record::bag::topics::SURFACE_MODEL,
-            record::bag::markers::surface_model(ros2::wall_clock_ns(), &model.to_model_json()),
-        );
-    }
-}
-
 /// The options of the run from the flags, each checked with the flag named.
 fn options(a: &FollowArgs, config: FollowRunConfig) -> Result<FollowRunOptions> {
     let start = match (&a.start, &a.joints) {
@@ -243,7 +230,7 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     let Some(out) = &a.out else {
         bail!("--out is required");
     };
-    sim::follow_job::check_follow_out(out)?;
+    check_follow_out(out)?;
     let opts = options(a, config)?;
     // The scenario as given (its paths made absolute), for the report's
     // ground truth; a --scene run has none.
@@ -260,7 +247,13 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
         }
         (None, None) => bail!("give --scenario NAME|FILE or --scene FILE"),
     };
-    super::warn_about(setup.rig.robot());
+    super::warn_about(&setup.robot);
+    // The in-process run's rig, made before the run as its setup is.
+    let simulated = if a.ros2.ros2 {
+        None
+    } else {
+        Some(SimFollow::new(setup.clone())?)
+    };
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = Arc::clone(&stop);
@@ -274,53 +267,46 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     {
         pb.set_style(style.progress_chars("=> "));
     }
-    let (hardware, live) = a
-        .ros2
-        .open(&spec, setup.rig.robot(), &setup.rig.world_from_base(), &[])?
-        .unzip();
-    let start_tolerance = a.ros2.start_tolerance(&spec);
-    let run = sim::follow_job::follow_with(
+    let mut progress = |row: &record::StepRow, follower: &follow::Follower| {
+        pb.set_position(row.step + 1);
+        if row.step.is_multiple_of(10) {
+            pb.set_message(format!(
+                "{} · {} segments",
+                row.mode,
+                follower.model().len()
+            ));
+        }
+    };
+    let mut report =
+        |staging: &record::Staging| report::write_staged(staging).map_err(|e| e.to_string());
+    let Some(simulated) = simulated else {
+        let run = super::on_robot::follow_job(
+            &a.ros2,
+            &spec,
+            setup,
+            scenario_toml,
+            out,
+            &stop,
+            &mut progress,
+            &mut report,
+        );
+        pb.finish_and_clear();
+        let (run, live) = run?;
+        super::on_robot::say_follow_live(&live, &run)?;
+        say_summary(&run, out, a.no_timings)?;
+        return say_end(&run, out);
+    };
+    let run = follow_with(
         scenario_toml,
         out,
-        |stop, progress| match hardware {
-            Some(hw) => setup.run_on(hw, start_tolerance, stop, progress),
-            None => setup.run(stop, progress),
-        },
+        |stop, progress| simulated.run(stop, progress),
         &stop,
-        &mut |row, follower| {
-            pb.set_position(row.step + 1);
-            if let Some(live) = &live {
-                let model = (row.step % LIVE_MODEL_EVERY == 0).then(|| follower.model());
-                live_step(live, &row.joints, model);
-            }
-            if row.step % 10 == 0 {
-                pb.set_message(format!(
-                    "{} · {} segments",
-                    row.mode,
-                    follower.model().len()
-                ));
-            }
-        },
-        &mut |staging| report::write_staged(staging).map_err(|e| e.to_string()),
+        &mut progress,
+        &mut report,
     );
     pb.finish_and_clear();
     let run = run?;
-    if let Some(live) = &live {
-        live_step(live, &run.episode.end_joints, Some(&run.model));
-        super::on_robot::say_live(live)?;
-    }
-    let summary = run.summary();
-    let collisions = summary
-        .collisions
-        .map_or_else(|| "no ground truth for".to_owned(), |n| n.to_string());
-    let times = step_times(&summary.step_us, a.no_timings);
-    say!(
-        "{} sets, termination {}, {collisions} collisions, {times}; robot time {} → {}",
-        summary.sets,
-        summary.termination,
-        summary.robot_time_s,
-        out.display()
-    )?;
+    let summary = say_summary(&run, out, a.no_timings)?;
     if let Some(score) = &run.score {
         say!(
             "model: {} segments; coverage {:.1}% of the counted faces ({:.1}% within λ of any polygon), shared edges {:.1}%, {} of {} corners",
@@ -352,6 +338,37 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
         };
         say!("scan: {clearance}; {model}")?;
     }
+    say_end(&run, out)
+}
+
+/// Say the run's summary line (sets, termination, collisions, step and
+/// robot times); the summary, for the lines that follow.
+fn say_summary<S, M>(
+    run: &FollowRun<S, M>,
+    out: &Path,
+    no_timings: bool,
+) -> Result<FollowSummary<FollowRunOptions, S, M>>
+where
+    S: SurfaceFigures + Serialize + Clone,
+    M: ScanFigures + Serialize + Clone,
+{
+    let summary = run.summary();
+    let collisions = summary
+        .collisions
+        .map_or_else(|| "no ground truth for".to_owned(), |n| n.to_string());
+    let times = step_times(&summary.step_us, no_timings);
+    say!(
+        "{} sets, termination {}, {collisions} collisions, {times}; robot time {} → {}",
+        summary.sets,
+        summary.termination,
+        summary.robot_time_s,
+        out.display()
+    )?;
+    Ok(summary)
+}
+
+/// Say where the report is, and fail when the run stopped on an error.
+fn say_end<S, M>(run: &FollowRun<S, M>, out: &Path) -> Result<()> {
     say!(
         "report: {}",
         out.join(record::folder::REPORT_HTML).display()

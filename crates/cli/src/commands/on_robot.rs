@@ -1,15 +1,21 @@
 //! The `--ros2` paths of `explore` and `follow`: a ROS 2 robot as the
 //! hardware of a job, and the live view of its run. A robot's exploration
-//! runs the job of [`scenario::job::explore`] and uses no simulator type
-//! (the architecture test reads this file to check it).
+//! runs the job of [`scenario::job::explore`], its surface following the
+//! job of [`scenario::job::follow`], and neither uses a simulator type (the
+//! architecture test reads this file to check it).
 
 use anyhow::Result;
 use clap::Args;
+use follow::Follower;
 use geom::Real;
+use record::StepRow;
 use scenario::job::JobError;
 use scenario::job::explore::{ExploreOptions, HardwareExplore};
+use scenario::job::follow::{FollowRun, FollowSetup, HardwareFollow, follow_with};
 use std::cell::RefCell;
+use std::path::Path;
 use std::rc::Rc;
+use std::sync::atomic::AtomicBool;
 
 /// How `explore` and `follow` drive a ROS 2 robot instead of the simulator.
 #[derive(Debug, Args)]
@@ -221,4 +227,68 @@ pub fn explore_job(
         Some(live) => job.judged_by(Box::new(LiveWatcher(live))),
         None => job,
     })
+}
+
+/// A live view of surface following publishes the surface model every
+/// this many steps.
+const LIVE_MODEL_EVERY: u64 = 25;
+
+/// The live view of a step: the arm's frames at `q`, and `model` when given.
+fn live_step(live: &RefCell<ros2::LiveView>, q: &[Real], model: Option<&surface::SurfaceModel>) {
+    let mut view = live.borrow_mut();
+    view.frames(q);
+    if let Some(model) = model {
+        view.markers(
+            record::bag::topics::SURFACE_MODEL,
+            record::bag::markers::surface_model(ros2::wall_clock_ns(), &model.to_model_json()),
+        );
+    }
+}
+
+/// The whole `surveyor follow --ros2` job: the surface following of
+/// `setup` on the ROS 2 robot `flags` connect to under `spec` (waiting for
+/// its first joint state; it must stand at the setup's start joints), its
+/// run folder as [`follow_with`] writes it (`scenario_toml`, `out`,
+/// `finish`), and its live view, which `progress` sees every step beside.
+/// The run and its live view, for [`say_follow_live`].
+#[allow(
+    clippy::too_many_arguments,
+    reason = "follow_with's arguments and the robot's two: each is one the binary reads"
+)]
+pub fn follow_job(
+    flags: &Ros2Flags,
+    spec: &scenario::ros2::Ros2Spec,
+    setup: FollowSetup,
+    scenario_toml: Option<String>,
+    out: &Path,
+    stop: &AtomicBool,
+    progress: &mut dyn FnMut(&StepRow, &Follower),
+    finish: &mut dyn FnMut(&record::Staging) -> Result<(), String>,
+) -> Result<(FollowRun, Rc<RefCell<ros2::LiveView>>)> {
+    let hw = flags.connect(spec, &setup.robot, &setup.world_from_base, &[])?;
+    let live = flags.live(&setup.robot, &setup.world_from_base)?;
+    let job = HardwareFollow::new(setup, hw, flags.start_tolerance(spec))?;
+    let run = follow_with(
+        scenario_toml,
+        out,
+        |stop, progress| job.run(stop, progress),
+        stop,
+        &mut |row, follower| {
+            progress(row, follower);
+            let model = row
+                .step
+                .is_multiple_of(LIVE_MODEL_EVERY)
+                .then(|| follower.model());
+            live_step(&live, &row.joints, model);
+        },
+        finish,
+    )?;
+    Ok((run, live))
+}
+
+/// The live view's last frames and surface model once the run has them,
+/// and what it sent.
+pub fn say_follow_live(live: &RefCell<ros2::LiveView>, run: &FollowRun) -> Result<()> {
+    live_step(live, &run.episode.end_joints, Some(&run.model));
+    say_live(live)
 }

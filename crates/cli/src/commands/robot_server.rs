@@ -78,7 +78,7 @@ pub fn sim_robot(a: &SimRobotArgs) -> Result<()> {
                 seed: a.seed,
                 ..sim::follow_job::FollowRunOptions::default()
             };
-            sim::follow_job::FollowSetup::from_scenario(&loaded, &options)?.rig
+            sim::follow_job::SimFollow::from_scenario(&loaded, &options)?.rig
         }
     };
     let robot = rig.robot().clone();

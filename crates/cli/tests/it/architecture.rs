@@ -233,18 +233,16 @@ fn paths_into_finds_a_crate_path_and_nothing_else() {
 
 /// Issue 46 acceptance 6: a robot's run is not the simulator's. The
 /// `--ros2` paths of the binary (`commands/on_robot.rs`: the connection,
-/// the live view, the exploration on a ROS 2 robot) name no `sim` item:
-/// the job they run is `scenario::job`'s. `py` has no ROS 2 path (it does
+/// the live view, the exploration and the surface following on a ROS 2
+/// robot) name no `sim` item: the jobs they run are `scenario::job`'s. `py` has no ROS 2 path (it does
 /// not depend on `ros2`); if it gains one, this test is where to check it.
 #[test]
 fn the_ros2_paths_use_no_sim_type() {
     let path = root().join("crates/cli/src/commands/on_robot.rs");
     let code = code_of(&std::fs::read_to_string(&path).unwrap());
-    assert!(
-        code.contains("HardwareExplore"),
-        "{}: moved?",
-        path.display()
-    );
+    for job in ["HardwareExplore", "HardwareFollow"] {
+        assert!(code.contains(job), "{}: {job} moved?", path.display());
+    }
     let named = paths_into(&code, "sim");
     assert!(
         named.is_empty() && !code.contains("use sim"),

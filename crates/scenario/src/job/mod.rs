@@ -3,8 +3,16 @@
 //! `run.mcap`, and write the run folder. A robot's run needs no simulator;
 //! `sim` runs the same jobs on its `SimRig` and judges them against the
 //! ground truth.
+//!
+//! | module | the job |
+//! |---|---|
+//! | [`explore`] | AXBAM exploration: [`explore::HardwareExplore`], [`explore::explore_with`] |
+//! | [`follow`] | surface following: [`follow::FollowSetup`], [`follow::HardwareFollow`], [`follow::follow_with`] |
+//! | [`reach`] | which true faces a follower can reach ([`reach::unreachable_faces`], given a priori) |
 
 pub mod explore;
+pub mod follow;
+pub mod reach;
 
 use geom::Real;
 

@@ -8,7 +8,7 @@
 use hw::script::{Event, Recorder, Tap};
 use hw::{Arm, RangeSensors};
 use scenario::Scenario;
-use sim::follow_job::{FollowRunOptions, FollowSetup};
+use sim::follow_job::{FollowRunOptions, SimFollow};
 
 #[test]
 fn range_readings_in_the_bag_are_the_rig_s_sensor_points() {
@@ -19,12 +19,12 @@ fn range_readings_in_the_bag_are_the_rig_s_sensor_points() {
             ..FollowRunOptions::default()
         };
         let mut setup =
-            FollowSetup::from_scenario(&Scenario::load(scene).unwrap(), &options).unwrap();
+            SimFollow::from_scenario(&Scenario::load(scene).unwrap(), &options).unwrap();
         let model = setup.rig.robot().clone();
-        let start = setup.start_joints.clone();
+        let start = setup.job.start_joints.clone();
         let mut bag = setup.rig.run_bag().unwrap();
         let clock = hw::clock::RobotClock::default();
-        let timed = hw::clock::Timed::new(&mut setup.rig, setup.timing.clone(), clock.clone());
+        let timed = hw::clock::Timed::new(&mut setup.rig, setup.job.timing.clone(), clock.clone());
         let mut rec = Tap::with_sink(Recorder::new(timed, Vec::new()), |e: &Event| {
             scenario::job::bag_event(&mut bag, &clock, e);
         });

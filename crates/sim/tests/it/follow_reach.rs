@@ -1,13 +1,13 @@
 //! Issue 24 acceptance 1: which faces arm4 on its post at x = −1.6 m can
 //! bring its control point to, decided by the inverse-kinematics test of
-//! `sim::follow_reach` and re-run here. The faces it cannot reach are the
+//! `scenario::job::reach` and re-run here. The faces it cannot reach are the
 //! ones to give as initial segments (Pudney gave his objects' occluded faces
 //! so, P§4.3).
 
 use geom::Isometry3;
 use scenario::Scenario;
+use scenario::job::reach::{ReachConfig, face_reachability};
 use sim::follow_job::{ARM4_BASE_XYZ, ARM4_SEED};
-use sim::follow_reach::{ReachConfig, face_reachability};
 use sim::surface_score::not_resting_on;
 
 #[test]
@@ -53,9 +53,9 @@ fn arm4_on_its_post_reaches_every_face_of_the_cube_but_the_far_one() {
 fn a_face_outline_is_its_boundary_anticlockwise_about_its_normal() {
     let world = Scenario::load("cube").unwrap().build_world().unwrap();
     let scene = world.as_scene().unwrap();
-    let faces = sim::surface_score::true_faces(scene);
+    let faces = scene::faces::true_faces(scene);
     let plus_x = faces.iter().find(|f| f.normal.x > 0.99).unwrap();
-    let outline = sim::follow_reach::face_outline(scene, plus_x).unwrap();
+    let outline = scene::faces::face_outline(scene, plus_x).unwrap();
     assert_eq!(outline.len(), 4, "{outline:?}");
     for p in &outline {
         assert!(

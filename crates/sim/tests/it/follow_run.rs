@@ -7,11 +7,12 @@
 use follow::RunEnd;
 use geom::{Point3, Real};
 use scenario::Scenario;
-use sim::follow_job::{FollowRunError, FollowRunOptions, FollowSetup, StartPose};
+use scenario::job::follow::HardwareFollow;
+use sim::follow_job::{FollowRunError, FollowRunOptions, Judgement, SimFollow, StartPose};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-fn setup(name: &str, options: &FollowRunOptions) -> FollowSetup {
-    FollowSetup::from_scenario(&Scenario::load(name).unwrap(), options).unwrap()
+fn setup(name: &str, options: &FollowRunOptions) -> SimFollow {
+    SimFollow::from_scenario(&Scenario::load(name).unwrap(), options).unwrap()
 }
 
 fn budget(n: u64) -> FollowRunOptions {
@@ -28,7 +29,7 @@ fn no_stop() -> AtomicBool {
 #[test]
 fn a_budgeted_cube_run_records_every_step_and_writes_every_output() {
     let s = setup("cube", &budget(50));
-    assert_eq!(s.start_joints, vec![0.0, 0.0, 1.1]);
+    assert_eq!(s.job.start_joints, vec![0.0, 0.0, 1.1]);
     let robot = s.rig.robot().clone();
     let mut calls = 0;
     let run = s.run(&no_stop(), &mut |_, _| calls += 1).unwrap();
@@ -188,6 +189,52 @@ fn without_timings_two_runs_are_byte_identical_and_the_seed_matters() {
     assert_eq!(&f[9..12], ["", "", ""], "{row}");
 }
 
+/// Issue 46: the job a robot runs ([`HardwareFollow`], nobody judging) on
+/// the rig makes the simulated run's steps, model and bag; only the
+/// judgement and the scores are the simulator's.
+#[test]
+fn the_robot_job_on_the_rig_is_the_simulated_run_without_its_judgement() {
+    let opts = FollowRunOptions {
+        max_sets: 60,
+        robot: Some("arm4".to_owned()),
+        noise_sigma_m: Some(0.002),
+        timings: false,
+        ..FollowRunOptions::default()
+    };
+    let simulated = setup("cube", &opts);
+    let on_robot = HardwareFollow::new(simulated.job.clone(), simulated.rig.clone(), 0.0)
+        .unwrap()
+        .run(&no_stop(), &mut |_, _| {})
+        .unwrap();
+    let simulated = simulated.run(&no_stop(), &mut |_, _| {}).unwrap();
+    let (a, b) = (on_robot.outputs().unwrap(), simulated.outputs().unwrap());
+    for k in [0, 1, 2, 3, 5] {
+        assert_eq!(a[k].1, b[k].1, "{}", a[k].0);
+    }
+    assert_eq!(on_robot.bag, simulated.bag, "run.mcap");
+    assert_eq!(on_robot.a_priori_faces, simulated.a_priori_faces);
+    assert_eq!(on_robot.judgement, Judgement::default());
+    assert!(simulated.judgement.min_clearance_m.is_some());
+    assert!(on_robot.score.is_none() && simulated.score.is_some());
+    let json: serde_json::Value = serde_json::from_str(&a[4].1).unwrap();
+    assert!(
+        json["score"].is_null() && json["collisions"].is_null(),
+        "{json}"
+    );
+}
+
+/// A robot that does not stand at the start joints is refused before the
+/// run.
+#[test]
+fn the_robot_job_refuses_a_robot_away_from_the_start() {
+    let simulated = setup("cube", &budget(10));
+    let mut rig = simulated.rig.clone();
+    hw::Arm::move_to(&mut rig, &[0.0, 0.0, 1.2]).unwrap();
+    let e = HardwareFollow::new(simulated.job, rig, 1e-3).unwrap_err();
+    assert!(matches!(e, FollowRunError::Option { .. }), "{e}");
+    assert!(e.to_string().contains("start joints"), "{e}");
+}
+
 #[test]
 fn the_stop_flag_ends_the_run_after_the_current_step_and_keeps_it() {
     let s = setup("cube", &budget(1000));
@@ -214,7 +261,7 @@ fn arm4_on_block1_starts_delta_above_the_top_face_pointing_down_clear_of_the_blo
     };
     let s = setup("block1", &opts);
     let robot = s.rig.robot();
-    let tool = robot.tool_pose(&s.start_joints).unwrap();
+    let tool = robot.tool_pose(&s.job.start_joints).unwrap();
     let world = s.rig.world_from_base() * tool;
     // block1's upper top face is x ∈ [−0.6, 0], y ∈ [−0.35, 0.35] at z = 0.8.
     let p = Point3::from(world.translation.vector);
@@ -239,7 +286,7 @@ fn a_start_pose_through_the_top_face_is_refused() {
         max_sets: 1,
         ..FollowRunOptions::default()
     };
-    let e = FollowSetup::from_scenario(&Scenario::load("cube").unwrap(), &at(1.01)).unwrap_err();
+    let e = SimFollow::from_scenario(&Scenario::load("cube").unwrap(), &at(1.01)).unwrap_err();
     assert!(matches!(e, FollowRunError::Option { .. }), "{e}");
     let text = e.to_string();
     assert!(
@@ -259,7 +306,7 @@ fn a_start_pose_through_the_top_face_is_refused() {
 #[test]
 fn bad_options_are_refused_before_anything_runs() {
     let load = || Scenario::load("cube").unwrap();
-    let err = |o: FollowRunOptions| FollowSetup::from_scenario(&load(), &o).unwrap_err();
+    let err = |o: FollowRunOptions| SimFollow::from_scenario(&load(), &o).unwrap_err();
     let e = err(FollowRunOptions {
         robot: Some("robby".into()),
         ..FollowRunOptions::default()

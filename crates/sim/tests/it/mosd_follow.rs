@@ -16,7 +16,7 @@ use follow::RunEnd;
 use follow::Termination;
 use geom::{Point3, Real};
 use scenario::Scenario;
-use sim::follow_job::{FollowRunOptions, FollowSetup};
+use sim::follow_job::{FollowRunOptions, SimFollow};
 use std::collections::BTreeMap;
 use std::sync::atomic::AtomicBool;
 /// Issue 9 acceptance 5: point3 over the real mOSD scan (learn0, two boxes on
@@ -53,7 +53,7 @@ fn point3_follows_the_mosd_boxes_clear_of_the_scan() {
     };
     let delta = options.config.follow.desired_distance_m;
     let lambda = options.config.surface.lambda;
-    let setup = FollowSetup::from_scenario(&loaded, &options).unwrap();
+    let setup = SimFollow::from_scenario(&loaded, &options).unwrap();
     let run = setup.run(&AtomicBool::new(false), &mut |_, _| {}).unwrap();
     let scan = run
         .scan_score

@@ -9,7 +9,7 @@
 use follow::{EpisodeOptions, NoJudge};
 use hw::script::{Event, Recorder, Replay, Script};
 use scenario::Scenario;
-use sim::follow_job::{FollowRunOptions, FollowSetup};
+use sim::follow_job::{FollowRunOptions, SimFollow};
 use std::sync::atomic::AtomicBool;
 
 /// A script through JSON, as a driver test would keep it.
@@ -26,7 +26,7 @@ fn surface_following_on_a_replayed_session_repeats_the_simulated_run() {
         timings: false,
         ..FollowRunOptions::default()
     };
-    let setup = FollowSetup::from_scenario(&loaded, &options).unwrap();
+    let setup = SimFollow::from_scenario(&loaded, &options).unwrap();
     let episode = EpisodeOptions {
         max_sets: 300,
         timings: false,

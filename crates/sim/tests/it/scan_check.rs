@@ -8,7 +8,7 @@ use follow::RunEnd;
 use geom::{Capsule, Isometry3, Point3, Real, Vector3};
 use scenario::Scenario;
 use scene::World;
-use sim::follow_job::{FollowRunOptions, FollowSetup, StartPose};
+use sim::follow_job::{FollowRunOptions, SimFollow, StartPose};
 use sim::scan_check::{ModelScanConfig, ScanIndex, model_to_scan, polygon_to_scan, scan_clearance};
 use std::sync::atomic::AtomicBool;
 use surface::{SensorSet, SurfaceConfig, SurfaceModel};
@@ -225,7 +225,7 @@ fn run_clearance_over_the_mosd_scan_matches_brute_force() {
         start: Some(StartPose::Joints(start)),
         ..FollowRunOptions::default()
     };
-    let setup = FollowSetup::from_scenario(&loaded, &options).unwrap();
+    let setup = SimFollow::from_scenario(&loaded, &options).unwrap();
     let base = setup.rig.world_from_base();
     let run = setup.run(&AtomicBool::new(false), &mut |_, _| {}).unwrap();
     // The poses visited: each step's, and where the run ended. point3's

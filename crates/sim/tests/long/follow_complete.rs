@@ -16,7 +16,7 @@
 use follow::RunEnd;
 use follow::Termination;
 use scenario::Scenario;
-use sim::follow_job::{FollowRun, FollowRunOptions, FollowSetup};
+use sim::follow_job::{FollowRun, FollowRunOptions, SimFollow};
 use std::sync::atomic::AtomicBool;
 
 fn run_to_the_end(scenario: &str, robot: &str) -> FollowRun {
@@ -43,7 +43,7 @@ fn run_with(scenario: &str, options: FollowRunOptions) -> FollowRun {
         timings: false,
         ..options
     };
-    let setup = FollowSetup::from_scenario(&Scenario::load(scenario).unwrap(), &options).unwrap();
+    let setup = SimFollow::from_scenario(&Scenario::load(scenario).unwrap(), &options).unwrap();
     setup.run(&AtomicBool::new(false), &mut |_, _| {}).unwrap()
 }
 

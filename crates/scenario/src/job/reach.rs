@@ -12,16 +12,20 @@
 //! ([`follow::place_tool`] from several start guesses, then
 //! [`plan::contact::min_clearance`]). A pose is all it asks: whether the
 //! follower finds a path there is the run's business.
+//!
+//! A follow job's setup gives the faces a robot cannot reach a priori
+//! ([`unreachable_faces`], [`super::follow::FollowSetup::from_scenario`]):
+//! the scene is the scenario's, known before the run as Pudney knew his
+//! objects' occluded faces, so this needs no simulator.
 
-use crate::surface_score::{TrueFace, triangle_samples, true_faces};
 use geom::{Isometry3, Point3, Real, UnitVector3, Vector3};
 use plan::contact::min_clearance;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use robot::Robot;
 use scene::Scene;
+use scene::faces::{TrueFace, face_outline, triangle_samples, true_faces};
 use serde::Serialize;
-use std::collections::HashMap;
 
 /// How [`face_reachability`] tests.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -201,60 +205,6 @@ fn reachable(
         }
     }
     false
-}
-
-/// The outline of a true face: its boundary loop (the edges of its
-/// triangles that no other of its triangles shares, vertices welded within
-/// 10⁻⁷ m), anticlockwise about its outward normal when the scene's
-/// triangles are, with collinear vertices dropped. `None` when the boundary
-/// is not one loop (a face with a hole, or faces touching at a vertex).
-pub fn face_outline(scene: &Scene, face: &TrueFace) -> Option<Vec<Point3>> {
-    type Key = [i64; 3];
-    #[allow(clippy::cast_possible_truncation)]
-    let key = |p: &Point3| -> Key { [p.x, p.y, p.z].map(|v| (v * 1e7).round() as i64) };
-    let mut edges: HashMap<(Key, Key), Point3> = HashMap::new();
-    for &t in &face.triangles {
-        let tri = scene.mesh().triangle(t as usize);
-        for (a, b) in [(tri.a, tri.b), (tri.b, tri.c), (tri.c, tri.a)] {
-            let (ka, kb) = (key(&a), key(&b));
-            if edges.remove(&(kb, ka)).is_none() {
-                edges.insert((ka, kb), a);
-            }
-        }
-    }
-    let mut next: HashMap<Key, (Key, Point3)> = HashMap::new();
-    for (&(ka, kb), &a) in &edges {
-        if next.insert(ka, (kb, a)).is_some() {
-            return None;
-        }
-    }
-    let start = *next.keys().min()?;
-    let mut loop_points = Vec::with_capacity(next.len());
-    let mut at = start;
-    for _ in 0..next.len() {
-        let (to, p) = next.get(&at)?;
-        loop_points.push(*p);
-        at = *to;
-        if at == start {
-            break;
-        }
-    }
-    if at != start || loop_points.len() != next.len() {
-        return None;
-    }
-    let n = loop_points.len();
-    let outline: Vec<Point3> = (0..n)
-        .filter(|&i| {
-            let (prev, p, nxt) = (
-                loop_points[(i + n - 1) % n],
-                loop_points[i],
-                loop_points[(i + 1) % n],
-            );
-            (p - prev).cross(&(nxt - p)).norm() > 1e-9
-        })
-        .map(|i| loop_points[i])
-        .collect();
-    (outline.len() >= 3).then_some(outline)
 }
 
 /// A true face given a priori because the robot cannot reach it.
