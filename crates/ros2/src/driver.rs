@@ -573,7 +573,7 @@ fn not_moving() -> HwError {
 
 /// A continuous motion over ROS 2: the motion goes out as one
 /// `JointTrajectory` of its joints every 10 ms, stamped to begin
-/// [`MOTION_LEAD_S`] ahead on the robot's clock; each `LaserScan` begun
+/// 20 ms (`MOTION_LEAD_S`) ahead on the robot's clock; each `LaserScan` begun
 /// while it runs comes back with the joint states around its beams
 /// (`time_increment` apart from the header's stamp); braking sends the
 /// braked rest of the profile, stamped where it departs from the motion.
