@@ -393,7 +393,8 @@ impl Ros2Hardware {
             points: times
                 .iter()
                 .map(|&t| JointTrajectoryPoint {
-                    positions: motion.at(t),
+                    // The last point is where the motion rests, exactly.
+                    positions: if t >= d { motion.end() } else { motion.at(t) },
                     time_from_start: Time::from_nanos(ns(t - from_s)),
                     ..JointTrajectoryPoint::default()
                 })
