@@ -355,7 +355,12 @@ impl Ros2Hardware {
     /// (or the timeout of `wait`), and take where it stands.
     fn settle_at(&mut self, q: &[Real], wait: &Wait) -> Result<(), HwError> {
         let tolerance = self.config.tolerance_rad();
-        let mut error = Real::INFINITY;
+        let mut error = self
+            .q
+            .iter()
+            .zip(q)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, Real::max);
         loop {
             if let Some((stamp, now)) = self.latest_stamped()? {
                 error = now

@@ -40,10 +40,10 @@ impl Ros2Config {
     }
 }
 
-/// A ROS 2 node: one DDS participant, publishers and subscriptions with
 /// Messages ROS 2's default QoS keeps.
 const DEFAULT_DEPTH: usize = 10;
 
+/// A ROS 2 node: one DDS participant, publishers and subscriptions with
 /// ROS 2's default QoS (reliable, volatile, keep last 10).
 pub struct Ros2Node {
     node: Node,

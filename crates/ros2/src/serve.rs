@@ -193,7 +193,7 @@ pub fn exact_readings(
 /// between timed knots (robot seconds), those of the trajectory under way
 /// ahead and, behind the arm, the last [`PATH_MEMORY_S`] of where it went,
 /// so that a scan can cast each beam from where the arm was at its moment.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 struct Execution {
     /// `(due, joints, a trajectory point)`, in time order.
     knots: VecDeque<(Real, Vec<Real>, bool)>,

@@ -311,7 +311,8 @@ impl MovingScanner for SimRig {
             what: "continuous motion".into(),
             message: "braking asked before a motion began".into(),
         })?;
-        *motion = motion.braked(*k as Real * scan_time);
+        // At the end of the last scan taken.
+        *motion = motion.braked(*k as Real * scan_time + self.scan_phase_s);
         Ok(motion.clone())
     }
 }

@@ -160,7 +160,7 @@ fn beams_placed_at_their_moment_lie_on_the_walls_and_whole_scans_do_not() {
 /// the joint states around it (here every 10 ms of robot time). The
 /// points placed by the driver lie on the walls as they do in process, and
 /// placed whole they do not; the arm rests at the end of the line, and
-/// the motion takes its 2.5 s of robot time (with the driver's 0.05 s
+/// the motion takes its 2.5 s of robot time (with the driver's 0.02 s
 /// lead and the robot's 10 ms ticks), half a second of wall time.
 #[test]
 fn over_ros2_moving_scans_land_on_the_walls() {
