@@ -188,7 +188,7 @@ fn stage_one_over_ros2_faster_than_real_time_matches_the_run_in_process() {
     // In process, the scanner's scans begin with each motion; a free
     // running one's begin anywhere in their period, and the run's choices
     // follow (Stage One's A1 moves by 7 points with the phase alone): the
-    // in-process figures are those of four phases a period apart.
+    // in-process figures are those of four phases a quarter period apart.
     let in_process: Vec<explore::ExploreRun> = [0.0, 0.025, 0.05, 0.075]
         .into_iter()
         .map(|phase| {
