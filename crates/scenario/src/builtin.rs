@@ -109,6 +109,8 @@ pub fn builtin_scenario(name: &str) -> Option<Scenario> {
         initial_segments: initial,
         metrics,
         explore,
+        follow: None,
+        surface: None,
         ros2: None,
         scene,
     })

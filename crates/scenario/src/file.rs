@@ -46,6 +46,15 @@ pub struct Scenario {
     /// table, with `[explore.plan]` (n_Q, ...) and `[explore.prediction]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub explore: Option<explore::ExploreConfig>,
+    /// Surface-following parameters of this scene (the `[follow]` table of
+    /// `surveyor follow --config`; P ch. 3 defaults when absent). A
+    /// `--config` file replaces this table and `[surface]` as a whole.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub follow: Option<follow::FollowConfig>,
+    /// Surface-model parameters of this scene (the `[surface]` table of
+    /// `surveyor follow --config`; P ch. 2 defaults when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface: Option<surface::SurfaceConfig>,
     /// How `--ros2` talks to the robot: topics, joint names, tolerances
     /// (the `[ros2]` table; ROS 2's usual topics when absent).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -308,6 +317,12 @@ impl Scenario {
         if let Some(e) = &self.explore {
             e.validate().map_err(|e| fail(e.to_string()))?;
         }
+        if let Some(f) = &self.follow {
+            f.validate().map_err(|e| fail(format!("follow: {e}")))?;
+        }
+        if let Some(c) = &self.surface {
+            c.validate().map_err(|e| fail(format!("surface: {e}")))?;
+        }
         self.metrics.validate().map_err(|e| match e {
             ScenarioError::Scenario { message, .. } => fail(message),
             other => other,
@@ -512,5 +527,47 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("robot.timing.settle_s = -1"), "{e}");
+    }
+
+    /// A scenario's `[follow]` and `[surface]` tables are the run's
+    /// parameters, each field it leaves out at its default; a scenario
+    /// without them gives the defaults; a bad value is refused naming the
+    /// table.
+    #[test]
+    fn follow_and_surface_tables() {
+        use crate::job::follow::FollowRunConfig;
+        let block1 = Scenario::load("block1").unwrap().scenario;
+        assert_eq!(
+            FollowRunConfig::of_scenario(&block1),
+            FollowRunConfig::default()
+        );
+        let text = format!(
+            "{}\n[follow]\nguard_margin_m = 0.04\n\n[surface]\nlambda = 0.03\n",
+            block1.to_toml().unwrap()
+        );
+        let own = Scenario::from_toml(&text, "own.toml").unwrap();
+        let c = FollowRunConfig::of_scenario(&own);
+        let d = FollowRunConfig::default();
+        assert_eq!(c.follow.guard_margin_m, 0.04);
+        assert_eq!(c.surface.lambda, 0.03);
+        assert_eq!(c.follow.max_step_m, d.follow.max_step_m);
+        assert_eq!(c.surface.mu_deg, d.surface.mu_deg);
+        // Printed and read back, the tables stay.
+        let again = Scenario::from_toml(&own.to_toml().unwrap(), "again.toml").unwrap();
+        assert_eq!(FollowRunConfig::of_scenario(&again), c);
+        for (bad, table) in [
+            ("guard_margin_m = 0.04", "guard_margin_m = -1.0"),
+            ("lambda = 0.03", "lambda = 0.0"),
+        ] {
+            let e = Scenario::from_toml(&text.replace(bad, table), "bad.toml")
+                .unwrap_err()
+                .to_string();
+            let name = if bad.starts_with("guard") {
+                "follow"
+            } else {
+                "surface"
+            };
+            assert!(e.contains("bad.toml") && e.contains(name), "{e}");
+        }
     }
 }

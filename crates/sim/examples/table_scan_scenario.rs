@@ -94,5 +94,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pitch.to_degrees(),
         yaw.to_degrees()
     );
+    println!();
+    println!("# One camera view is a shell: it leaves sides unseen (a box's back, the part of a");
+    println!("# box another hides), and point3's 26 range finders pass edges and corners between");
+    println!("# their beams, so the body meets scan points no reading has touched. On these scans");
+    println!("# the safety guard keeps 0.04 m (default 0.02 m) from what is known and a step is");
+    println!("# at most 0.05 m (default 0.1 m), so the robot senses again before it goes far");
+    println!("# into what it has not seen: the body kept 35 mm from every scan point in 19 of");
+    println!("# 24 runs from shifted starts and under noise, and 26.9 mm at worst (the defaults:");
+    println!(
+        "# none, one touching). Issue 45 acceptance 6; crates/follow/README.md, \"Real scans\"."
+    );
+    println!("[follow]");
+    println!("guard_margin_m = 0.04");
+    println!("max_step_m = 0.05");
     Ok(())
 }

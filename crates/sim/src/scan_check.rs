@@ -189,6 +189,8 @@ pub struct PolygonScanScore {
     pub segment: Option<SegmentId>,
     /// Vertices.
     pub vertices: usize,
+    /// Vertices within λ of a scan point.
+    pub vertices_within_lambda: usize,
     /// Area, m².
     pub area_m2: Real,
     /// Outward unit normal.
@@ -222,6 +224,9 @@ pub struct ModelScanScore {
     pub within_lambda_fraction: Real,
     /// Polygons with a sample farther than λ from the scan.
     pub polygons_beyond_lambda: usize,
+    /// Share of the polygons' vertices within λ of a scan point, `[0, 1]` (1
+    /// without polygons).
+    pub vertices_within_lambda_fraction: Real,
 }
 
 /// Samples of a polygon: vertices, perimeter points at most `spacing` apart,
@@ -320,6 +325,10 @@ fn score_polygon(
     PolygonScanScore {
         segment,
         vertices: vertices.len(),
+        vertices_within_lambda: vertices
+            .iter()
+            .filter(|v| scan.nearest_distance(v) <= lambda)
+            .count(),
         area_m2,
         normal: [frame.normal.x, frame.normal.y, frame.normal.z],
         centroid: [c.x, c.y, c.z],
@@ -427,8 +436,15 @@ pub fn model_to_scan(
             .map(|p| (p.within_lambda_fraction, p.area_m2)),
         1.0,
     );
+    let vertices: usize = polygons.iter().map(|p| p.vertices).sum();
+    let vertices_within: usize = polygons.iter().map(|p| p.vertices_within_lambda).sum();
     Ok(ModelScanScore {
         config: *cfg,
+        vertices_within_lambda_fraction: if vertices == 0 {
+            1.0
+        } else {
+            vertices_within as Real / vertices as Real
+        },
         polygons_beyond_lambda: polygons.iter().filter(|p| !p.within_lambda).count(),
         polygons,
         max_m,

@@ -97,6 +97,8 @@ pub struct FollowArgs {
     max_sets: u64,
     /// Parameters (TOML): a `[follow]` table (FollowConfig: desired_distance_m,
     /// max_step_m, ...) and a [surface] table (SurfaceConfig: lambda, mu_deg, ...).
+    /// Without it, the scenario file's own `[follow]` and `[surface]` tables
+    /// (the defaults where it has none); with it, both of those are replaced.
     #[arg(long)]
     config: Option<PathBuf>,
     /// How current edge following cuts slices (P§3.4.3): `thesis`, Pudney's
@@ -204,7 +206,13 @@ fn options(a: &FollowArgs, config: FollowRunConfig) -> Result<FollowRunOptions> 
 }
 
 pub fn follow(a: &FollowArgs) -> Result<()> {
-    let mut config: FollowRunConfig = load_config(a.config.as_deref())?;
+    // The scenario's own [follow] and [surface] tables unless --config
+    // replaces them.
+    let loaded = a.scenario.as_deref().map(Scenario::load).transpose()?;
+    let mut config: FollowRunConfig = match (&a.config, &loaded) {
+        (None, Some(l)) => FollowRunConfig::of_scenario(&l.scenario),
+        (path, _) => load_config(path.as_deref())?,
+    };
     match a.slices.as_deref() {
         None => {}
         Some("thesis") => config.follow.slices = SliceRule::Thesis,
@@ -237,13 +245,12 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
     let mut scenario_toml = None;
     // How --ros2 talks to the robot: the scenario's [ros2] table.
     let mut spec = scenario::ros2::Ros2Spec::default();
-    let setup = match (&a.scenario, &a.scene) {
+    let setup = match (&loaded, &a.scene) {
         (_, Some(file)) => FollowSetup::from_scene_file(file, a.scale.unwrap_or(1.0), &opts)?,
-        (Some(name), None) => {
-            let loaded = Scenario::load(name)?;
+        (Some(loaded), None) => {
             scenario_toml = Some(loaded.standalone().to_toml()?);
             spec = loaded.scenario.ros2.clone().unwrap_or_default();
-            FollowSetup::from_scenario(&loaded, &opts)?
+            FollowSetup::from_scenario(loaded, &opts)?
         }
         (None, None) => bail!("give --scenario NAME|FILE or --scene FILE"),
     };
@@ -328,8 +335,9 @@ pub fn follow(a: &FollowArgs) -> Result<()> {
         };
         let model = match scan.max_m {
             Some(m) => format!(
-                "model polygons at most {m:.4} m from the scan, {:.1}% of their area within λ = {} m, {} of {} polygons beyond λ",
+                "model polygons at most {m:.4} m from the scan, {:.1}% of their area and {:.1}% of their vertices within λ = {} m, {} of {} polygons beyond λ",
                 100.0 * scan.within_lambda_fraction,
+                100.0 * scan.vertices_within_lambda_fraction,
                 scan.config.lambda_m,
                 scan.polygons_beyond_lambda,
                 scan.polygons.len()

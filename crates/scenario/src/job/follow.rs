@@ -72,6 +72,17 @@ pub struct FollowRunConfig {
     pub surface: SurfaceConfig,
 }
 
+impl FollowRunConfig {
+    /// A scenario's own parameters: its `[follow]` and `[surface]` tables,
+    /// each table's defaults where it has none.
+    pub fn of_scenario(s: &crate::Scenario) -> Self {
+        Self {
+            follow: s.follow.unwrap_or_default(),
+            surface: s.surface.unwrap_or_default(),
+        }
+    }
+}
+
 /// Options of a run; fields left out take their defaults.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]

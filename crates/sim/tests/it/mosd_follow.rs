@@ -16,7 +16,7 @@ use follow::RunEnd;
 use follow::Termination;
 use geom::{Point3, Real};
 use scenario::Scenario;
-use sim::follow_job::{FollowRunOptions, SimFollow};
+use sim::follow_job::{FollowRunConfig, FollowRunOptions, SimFollow};
 use std::collections::BTreeMap;
 use std::sync::atomic::AtomicBool;
 /// Issue 9 acceptance 5: point3 over the real mOSD scan (learn0, two boxes on
@@ -26,17 +26,15 @@ use std::sync::atomic::AtomicBool;
 /// pose; `sim::scan_check::scan_clearance`, cross-checked here against a
 /// brute-force pass over every scan point), and every non-initial model
 /// polygon must lie within λ of the scan (`sim::scan_check::model_to_scan`).
-// FAILS today (2026-11-27, default merger order, the guard's brim round the
-// table: 2734 sets, surface_complete): point3's 0.02 m body keeps 0.0213 m
-// from the scan (the guard's 0.02 m margin), but 776 poses come closer than
-// δ/2 = 0.05 m, and three of ten polygons reach 0.057 m from the scan
-// (λ = 0.05 m; 0.042 m in the thesis' merger order, 2026-11-26, with 820
-// close poses). learn5 and learn17 (`data/scenarios/mosd_learn5.toml`,
-// `mosd_learn17.toml`) keep the model within λ but have 377 and 103 close
-// poses. Not weakened, not tuned: kept as the acceptance check for when the
-// follower meets it.
+// FAILS today (2026-11-29, the scenario's [follow] table: guard margin 0.04 m,
+// steps of at most 0.05 m; 752 sets, surface_complete): the body keeps
+// 0.0405 m from the scan, but 9 poses come closer than δ/2 = 0.05 m (the
+// defaults: 0.0213 m and 776 poses, three polygons beyond λ). learn5 and
+// learn17 keep 0.0404 and 0.0396 m with 198 and 126 close poses. Issue 45
+// restated the bound on real scans as 35 mm, which `long/follow_complete.rs`
+// holds; δ/2 is kept here as issue 9's check.
 #[test]
-#[ignore = "fails acceptance 5 today: 776 poses closer than δ/2 to the scan (0.0213 m at the closest), three polygons beyond λ; whole run, release profile"]
+#[ignore = "fails acceptance 5 today: 9 poses closer than δ/2 to the scan (0.0405 m at the closest); whole run, release profile"]
 fn point3_follows_the_mosd_boxes_clear_of_the_scan() {
     let loaded = Scenario::load(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -49,6 +47,7 @@ fn point3_follows_the_mosd_boxes_clear_of_the_scan() {
     let options = FollowRunOptions {
         max_sets: 20_000,
         timings: false,
+        config: FollowRunConfig::of_scenario(&loaded.scenario),
         ..FollowRunOptions::default()
     };
     let delta = options.config.follow.desired_distance_m;

@@ -151,12 +151,18 @@ fn model_polygons_are_scored_and_initial_segments_are_not() {
         assert!(max >= lo - 1e-9 && max <= hi + 1e-9);
         assert_eq!(r.polygons_beyond_lambda, if within { 0 } else { polygons });
         assert_eq!(r.within_lambda_fraction, if within { 1.0 } else { 0.0 });
+        // Every vertex is h above the grid: all within λ = 0.05 m, or none.
+        assert_eq!(
+            r.vertices_within_lambda_fraction,
+            if within { 1.0 } else { 0.0 }
+        );
     }
     // No polygons: nothing beyond λ, no maximum.
     let mut only_initial = SurfaceModel::new(SurfaceConfig::default()).unwrap();
     only_initial.add_initial_segment(&square(0.3, 1.0)).unwrap();
     let r = model_to_scan(&only_initial, &scan, &cfg).unwrap();
     assert!(r.polygons.is_empty() && r.max_m.is_none());
+    assert_eq!(r.vertices_within_lambda_fraction, 1.0);
 }
 
 #[test]
