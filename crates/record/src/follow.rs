@@ -343,12 +343,13 @@ pub struct FollowSummary<O = serde_json::Value, S = serde_json::Value, M = serde
     /// What the safety guard did (all zero when it is off).
     #[serde(default)]
     pub guard: GuardCounts,
-    /// True surface area modelled: the counted faces' area within λ of a
-    /// model polygon, m² (mesh worlds).
+    /// Surface area modelled, m²: in a mesh world the counted faces' area
+    /// within λ of a model polygon; in a point-cloud world the non-initial
+    /// model polygons' area within λ of a scan point.
     #[serde(default)]
     pub modelled_m2: Option<Real>,
-    /// Sets taken per square metre of true surface modelled
-    /// (`sets / modelled_m2`; `null` when nothing true is modelled).
+    /// Sets taken per square metre modelled (`sets / modelled_m2`; `null`
+    /// when nothing is modelled or there is nothing to judge it by).
     #[serde(default)]
     pub sets_per_m2: Option<Real>,
     /// Wall time per step (update + direction + kinematics), µs.

@@ -70,6 +70,13 @@ impl ScanFigures for ModelScanScore {
     fn within_lambda_fraction(&self) -> Real {
         self.within_lambda_fraction
     }
+
+    fn modelled_m2(&self) -> Real {
+        self.polygons
+            .iter()
+            .map(|p| p.area_m2 * p.within_lambda_fraction)
+            .sum()
+    }
 }
 
 /// A run ready to start in the simulator: the setup of any hardware's job,

@@ -873,6 +873,9 @@ pub trait ScanFigures {
     /// The area fraction of the non-initial model polygons within λ of a
     /// scan point.
     fn within_lambda_fraction(&self) -> Real;
+    /// The area of the non-initial model polygons within λ of a scan point,
+    /// m²: what a scanned run counts as modelled (a scan has no true area).
+    fn modelled_m2(&self) -> Real;
 }
 
 /// The score of a run nobody scores: it has none.
@@ -891,6 +894,10 @@ impl ScanFigures for NoScore {
     }
 
     fn within_lambda_fraction(&self) -> Real {
+        match *self {}
+    }
+
+    fn modelled_m2(&self) -> Real {
         match *self {}
     }
 }
@@ -966,6 +973,12 @@ impl<S: SurfaceFigures + Serialize + Clone, M: ScanFigures + Serialize + Clone> 
         parts.direction_us /= n;
         parts.kinematics_us /= n;
         let j = &self.judgement;
+        // Against the true scene where there is one, else against the scan.
+        let modelled_m2 = self
+            .score
+            .as_ref()
+            .map(SurfaceFigures::modelled_m2)
+            .or_else(|| self.scan_score.as_ref().map(ScanFigures::modelled_m2));
         FollowSummary {
             format_version: record::FORMAT_VERSION,
             scenario: self.source.clone(),
@@ -997,11 +1010,8 @@ impl<S: SurfaceFigures + Serialize + Clone, M: ScanFigures + Serialize + Clone> 
             motion_checks: j.motion_checks,
             a_priori_faces: self.a_priori_faces.iter().map(|f| f.normal).collect(),
             guard: self.episode.guard,
-            modelled_m2: self.score.as_ref().map(SurfaceFigures::modelled_m2),
-            sets_per_m2: self
-                .score
-                .as_ref()
-                .map(SurfaceFigures::modelled_m2)
+            modelled_m2,
+            sets_per_m2: modelled_m2
                 .filter(|m2| *m2 > 0.0)
                 .map(|m2| rows.len() as Real / m2),
             step_us: StepTimeStats::from_micros(&self.step_micros()),

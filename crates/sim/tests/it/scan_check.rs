@@ -7,6 +7,7 @@
 use follow::RunEnd;
 use geom::{Capsule, Isometry3, Point3, Real, Vector3};
 use scenario::Scenario;
+use scenario::job::follow::ScanFigures;
 use scene::World;
 use sim::follow_job::{FollowRunOptions, SimFollow, StartPose};
 use sim::scan_check::{ModelScanConfig, ScanIndex, model_to_scan, polygon_to_scan, scan_clearance};
@@ -155,6 +156,19 @@ fn model_polygons_are_scored_and_initial_segments_are_not() {
         assert_eq!(
             r.vertices_within_lambda_fraction,
             if within { 1.0 } else { 0.0 }
+        );
+        // What run.json counts as modelled: the whole polygons' area, or none.
+        let area: f64 = m
+            .segments()
+            .filter(|s| !s.is_initial())
+            .filter_map(|s| s.as_polygon())
+            .map(|p| p.area())
+            .sum();
+        let modelled = ScanFigures::modelled_m2(&r);
+        assert!(area > 0.0);
+        assert!(
+            (modelled - if within { area } else { 0.0 }).abs() < 1e-12,
+            "{modelled} of {area} m²"
         );
     }
     // No polygons: nothing beyond λ, no maximum.
