@@ -162,7 +162,7 @@ fn model_polygons_are_scored_and_initial_segments_are_not() {
             .segments()
             .filter(|s| !s.is_initial())
             .filter_map(|s| s.as_polygon())
-            .map(|p| p.area())
+            .map(surface::Polygon::area)
             .sum();
         let modelled = ScanFigures::modelled_m2(&r);
         assert!(area > 0.0);
