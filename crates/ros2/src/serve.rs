@@ -7,6 +7,7 @@ use geom::Real;
 use hw::{Arm, HwError, LineScanner, RangeSensors};
 use record::bag::msg::JointTrajectory;
 use robot::Robot;
+use ros2_client::Publisher;
 use scenario::ros2::Ros2Spec;
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -308,6 +309,46 @@ impl Execution {
     }
 }
 
+/// The joint states due at robot time `t` (the robot's clock began at
+/// `start_ns`), on `publisher`; how many. Not in lockstep they keep their
+/// period of robot time, each with where `execution` had the arm at its
+/// stamp: a turn of the serving loop that comes late (a loaded machine)
+/// sends the states it owes, up to [`PATH_MEMORY_S`] of them, as a robot's
+/// driver buffering its controller's states would. In lockstep a state
+/// goes out when its period has passed, stamped now. Either way the arm
+/// reaching a trajectory point sends `joints` (where it stands) at once.
+fn publish_states(
+    publisher: &Publisher<record::bag::msg::JointState>,
+    (topic, names): (&str, &[String]),
+    (execution, joints): (&Execution, &[Real]),
+    (t, start_ns, reached): (Real, u64, bool),
+    next_state: &mut Real,
+    config: &ServeConfig,
+) -> Result<u64, Ros2Error> {
+    let stamp_at = |t: Real| start_ns.saturating_add((t * 1e9) as u64);
+    let mut sent = 0;
+    let mut send = |stamp: u64, q: &[Real]| {
+        publisher
+            .publish(record::bag::joint_state(stamp, names, q))
+            .map_err(|e| transfer(topic, e))
+            .map(|()| sent += 1)
+    };
+    if !config.lockstep && t >= *next_state {
+        *next_state = next_state.max(t - PATH_MEMORY_S);
+        while *next_state <= t {
+            send(stamp_at(*next_state), &execution.position(*next_state))?;
+            *next_state += config.state_period_s;
+        }
+    }
+    if (config.lockstep && t >= *next_state) || reached {
+        if config.lockstep {
+            *next_state = t + config.state_period_s;
+        }
+        send(stamp_at(t), joints)?;
+    }
+    Ok(sent)
+}
+
 /// Robot seconds between the poses a scan's beams are cast from (each
 /// beam's pose is interpolated between them).
 const BEAM_POSE_PERIOD_S: Real = 0.001;
@@ -509,14 +550,14 @@ pub fn serve_robot<H: Arm + LineScanner + RangeSensors>(
             log(&format!("trajectory stopped: {e}"));
             false
         });
-        if t >= next_state || reached {
-            next_state = t + config.state_period_s;
-            let msg = record::bag::joint_state(stamp, &names, &hw.joints());
-            states
-                .publish(msg)
-                .map_err(|e| transfer(&spec.joint_states_topic, e))?;
-            stats.states += 1;
-        }
+        stats.states += publish_states(
+            &states,
+            (&spec.joint_states_topic, &names),
+            (&execution, &hw.joints()),
+            (t, start_ns, reached),
+            &mut next_state,
+            config,
+        )?;
         while !config.lockstep
             && let Some(msg) = free.scan_due(t, hw, &execution)?
         {
