@@ -10,9 +10,9 @@
 //! is `child(0) · post⁻¹ · motion(q) · post`). Capsules stay capsules (a
 //! sphere when both ends meet), link meshes are inline mesh assets.
 //!
-//! Masses: each moving link's shapes at [`MjcfConfig::density_kg_m3`] (the
-//! robot model keeps no inertials), a link without shapes
-//! [`MjcfConfig::min_mass_kg`]. Each actuated joint has
+//! Masses: a link's stated inertial (a URDF's `<inertial>`, [`robot::Inertial`])
+//! where it has one, else its shapes at [`MjcfConfig::density_kg_m3`], and a
+//! link without either [`MjcfConfig::min_mass_kg`]. Each actuated joint has
 //! [`MjcfConfig::armature`] and a torque (force) limit of
 //! [`MjcfConfig::torque_margin`] times the most gravity could ask of it with
 //! the arm stretched out (a bound by the triangle inequality, see
@@ -249,6 +249,18 @@ impl MassProperties {
         })
     }
 
+    /// What a model states (a URDF's `<inertial>`), in the link frame.
+    pub fn stated(i: &robot::Inertial) -> Self {
+        let [xx, yy, zz, xy, xz, yz] = i.inertia;
+        let in_com = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
+        let r = i.link_from_com.rotation.to_rotation_matrix();
+        Self {
+            mass_kg: i.mass_kg,
+            com: Point3::from(i.link_from_com.translation.vector),
+            inertia: r.matrix() * in_com * r.matrix().transpose(),
+        }
+    }
+
     /// A solid box spanning `lo`–`hi` (link axes) of `density`.
     pub fn aabb(lo: &Point3, hi: &Point3, density: Real) -> Self {
         let d = hi - lo;
@@ -306,6 +318,9 @@ pub fn link_masses(
         .map(|(i, link)| {
             if i < mounted {
                 return None;
+            }
+            if let Some(stated) = link.inertial {
+                return Some(MassProperties::stated(&stated));
             }
             let parts: Vec<MassProperties> = link
                 .collision
@@ -939,8 +954,8 @@ pub fn model(
     );
     let _ = writeln!(
         xml,
-        "  <!-- Written by surveyor (scenario::mjcf). Masses: the links' collision shapes at {} kg/m3 \
-         (a shapeless moving link {} kg); armature {} on every joint; torque limits {} times the \
+        "  <!-- Written by surveyor (scenario::mjcf). Masses: the links' stated inertials (URDF), else their collision shapes at {} kg/m3 \
+         (a moving link with neither {} kg); armature {} on every joint; torque limits {} times the \
          gravity bound with the arm stretched out (at least {}). Arm geoms arm/LINK/K (group 1), \
          scene geoms scene/OBJECT[/PART] (group 0): only arm-scene pairs collide. -->",
         num(config.density_kg_m3),
@@ -1231,5 +1246,26 @@ shape = { kind = "box", min = [1.0, -0.5, 0.0], max = [2.0, 0.5, 0.4] }
         .unwrap_err()
         .to_string();
         assert!(e.contains("MjcfConfig"), "{e}");
+    }
+
+    /// A stated inertial turned a quarter about z: x and y swap.
+    #[test]
+    fn a_stated_inertial_is_put_in_the_link_frame() {
+        let m = MassProperties::stated(&robot::Inertial {
+            mass_kg: 2.0,
+            link_from_com: Isometry3::new(Vector3::new(0.1, 0.0, 0.2), Vector3::z() * (PI / 2.0)),
+            inertia: [0.3, 0.2, 0.1, 0.0, 0.0, 0.0],
+        });
+        assert_eq!(m.mass_kg, 2.0);
+        close(&[m.com.x, m.com.y, m.com.z], &[0.1, 0.0, 0.2]);
+        close(
+            &[
+                m.inertia[(0, 0)],
+                m.inertia[(1, 1)],
+                m.inertia[(2, 2)],
+                m.inertia[(0, 1)],
+            ],
+            &[0.2, 0.3, 0.1, 0.0],
+        );
     }
 }
