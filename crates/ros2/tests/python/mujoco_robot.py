@@ -28,8 +28,10 @@ time, as sim-robot stamps):
 It executes each trajectory_msgs/JointTrajectory sent to
 /joint_trajectory_controller/joint_trajectory as ros2_control's joint
 trajectory controller does: the points on their time_from_start counted
-from the header stamp (from now when the stamp is zero or past), linearly
-interpolated, from where the arm is due when the trajectory begins; a new
+from the header stamp (from now when the stamp is zero; a stamp already
+past still counts, so the path jumps ahead: the summary says how many came
+late and by how much), linearly interpolated, from where the arm is due
+when the trajectory begins; a new
 trajectory replaces the one under way from its start on; a single point
 without a time runs at --joint-speed. A PD controller with gravity and
 Coriolis compensation (MuJoCo's qfrc_bias) tracks the interpolated
@@ -219,8 +221,11 @@ class Trajectory:
         return q0 + v * (t - t0), v
 
     def replace(self, points, times, now, begin, joint_speed):
-        """Take a new trajectory received at `now`, beginning at `begin`."""
-        begin = now if begin is None else max(begin, now)
+        """Take a new trajectory received at `now`, beginning at `begin`
+        (now when None). A `begin` already past counts the points' times
+        from it all the same, as ros2_control's controller does: the path
+        jumps to where the new trajectory has the arm now."""
+        begin = now if begin is None else begin
         here, _ = self.at(begin)
         kept = [k for k in self.knots if k[0] < begin]
         kept.append((begin, here))
@@ -289,6 +294,8 @@ class Robot:
         self.worst_still = (0.0, None, 0.0)
         self.trajectories = 0
         self.refused = 0
+        self.late = 0     # trajectories whose stamp had passed when they came
+        self.latest = 0.0  # by how much, the most, sim seconds
         self.states = 0
         self.scans = 0
         self.readings = 0
@@ -335,6 +342,9 @@ class Robot:
             times.append(to_ns(p.time_from_start) * 1e-9)
         ns = to_ns(msg.header.stamp)
         begin = (ns - start_ns) * 1e-9 if ns > 0 else None
+        if begin is not None and begin < now:
+            self.late += 1
+            self.latest = max(self.latest, now - begin)
         self.traj.replace(points, times, now, begin, self.args.joint_speed)
         self.trajectories += 1
 
@@ -528,7 +538,8 @@ class Robot:
         es, js, ats = self.worst_still
         print(f"ran {t:.3f} s of sim time in {wall:.3f} s of wall time ({t / max(wall, 1e-9):.1f}x); "
               f"{self.states} joint states, {self.scans} scans, {self.readings} readings, "
-              f"{self.trajectories} trajectories ({self.refused} refused)")
+              f"{self.trajectories} trajectories ({self.refused} refused, {self.late} came after "
+              f"their stamp, by at most {1000 * self.latest:.1f} ms)")
         print(f"largest tracking error: {e:.3e} rad ({j} at {at:.3f} s) while moving; "
               f"{es:.3e} rad ({js} at {ats:.3f} s) holding still")
         print(f"contacts: {self.contacts} (pairs {sorted(self.pairs)}, deepest {self.deepest:.6f} m)",
