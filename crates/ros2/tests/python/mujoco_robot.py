@@ -35,9 +35,10 @@ when the trajectory begins; a new
 trajectory replaces the one under way from its start on; a single point
 without a time runs at --joint-speed. A PD controller with gravity and
 Coriolis compensation (MuJoCo's qfrc_bias) tracks the interpolated
-positions and velocities, its gains scaled by each joint's inertia (the
-diagonal of the mass matrix, armature included), its torques clipped to
-the model's limits: the arm lags, overshoots and settles as a real one.
+positions and velocities, its gains weighted by the mass matrix (armature
+included: each joint a critically damped loop of 50 rad/s), its torques
+clipped to the model's limits: the arm lags, overshoots and settles as a
+real one.
 
 Every contact MuJoCo finds between an arm geom and a scene geom (`arm/...`
 and `scene/...`) is logged to --contacts as a JSON line (sim time, the two
@@ -257,8 +258,8 @@ class Robot:
         self.vadr = np.array([m.jnt_dofadr[m.joint(j["name"]).id] for j in joints])
         self.act = np.array([m.actuator(j["name"]).id for j in joints])
         self.tau_max = np.array([j["torque_limit"] for j in joints])
-        # The mass matrix's diagonal in MjData.M (rows of its lower triangle, CSR).
-        self.mdiag = (m.M_rowadr + m.M_rownnz - 1)[self.vadr]
+        self.acc = np.zeros(m.nv)
+        self.weighted = np.zeros(m.nv)
         self.rng = np.random.default_rng(args.seed)
         self.traj = Trajectory(0.0, self.q())
         # Geoms: arm and scene, by id; the scene geoms' materials.
@@ -310,8 +311,13 @@ class Robot:
         q_des, v_des = self.traj.at(t)
         q, v = d.qpos[self.qadr], d.qvel[self.vadr]
         err = q_des - q
-        inertia = d.M[self.mdiag]
-        tau = d.qfrc_bias[self.vadr] + inertia * (OMEGA * OMEGA * err + 2.0 * OMEGA * (v_des - v))
+        # The PD's accelerations, weighted by the mass matrix (armature
+        # included): every joint, coupled or not, a critically damped loop
+        # of OMEGA while the torques stay within their limits.
+        self.acc[:] = 0.0
+        self.acc[self.vadr] = OMEGA * OMEGA * err + 2.0 * OMEGA * (v_des - v)
+        mujoco.mj_mulM(self.m, d, self.weighted, self.acc)
+        tau = d.qfrc_bias[self.vadr] + self.weighted[self.vadr]
         d.ctrl[self.act] = np.clip(tau, -self.tau_max, self.tau_max)
         e = float(np.max(np.abs(err)))
         j = int(np.argmax(np.abs(err)))
