@@ -9,7 +9,9 @@ installation), in place of `surveyor sim-robot`.
 The model comes from `surveyor scenario mjcf` (SURVEYOR_BIN, default
 target/release/surveyor) with its JSON sidecar. The physics steps every
 2 ms on its own clock, `--rate` sim seconds per wall second (0: as fast as
-it can), and the robot publishes, stamped on that clock (`start` + sim
+it can; fallen more than 5 ms of wall time behind, it does not race to
+catch up, its clock runs slower for a moment), and the robot publishes,
+stamped on that clock (`start` + sim
 time, as sim-robot stamps):
 
 - /clock (rosgraph_msgs/Clock, best effort, keep last 1) every 5 ms;
@@ -171,6 +173,7 @@ STATE_PERIOD_S = 0.01   # 100 Hz
 RANGE_PERIOD_S = 0.1
 OMEGA = 50.0           # the PD loop's natural frequency, rad/s (critically damped)
 STILL_AFTER_S = 0.5    # the arm counts as holding still this long after a trajectory's end
+MAX_BEHIND_S = 0.005   # wall seconds the sim may fall behind its rate before it stops catching up
 
 
 def stamp(ns):
@@ -487,6 +490,11 @@ class Robot:
                 ahead = wall0 + t / args.rate - time.monotonic()
                 if ahead > 0:
                     time.sleep(ahead)
+                elif ahead < -MAX_BEHIND_S:
+                    # Fallen behind (the machine busy): the clock runs on
+                    # from here, slower for a moment, rather than racing to
+                    # catch up (a burst of sim time the driver cannot follow).
+                    wall0 -= ahead + MAX_BEHIND_S
             now_ns = start_ns + int(round(t * 1e9))
             if step % 2 == 0:
                 for msg in traj_r.take(N=100):
