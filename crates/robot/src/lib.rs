@@ -38,8 +38,8 @@ pub use error::RobotError;
 pub use linalg::{damped_pseudo_inverse, null_space_projector, pseudo_inverse};
 pub use mesh::{LoadedMesh, MeshLoader, NoMeshLoader};
 pub use model::{
-    CollisionShape, Joint, JointKind, JointLimits, Link, LinkId, PosedShape, RangeFinderMount,
-    Robot, ScannerMount,
+    CollisionShape, Inertial, Joint, JointKind, JointLimits, Link, LinkId, PosedShape,
+    RangeFinderMount, Robot, ScannerMount,
 };
 pub use posture::Posture;
 pub use reach::ReachBound;

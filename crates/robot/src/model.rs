@@ -238,6 +238,22 @@ pub struct Link {
     pub collision: Vec<CollisionShape>,
     /// Bounding ellipsoid in the link frame, for the AXBAM safety distance (A eq. 3.5).
     pub ellipsoid: Option<Ellipsoid>,
+    /// Mass properties, when the model states them (a URDF's `<inertial>`);
+    /// kinematics never uses them, a physics model of the robot does
+    /// (the MJCF of `scenario::mjcf`).
+    pub inertial: Option<Inertial>,
+}
+
+/// A link's mass properties as a URDF's `<inertial>` states them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Inertial {
+    /// Mass, kg.
+    pub mass_kg: Real,
+    /// The inertia frame in the link frame: its origin is the centre of mass.
+    pub link_from_com: Isometry3,
+    /// Inertia about the centre of mass, in the inertia frame's axes, kg·m²:
+    /// `[ixx, iyy, izz, ixy, ixz, iyz]`.
+    pub inertia: [Real; 6],
 }
 
 impl Link {
@@ -247,6 +263,7 @@ impl Link {
             name: name.to_owned(),
             collision: Vec::new(),
             ellipsoid: None,
+            inertial: None,
         }
     }
 }

@@ -8,7 +8,8 @@
 //! (default `1 0 0`) and `<limit lower upper velocity>` (the velocity bounds
 //! the robot clock's motions, [`crate::timing`]). `floating` and `planar` joints are
 //! rejected when they lie on the chain; a `<mimic>` joint is kept as an independent
-//! joint, with a warning. Other elements (`visual`, `inertial`, `gazebo`,
+//! joint, with a warning. A link's `<inertial>` is kept ([`crate::Inertial`]: a
+//! physics model's masses). Other elements (`visual`, `gazebo`,
 //! `transmission`…) are ignored.
 //!
 //! The chain runs from the root link (the one link that is no joint's child) to
@@ -31,7 +32,7 @@ use crate::bounds::enclosing_ellipsoid_of;
 use crate::dh::DEFAULT_LINK_RADIUS_M;
 use crate::error::RobotError;
 use crate::mesh::{LoadedMesh, MeshLoader, NoMeshLoader, urdf_cylinder};
-use crate::model::{CollisionShape, Joint, JointKind, JointLimits, Link, LinkId, Robot};
+use crate::model::{CollisionShape, Inertial, Joint, JointKind, JointLimits, Link, LinkId, Robot};
 use geom::math::isometry_from_xyz_rpy;
 use geom::primitives::cuboid;
 use geom::{Capsule, Isometry3, Point3, Real, TriMesh, Vector3, unit};
@@ -632,7 +633,40 @@ impl<'a, 'input> Parser<'a, 'input> {
             name: name.to_owned(),
             collision,
             ellipsoid,
+            inertial: self.inertial(node)?,
         })
+    }
+
+    /// A link's `<inertial>` (`<mass value>`, `<origin>`, `<inertia ixx …
+    /// izz>`, absent attributes 0), `None` without one or with a mass of 0.
+    fn inertial(&self, node: Node<'a, 'input>) -> Result<Option<Inertial>, RobotError> {
+        let Some(i) = child(node, "inertial") else {
+            return Ok(None);
+        };
+        let Some(m) = child(i, "mass") else {
+            return Ok(None);
+        };
+        let mass_kg = self.real(m, "value", None)?;
+        if mass_kg < 0.0 {
+            return Err(self.bad_value(m, "value", &mass_kg.to_string(), "a mass ≥ 0"));
+        }
+        if mass_kg == 0.0 {
+            return Ok(None);
+        }
+        let mut inertia = [0.0; 6];
+        if let Some(t) = child(i, "inertia") {
+            for (v, k) in inertia
+                .iter_mut()
+                .zip(["ixx", "iyy", "izz", "ixy", "ixz", "iyz"])
+            {
+                *v = self.real(t, k, Some(0.0))?;
+            }
+        }
+        Ok(Some(Inertial {
+            mass_kg,
+            link_from_com: self.origin(i)?,
+            inertia,
+        }))
     }
 
     fn collision(

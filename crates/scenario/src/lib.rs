@@ -10,11 +10,13 @@
 //! | [`range_sensors`] | [`range_sensors::RangeSensorsSpec`]: a scenario's range finders (single and rings) and range noise |
 //! | [`ros2`](mod@ros2) | [`ros2::Ros2Spec`]: the `[ros2]` table (topics, joint names, tolerances of a ROS 2 robot) |
 //! | [`job`] | [`job::explore::HardwareExplore`], [`job::explore::explore_with`]: a scenario's run on any hardware and its run folder; [`job::JobError`] |
+//! | [`mjcf`] | [`mjcf::model`]: the scenario as a MuJoCo model (MJCF) and the sidecar a physics robot serving it needs |
 //! | [`table_fit`] | [`table_fit::fit_table`]: a table plane fitted to scan points, as world frame and initial segment |
 
 pub mod builtin;
 pub mod file;
 pub mod job;
+pub mod mjcf;
 pub mod range_sensors;
 pub mod robots;
 pub mod ros2;

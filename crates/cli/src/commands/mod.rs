@@ -4,6 +4,7 @@ mod blast;
 mod explore;
 mod follow;
 mod maps;
+mod mjcf;
 mod model;
 mod on_robot;
 mod output;
@@ -90,6 +91,11 @@ enum ScenarioCmd {
         /// Built-in name or scenario file.
         name: String,
     },
+    /// Write the scenario as a MuJoCo model (MJCF): the arm's chain with
+    /// masses, armature and torque limits, its scanner, tool and range
+    /// finders as sites, the scene's solids as geoms; and beside it
+    /// (FILE.json) what a physics robot serving it over ROS 2 needs.
+    Mjcf(mjcf::MjcfArgs),
 }
 
 /// Joint values given on the command line.
@@ -271,6 +277,7 @@ pub fn run(cli: Cli) -> Result<()> {
             put!("{}", loaded.scenario.to_toml()?)?;
             Ok(())
         }
+        Command::Scenario(ScenarioCmd::Mjcf(a)) => mjcf::mjcf(&a),
         Command::Fk(a) => fk(&a),
         Command::Scan(a) => scan(&a),
         Command::Raycast(a) => raycast(&a),

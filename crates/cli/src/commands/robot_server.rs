@@ -3,7 +3,7 @@
 use anyhow::{Result, bail};
 use clap::Args;
 use geom::Real;
-use scenario::Scenario;
+use scenario::{LoadedScenario, Scenario};
 use sim::SimRig;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -50,6 +50,23 @@ pub struct SimRobotArgs {
     duration_s: Option<Real>,
 }
 
+/// The rig `sim-robot` serves: the scenario's robot with every sensor it
+/// carries, or `robot` placed and started as `surveyor follow --robot`
+/// places it.
+pub fn served_rig(loaded: &LoadedScenario, robot: Option<&str>, seed: u64) -> Result<SimRig> {
+    Ok(match robot {
+        None => SimRig::with_every_sensor(loaded, seed)?,
+        Some(name) => {
+            let options = sim::follow_job::FollowRunOptions {
+                robot: Some(name.to_owned()),
+                seed,
+                ..sim::follow_job::FollowRunOptions::default()
+            };
+            sim::follow_job::SimFollow::from_scenario(loaded, &options)?.rig
+        }
+    })
+}
+
 pub fn sim_robot(a: &SimRobotArgs) -> Result<()> {
     if !(a.joint_speed.is_finite() && a.joint_speed > 0.0 && a.joint_speed <= 10.0) {
         bail!(
@@ -70,17 +87,7 @@ pub fn sim_robot(a: &SimRobotArgs) -> Result<()> {
         );
     }
     let loaded = Scenario::load(&a.scenario)?;
-    let mut rig = match &a.robot {
-        None => SimRig::with_every_sensor(&loaded, a.seed)?,
-        Some(name) => {
-            let options = sim::follow_job::FollowRunOptions {
-                robot: Some(name.clone()),
-                seed: a.seed,
-                ..sim::follow_job::FollowRunOptions::default()
-            };
-            sim::follow_job::SimFollow::from_scenario(&loaded, &options)?.rig
-        }
-    };
+    let mut rig = served_rig(&loaded, a.robot.as_deref(), a.seed)?;
     let robot = rig.robot().clone();
     let mut config = ros2::Ros2Config::from_env()?;
     config.loopback_only = !a.all_networks;

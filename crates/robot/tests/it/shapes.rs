@@ -426,3 +426,40 @@ fn urdf_geometry_primitives_and_meshes() {
         (b.translation.vector - a.translation.vector - Vector3::new(0.25, 0.0, 0.0)).norm() < 1e-12
     );
 }
+
+/// A link's `<inertial>` is kept as the URDF states it (mass, inertia
+/// frame, the six inertia entries, 0 where left out); a link without one,
+/// or with a mass of 0, has none, and a negative mass is refused naming
+/// the line.
+#[test]
+fn urdf_inertials_are_kept() {
+    let urdf = |inertial: &str| {
+        format!(
+            r#"<robot name="r">
+  <link name="base"/>
+  <link name="arm">{inertial}</link>
+  <joint name="j" type="revolute"><parent link="base"/><child link="arm"/>
+    <axis xyz="0 0 1"/><limit lower="-1" upper="1"/></joint>
+</robot>"#
+        )
+    };
+    let load = |text: &str| Robot::from_urdf_str(text, Path::new("."), "t.urdf", None);
+    let robot = load(&urdf(
+        r#"<inertial><mass value="2.5"/><origin xyz="0.1 0 0.2" rpy="0 0 1.5707963267948966"/>
+        <inertia ixx="0.3" iyy="0.2" izz="0.1" ixz="0.01"/></inertial>"#,
+    ))
+    .unwrap();
+    assert!(robot.links[0].inertial.is_none());
+    let i = robot.links[1].inertial.unwrap();
+    assert_eq!(i.mass_kg, 2.5);
+    assert_eq!(i.inertia, [0.3, 0.2, 0.1, 0.0, 0.01, 0.0]);
+    let t = i.link_from_com.translation.vector;
+    assert_eq!((t.x, t.y, t.z), (0.1, 0.0, 0.2));
+    assert!((i.link_from_com.rotation.angle() - FRAC_PI_2).abs() < 1e-12);
+    let zero = load(&urdf(r#"<inertial><mass value="0"/></inertial>"#)).unwrap();
+    assert!(zero.links[1].inertial.is_none());
+    let e = load(&urdf(r#"<inertial><mass value="-1"/></inertial>"#))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("t.urdf:3") && e.contains("mass"), "{e}");
+}
