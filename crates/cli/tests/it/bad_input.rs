@@ -1053,3 +1053,46 @@ fn map_robot_without_a_bag_is_an_error() {
         &["--bag"],
     );
 }
+
+/// `scenario mjcf` (issue 47) writes the model and its sidecar together;
+/// an output that is no `.xml`, a point-cloud world and an unknown robot
+/// are refused clearly and leave no file.
+#[test]
+fn scenario_mjcf_writes_both_files_or_none() {
+    let dir = tempfile::tempdir().unwrap();
+    let xml = dir.path().join("m/bridge1.xml");
+    let said = ok(&[
+        "scenario",
+        "mjcf",
+        "bridge1",
+        "--out",
+        xml.to_str().unwrap(),
+    ]);
+    assert!(said.contains("14 scene geoms"), "{said}");
+    let text = std::fs::read_to_string(&xml).unwrap();
+    assert!(text.starts_with("<mujoco model=\"bridge1 (denso-vm6083)\">"));
+    let sidecar = std::fs::read_to_string(xml.with_extension("json")).unwrap();
+    assert!(sidecar.contains("\"bearings_rad\""), "{sidecar}");
+    let other = tempfile::tempdir().unwrap();
+    let out = |name: &str| other.path().join(name).to_str().unwrap().to_owned();
+    for (args, needle) in [
+        (vec!["bridge1", "--out", &out("m.mjcf")], "ending in .xml"),
+        (
+            vec![&data("scenarios/mosd_boxes.toml"), "--out", &out("m.xml")],
+            "point cloud",
+        ),
+        (
+            vec!["bridge1", "--robot", "puma", "--out", &out("m.xml")],
+            "puma",
+        ),
+    ] {
+        let msg = fails(&[&["scenario", "mjcf"][..], &args[..]].concat());
+        assert!(msg.contains(needle), "{msg}");
+        clean(&msg);
+    }
+    assert!(
+        listing(other.path()).is_empty(),
+        "{:?}",
+        listing(other.path())
+    );
+}

@@ -172,7 +172,7 @@ CLOCK_PERIOD_S = 0.005  # as sim-robot
 STATE_PERIOD_S = 0.01   # 100 Hz
 RANGE_PERIOD_S = 0.1
 OMEGA = 50.0           # the PD loop's natural frequency, rad/s (critically damped)
-STILL_AFTER_S = 0.5    # the arm counts as holding still this long after a trajectory's end
+STILL_AFTER_S = 0.5    # the arm holds still this long after a trajectory's end and arrival
 MAX_BEHIND_S = 0.005   # wall seconds the sim may fall behind its rate before it stops catching up
 
 
@@ -297,6 +297,7 @@ class Robot:
         self.worst_moving = (0.0, None, 0.0)
         self.worst_still = (0.0, None, 0.0)
         self.trajectories = 0
+        self.taken_s = 0.0  # when the last trajectory came, sim seconds
         self.refused = 0
         self.late = 0     # trajectories whose stamp had passed when they came
         self.latest = 0.0  # by how much, the most, sim seconds
@@ -324,7 +325,7 @@ class Robot:
         d.ctrl[self.act] = np.clip(tau, -self.tau_max, self.tau_max)
         e = float(np.max(np.abs(err)))
         j = int(np.argmax(np.abs(err)))
-        if t > self.traj.end_s() + STILL_AFTER_S:
+        if t > max(self.traj.end_s(), self.taken_s) + STILL_AFTER_S:
             if e > self.worst_still[0]:
                 self.worst_still = (e, self.names[j], t)
         elif e > self.worst_moving[0]:
@@ -356,6 +357,7 @@ class Robot:
             self.latest = max(self.latest, now - begin)
         self.traj.replace(points, times, now, begin, self.args.joint_speed)
         self.trajectories += 1
+        self.taken_s = now
 
     # --- contacts ---
 
