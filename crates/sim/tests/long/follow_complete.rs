@@ -522,7 +522,7 @@ fn point3_completes_the_cylinder_within_lambda() {
 /// `data/scenarios/mosd_boxes.toml`, `mosd_learn5.toml`, `mosd_learn17.toml`,
 /// the last two made by `sim/examples/table_scan_scenario.rs` and not tuned
 /// on), each with its scenario's own `[follow]` table (the guard's 0.04 m
-/// margin):
+/// margin, steps of at most 0.05 m):
 /// - ends by the follower's own rule;
 /// - the body keeps 35 mm from every scan point at every pose (the judge's
 ///   figure, checked here against a brute-force pass over the scan);
