@@ -41,10 +41,34 @@ pub enum HwError {
     },
     /// A move ended away from its goal (a real arm stopped short, or a
     /// driver timed out).
-    #[error("the arm stopped {error:.4} from its goal (joint-space, largest joint)")]
+    #[error(
+        "the arm stopped short of its goal: joint {joint} is {error:.4} from it \
+         (the tolerance is {tolerance})"
+    )]
     NotReached {
-        /// Largest joint difference from the goal.
+        /// The joint farthest from the goal, by name.
+        joint: String,
+        /// Its difference from the goal (radians or metres).
         error: Real,
+        /// The tolerance it had to be within.
+        tolerance: Real,
+    },
+    /// A joint strayed from the trajectory it was sent (an arm too weak or
+    /// blocked, a controller that lags): the driver held the arm where it
+    /// stood.
+    #[error(
+        "joint {joint} was {error:.4} off its trajectory {at_s:.3} s into the motion \
+         (the path tolerance is {tolerance}): the arm was stopped where it stood"
+    )]
+    OffPath {
+        /// The joint farthest off, by name.
+        joint: String,
+        /// How far off it was (radians or metres).
+        error: Real,
+        /// The path tolerance.
+        tolerance: Real,
+        /// When, seconds from the motion's start.
+        at_s: Real,
     },
     /// The device failed (a driver's own error, as text).
     #[error("{device}: {message}")]

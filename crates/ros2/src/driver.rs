@@ -67,14 +67,25 @@ pub struct Ros2Hardware {
     clock: Subscription<Clock>,
     /// Its latest time, nanoseconds, and when that came (wall time).
     robot_now: Cell<Option<(u64, Instant)>>,
+    /// Where the clock stood when its rate was last measured (robot ns,
+    /// wall time).
+    clock_mark: Cell<Option<(u64, Instant)>>,
+    /// Robot seconds per wall second, as last measured over
+    /// [`RATE_WINDOW_S`] (1 until then, and without a clock).
+    clock_rate: Cell<Real>,
     /// The joint states received lately, stamped (robot time, ns), oldest
     /// first: a scan taken while the arm moved is placed between them.
     states_heard: RefCell<VecDeque<(u64, Vec<Real>)>>,
+    /// When the last joint state came (wall time).
+    state_heard_at: Cell<Option<Instant>>,
     /// The stamp of the joint state that showed the arm at the goal of its
     /// last motion: a scan begun before it is stale.
     arrived_ns: u64,
     /// The continuous motion under way.
     moving: Option<Moving>,
+    /// The last motion sent and when it began on the robot's clock (ns):
+    /// every joint state is checked against it (its goal once it is over).
+    path: RefCell<Option<(LineMotion, u64)>>,
     /// The limits motions are timed within.
     limits: MotionLimits,
     /// Robot seconds from a scan's end to a brake asked after it taking
@@ -98,6 +109,28 @@ struct Moving {
 /// Robot seconds between sending a timed motion and its start (the
 /// trajectory's header stamp): the time to reach the robot, with room.
 const MOTION_LEAD_S: Real = 0.02;
+
+/// Wall seconds a timed motion is sent ahead of its start at least: on a
+/// robot whose clock runs faster than real time, [`MOTION_LEAD_S`] of its
+/// time can be less than a message takes to arrive
+/// ([`Ros2Hardware::lead_s`]).
+const MOTION_LEAD_WALL_S: Real = 0.005;
+
+/// How far back along a motion's path a joint state is matched, in motion
+/// leads (the path check of [`Ros2Hardware::check_path`]): 0.2 s at real
+/// time, 50 ms of wall time on a fast clock.
+const PATH_SLACK_LEADS: Real = 10.0;
+
+/// Points of that stretch of path a joint state is compared with.
+const PATH_SAMPLES: usize = 10;
+
+/// Wall seconds over which the robot clock's rate is measured.
+const RATE_WINDOW_S: Real = 0.25;
+
+/// The largest clock rate the lead grows with: a robot clock that jumps
+/// (a simulator reset, a bag's clock replayed) leads motions by at most
+/// this many times [`MOTION_LEAD_WALL_S`].
+const MAX_LEAD_RATE: Real = 1000.0;
 
 /// Joint states the driver keeps (at 100 Hz, 20 s of them): a moving scan
 /// needs those of its own 0.1 s.
@@ -137,12 +170,14 @@ fn device(message: String) -> HwError {
 /// A timeout of `seconds` begun now. On a robot that publishes `/clock`
 /// it runs on that clock (`use_sim_time`): a robot running faster or
 /// slower than real time gets its timeouts in its own seconds, and one
-/// whose clock stops advancing times out after `seconds` of wall time
-/// without a new `/clock` message. Without `/clock` it runs on the wall
+/// whose clock stops advancing times out after `silent_s` of wall time
+/// (the configured timeout) without a new `/clock` message. Without `/clock` it runs on the wall
 /// clock. A setting that is no duration (negative, not finite, too long)
 /// waits a day rather than panicking.
 struct Wait {
     seconds: Real,
+    /// Wall seconds without a `/clock` message that end the wait.
+    silent_s: Real,
     wall: Instant,
     /// The robot's time when the wait began (or when its clock was first
     /// heard during the wait).
@@ -156,18 +191,21 @@ impl Wait {
     /// Whether the wait is over, the robot's clock standing at
     /// `robot_now` (its time and when that was heard; `None` without one).
     fn over(&self, robot_now: Option<(u64, Instant)>) -> bool {
-        let seconds = if self.seconds.is_finite() && self.seconds >= 0.0 {
-            self.seconds.min(LONGEST_WAIT_S)
-        } else {
-            LONGEST_WAIT_S
+        let bounded = |s: Real| {
+            if s.is_finite() && s >= 0.0 {
+                s.min(LONGEST_WAIT_S)
+            } else {
+                LONGEST_WAIT_S
+            }
         };
+        let seconds = bounded(self.seconds);
         match robot_now {
             None => self.wall.elapsed().as_secs_f64() > seconds,
             Some((now, heard)) => {
                 let from = self.robot_from.get().unwrap_or(now);
                 self.robot_from.set(Some(from));
                 now.saturating_sub(from) as Real * 1e-9 > seconds
-                    || heard.elapsed().as_secs_f64() > seconds
+                    || heard.elapsed().as_secs_f64() > bounded(self.silent_s).min(seconds)
             }
         }
     }
@@ -220,9 +258,13 @@ impl Ros2Hardware {
             exact,
             clock,
             robot_now: Cell::new(None),
+            clock_mark: Cell::new(None),
+            clock_rate: Cell::new(1.0),
             states_heard: RefCell::new(VecDeque::new()),
+            state_heard_at: Cell::new(None),
             arrived_ns: 0,
             moving: None,
+            path: RefCell::new(None),
             limits,
             brake_lag_s: MOTION_LEAD_S,
             node,
@@ -236,6 +278,12 @@ impl Ros2Hardware {
                 hw.hear_the_clock()?;
                 Ok(hw.robot_now.get())
             })?;
+            // Its rate, before the first motion is led by it.
+            let from = Instant::now();
+            while from.elapsed().as_secs_f64() < 1.5 * RATE_WINDOW_S {
+                hw.hear_the_clock()?;
+                std::thread::sleep(Duration::from_millis(1));
+            }
         }
         Ok(hw)
     }
@@ -265,10 +313,34 @@ impl Ros2Hardware {
             .map_err(|e| device(format!("{CLOCK_TOPIC}: {e:?}")))?
         {
             if let Some(t) = c.clock.to_nanos() {
-                self.robot_now.set(Some((t, Instant::now())));
+                let now = Instant::now();
+                self.robot_now.set(Some((t, now)));
+                match self.clock_mark.get() {
+                    None => self.clock_mark.set(Some((t, now))),
+                    Some((t0, at)) => {
+                        let wall = now.duration_since(at).as_secs_f64();
+                        if wall >= RATE_WINDOW_S {
+                            self.clock_rate.set(seconds_from(t0, t) / wall);
+                            self.clock_mark.set(Some((t, now)));
+                        }
+                    }
+                }
             }
         }
         Ok(())
+    }
+
+    /// Robot seconds between sending a timed motion and its start:
+    /// [`MOTION_LEAD_S`], or [`MOTION_LEAD_WALL_S`] of wall time at the
+    /// robot clock's rate where that is more.
+    fn lead_s(&self) -> Real {
+        let rate = self.clock_rate.get();
+        let rate = if rate.is_finite() {
+            rate.clamp(0.0, MAX_LEAD_RATE)
+        } else {
+            0.0
+        };
+        MOTION_LEAD_S.max(MOTION_LEAD_WALL_S * rate)
     }
 
     /// A timeout of `seconds` from now, on the robot's clock ([`Wait`]).
@@ -277,6 +349,7 @@ impl Ros2Hardware {
         let _ = self.hear_the_clock();
         Wait {
             seconds,
+            silent_s: self.config.ros2.timeout_s,
             wall: Instant::now(),
             robot_from: Cell::new(self.robot_now.get().map(|(t, _)| t)),
         }
@@ -332,6 +405,8 @@ impl Ros2Hardware {
                 q.push(js.position.get(i).copied().unwrap_or(Real::NAN));
             }
             let stamp = js.header.stamp.to_nanos().unwrap_or(0);
+            self.state_heard_at.set(Some(Instant::now()));
+            self.check_path(stamp, &q)?;
             let mut heard = self.states_heard.borrow_mut();
             heard.push_back((stamp, q.clone()));
             while heard.len() > STATES_KEPT {
@@ -340,6 +415,73 @@ impl Ros2Hardware {
             latest = Some((stamp, q));
         }
         Ok(latest)
+    }
+
+    /// Check a joint state `q` stamped `stamp` against the path of the
+    /// last motion sent (where it had the arm at the stamp or a little
+    /// before): a joint farther off than the path tolerance stops the arm
+    /// where it stands (a one-point trajectory to there, begun now) and the
+    /// run with [`HwError::OffPath`].
+    fn check_path(&self, stamp: u64, q: &[Real]) -> Result<(), HwError> {
+        if self.config.lockstep {
+            return Ok(());
+        }
+        let path = self.path.borrow();
+        let Some((motion, t0)) = path.as_ref() else {
+            return Ok(());
+        };
+        // Where the path had the arm over the last PATH_SLACK_LEADS leads:
+        // a robot that began the trajectory late (on its arrival, not at
+        // its stamp) lags by the time it took to come.
+        let d = motion.duration_s();
+        let t = seconds_from(*t0, stamp);
+        let slack = PATH_SLACK_LEADS * self.lead_s();
+        let off = |tau: Real| {
+            let tau = tau.clamp(0.0, d);
+            let due = if tau >= d {
+                motion.end()
+            } else {
+                motion.at(tau)
+            };
+            q.iter()
+                .zip(&due)
+                .map(|(a, b)| (a - b).abs())
+                .enumerate()
+                // The farthest joint (a NaN position counts as farthest).
+                .fold(
+                    (0, 0.0),
+                    |m, (j, e)| if e.is_nan() || e > m.1 { (j, e) } else { m },
+                )
+        };
+        let (joint, error) = (0..=PATH_SAMPLES)
+            .map(|k| off(t - slack * k as Real / PATH_SAMPLES as Real))
+            .fold((0, Real::INFINITY), |m, o| if o.1 < m.1 { o } else { m });
+        let tolerance = self.config.ros2.path_tolerance_rad;
+        if error <= tolerance {
+            return Ok(());
+        }
+        let hold = JointTrajectory {
+            header: Header::default(),
+            joint_names: self.names.clone(),
+            points: vec![JointTrajectoryPoint {
+                positions: q.to_vec(),
+                ..JointTrajectoryPoint::default()
+            }],
+        };
+        // The error says what happened; a failure to send the stop too.
+        let sent = self.trajectories.publish(hold);
+        Err(match sent {
+            Ok(()) => HwError::OffPath {
+                joint: self.names[joint].clone(),
+                error,
+                tolerance,
+                at_s: seconds_from(*t0, stamp),
+            },
+            Err(e) => device(format!(
+                "joint {} was {error:.4} off its trajectory, and the stop could not be sent: {}: {e:?}",
+                self.names[joint], self.config.ros2.trajectory_topic
+            )),
+        })
     }
 
     /// The joint states from the last stamped at or before `from_ns` to
@@ -355,27 +497,63 @@ impl Ros2Hardware {
     /// (or the timeout of `wait`), and take where it stands.
     fn settle_at(&mut self, q: &[Real], wait: &Wait) -> Result<(), HwError> {
         let tolerance = self.config.tolerance_rad();
-        let mut error = self
-            .q
-            .iter()
-            .zip(q)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, Real::max);
+        // The joint farthest from `q`, and how far.
+        let farthest = |now: &[Real]| {
+            now.iter()
+                .zip(q)
+                .map(|(a, b)| (a - b).abs())
+                .enumerate()
+                .fold((0, 0.0), |m, (j, e)| if e > m.1 { (j, e) } else { m })
+        };
+        let mut error = farthest(&self.q);
         loop {
             if let Some((stamp, now)) = self.latest_stamped()? {
-                error = now
-                    .iter()
-                    .zip(q)
-                    .map(|(a, b)| (a - b).abs())
-                    .fold(0.0, Real::max);
+                error = farthest(&now);
                 self.q = now;
-                if error <= tolerance {
+                // At rest there: the state before this one there too (an
+                // arm swinging through its goal is not; a lockstep robot
+                // ends exactly on it).
+                let before = if self.config.lockstep {
+                    Some(0.0)
+                } else {
+                    let heard = self.states_heard.borrow();
+                    heard
+                        .len()
+                        .checked_sub(2)
+                        .and_then(|k| heard.get(k))
+                        .map(|(_, q)| farthest(q).1)
+                };
+                if error.1 <= tolerance && before.is_some_and(|e| e <= tolerance) {
                     self.arrived_ns = stamp;
                     return Ok(());
                 }
             }
             if self.over(wait)? {
-                return Err(HwError::NotReached { error });
+                // A robot that fell silent did not stop short: say so
+                // (its states stopped for half the silence that ends a
+                // wait, a robot at 100 Hz never does; or for half the wait
+                // on a clock that runs on).
+                let silent_s = self
+                    .state_heard_at
+                    .get()
+                    .map_or(0.0, |at| at.elapsed().as_secs_f64());
+                let newest = self.states_heard.borrow().back().map(|(t, _)| *t);
+                let stale = match (self.robot_now.get(), newest) {
+                    (Some((now, _)), Some(t)) => seconds_from(t, now) > 0.5 * wait.seconds,
+                    _ => false,
+                };
+                if silent_s >= 0.5 * wait.silent_s.min(wait.seconds) || stale {
+                    return Err(device(format!(
+                        "no joint state on {} for {silent_s:.1} s of wall time (has the robot stopped?); \
+                         the last one had joint {} {:.4} from its goal",
+                        self.config.ros2.joint_states_topic, self.names[error.0], error.1
+                    )));
+                }
+                return Err(HwError::NotReached {
+                    joint: self.names[error.0].clone(),
+                    error: error.1,
+                    tolerance,
+                });
             }
             std::thread::sleep(Duration::from_micros(200));
         }
@@ -476,9 +654,11 @@ impl Arm for Ros2Hardware {
         if !self.config.lockstep {
             // The motion's profile within the joints' limits.
             let motion = LineMotion::new(&self.limits, &self.q, q);
-            let t0 = self.robot_now_ns()? + ns(MOTION_LEAD_S);
+            let lead = self.lead_s();
+            let t0 = self.robot_now_ns()? + ns(lead);
             self.send_motion(&motion, t0, 0.0)?;
-            let wait = self.wait(MOTION_LEAD_S + motion.duration_s() + self.config.ros2.timeout_s);
+            *self.path.borrow_mut() = Some((motion.clone(), t0));
+            let wait = self.wait(lead + motion.duration_s() + self.config.ros2.timeout_s);
             return self.settle_at(q, &wait);
         }
         let far = self
@@ -570,6 +750,21 @@ impl LineScanner for Ros2Hardware {
     }
 }
 
+/// The joints at `t_ns` from stamped joint states around it (oldest
+/// first): linear between the two that bracket it, else the nearest.
+fn interpolated(states: &[(u64, Vec<Real>)], t_ns: u64) -> Vec<Real> {
+    let after = states.iter().position(|(t, _)| *t >= t_ns);
+    match after {
+        Some(0) => states[0].1.clone(),
+        None => states.last().map(|(_, q)| q.clone()).unwrap_or_default(),
+        Some(i) => {
+            let ((t0, q0), (t1, q1)) = (&states[i - 1], &states[i]);
+            let f = seconds_from(*t0, t_ns) / seconds_from(*t0, *t1).max(1e-12);
+            q0.iter().zip(q1).map(|(a, b)| a + f * (b - a)).collect()
+        }
+    }
+}
+
 fn not_moving() -> HwError {
     HwError::Setting {
         what: "continuous motion".into(),
@@ -579,7 +774,8 @@ fn not_moving() -> HwError {
 
 /// A continuous motion over ROS 2: the motion goes out as one
 /// `JointTrajectory` of its joints every 10 ms, stamped to begin
-/// 20 ms (`MOTION_LEAD_S`) ahead on the robot's clock; each `LaserScan` begun
+/// 20 ms (`MOTION_LEAD_S`; 5 ms of wall time where that is more) ahead on
+/// the robot's clock; each `LaserScan` begun
 /// while it runs comes back with the joint states around its beams
 /// (`time_increment` apart from the header's stamp); braking sends the
 /// braked rest of the profile, stamped where it departs from the motion.
@@ -593,8 +789,9 @@ impl MovingScanner for Ros2Hardware {
             }
         })?;
         self.robot.check_joints(&motion.to)?;
-        let t0 = self.robot_now_ns()? + ns(MOTION_LEAD_S);
+        let t0 = self.robot_now_ns()? + ns(self.lead_s());
         self.send_motion(motion, t0, 0.0)?;
+        *self.path.borrow_mut() = Some((motion.clone(), t0));
         self.moving = Some(Moving {
             motion: motion.clone(),
             t0_ns: t0,
@@ -605,11 +802,12 @@ impl MovingScanner for Ros2Hardware {
 
     fn next_scan(&mut self) -> Result<Option<MovingScan>, HwError> {
         let now = self.robot_now_ns()?;
+        let lead = self.lead_s();
         let m = self.moving.as_mut().ok_or_else(not_moving)?;
         if let Some(end) = m.last_end_ns {
             // The loop worked on the last scan until now: a brake asked
             // then would have taken hold a lead later.
-            let lag = seconds_from(end, now) + MOTION_LEAD_S;
+            let lag = seconds_from(end, now) + lead;
             self.brake_lag_s = self.brake_lag_s.max(lag);
         }
         let (t0, d) = (m.t0_ns, m.motion.duration_s());
@@ -650,11 +848,12 @@ impl MovingScanner for Ros2Hardware {
     fn brake(&mut self) -> Result<LineMotion, HwError> {
         let now = self.robot_now_ns()?;
         let m = self.moving.as_ref().ok_or_else(not_moving)?;
-        let tb = seconds_from(m.t0_ns, now + ns(MOTION_LEAD_S)).max(0.0);
+        let tb = seconds_from(m.t0_ns, now + ns(self.lead_s())).max(0.0);
         let braked = m.motion.braked(tb);
         let t0 = m.t0_ns;
         if braked.duration_s() > tb && braked != m.motion {
             self.send_motion(&braked, t0 + ns(tb), tb)?;
+            *self.path.borrow_mut() = Some((braked.clone(), t0));
         }
         if let Some(m) = &mut self.moving {
             m.motion = braked.clone();
@@ -738,12 +937,23 @@ impl RangeSensors for Ros2Hardware {
         let frames = self.robot.forward_kinematics(&self.q)?;
         let wait = self.timeout();
         let mut messages = Vec::with_capacity(self.ranges.len());
+        // Readings taken before the arm stood here are stale too (a robot
+        // that publishes them in a burst may still be sending an older
+        // one).
+        let arrived = if self.config.lockstep {
+            0
+        } else {
+            self.arrived_ns
+        };
         for (k, s) in self.ranges.iter().enumerate() {
             let topic = self.config.ros2.range_topic(k);
             messages.push(self.poll(&wait, &topic, || {
-                s.take()
-                    .map(|m| m.map(|(m, _)| m))
-                    .map_err(|e| device(format!("{topic}: {e:?}")))
+                while let Some((m, _)) = s.take().map_err(|e| device(format!("{topic}: {e:?}")))? {
+                    if m.header.stamp.to_nanos().unwrap_or(0) >= arrived {
+                        return Ok(Some(m));
+                    }
+                }
+                Ok(None)
             })?);
         }
         // A lockstep robot's readings at full precision, each checked
@@ -767,7 +977,28 @@ impl RangeSensors for Ros2Hardware {
             _ => None,
         };
         let mut out = Vec::with_capacity(messages.len());
+        // Without lockstep each reading is placed where the arm stood at its
+        // stamp (the joint states around it, interpolated): an arm within
+        // the tolerance of its goal still moves by that much.
+        let mut at_stamp: Vec<(u64, Vec<Isometry3>)> = Vec::new();
+        for r in &messages {
+            let stamp = r.header.stamp.to_nanos().unwrap_or(0);
+            if self.config.lockstep || at_stamp.iter().any(|(t, _)| *t == stamp) {
+                continue;
+            }
+            let around = self.poll(&wait, &self.config.ros2.joint_states_topic, || {
+                self.latest_stamped()?;
+                Ok(self.states_over(stamp, stamp))
+            })?;
+            let q = interpolated(&around, stamp);
+            at_stamp.push((stamp, self.robot.forward_kinematics(&q)?));
+        }
         for (k, (r, m)) in messages.iter().zip(&self.robot.range_finders).enumerate() {
+            let stamp = r.header.stamp.to_nanos().unwrap_or(0);
+            let frames = at_stamp
+                .iter()
+                .find(|(t, _)| *t == stamp)
+                .map_or(&frames, |(_, f)| f);
             let world_from_link = self.world_from_base
                 * frames
                     .get(m.link.0)

@@ -419,3 +419,100 @@ fn a_served_robot_follows_a_trajectory_s_times() {
     }
     stop.store(true, Ordering::Relaxed);
 }
+
+/// An arm that does not move when sent a trajectory (seized, or too weak):
+/// the driver sees its joint states leave the path it sent by more than
+/// the path tolerance, sends a one-point trajectory holding the arm where
+/// it stands, and stops with an error naming the joint. Then the arm falls
+/// silent: the next motion stops after the timeout, saying no joint state
+/// came. A stand-in robot of a few lines publishes the states (no
+/// `/clock`: the wall clock times the run).
+#[test]
+fn an_arm_off_its_path_is_held_and_a_silent_one_is_reported() {
+    use record::bag::msg::{Header, JointState, JointTrajectory};
+    let loaded = Scenario::load("bridge1").unwrap();
+    let config = Ros2Config {
+        domain_id: domain(125),
+        loopback_only: true,
+    };
+    let rig = SimRig::with_every_sensor(&loaded, 7).unwrap();
+    let robot = rig.robot().clone();
+    let start = rig.joints();
+    let names: Vec<String> = robot.joint_names().iter().map(|&n| n.to_owned()).collect();
+    let spec = scenario::ros2::Ros2Spec {
+        timeout_s: 1.0,
+        ..scenario::ros2::Ros2Spec::default()
+    };
+    let silent = Arc::new(AtomicBool::new(false));
+    let sent = Arc::new(std::sync::Mutex::new(Vec::<JointTrajectory>::new()));
+    {
+        let (silent, sent, spec) = (Arc::clone(&silent), Arc::clone(&sent), spec.clone());
+        let (names, start) = (names.clone(), start.clone());
+        std::thread::spawn(move || {
+            let mut node = Ros2Node::new("seized", &config).unwrap();
+            let states = node
+                .publisher::<JointState>(&spec.joint_states_topic)
+                .unwrap();
+            let commands = node
+                .subscription::<JointTrajectory>(&spec.trajectory_topic)
+                .unwrap();
+            while !silent.load(Ordering::Relaxed) {
+                states
+                    .publish(JointState {
+                        header: Header::new(ros2::wall_clock_ns(), ""),
+                        name: names.clone(),
+                        position: start.clone(),
+                        ..JointState::default()
+                    })
+                    .unwrap();
+                while let Some((t, _)) = commands.take().unwrap() {
+                    sent.lock().unwrap().push(t);
+                }
+                std::thread::sleep(std::time::Duration::from_millis(10));
+            }
+        });
+    }
+    let mut driver = Ros2Hardware::new(
+        Ros2Node::new("driver", &config).unwrap(),
+        &robot,
+        &rig.world_from_base(),
+        &[],
+        DriverConfig {
+            ros2: spec,
+            lockstep: false,
+            limits: None,
+        },
+    )
+    .unwrap();
+    let mut goal = start.clone();
+    goal[1] += 0.5;
+    let e = driver.move_to(&goal).unwrap_err().to_string();
+    assert!(
+        e.contains(&format!("joint {} was", names[1])) && e.contains("off its trajectory"),
+        "{e}"
+    );
+    assert!(e.contains("the path tolerance is 0.05"), "{e}");
+    // The hold: one point, where the arm stands, after the motion.
+    let t0 = std::time::Instant::now();
+    let hold = loop {
+        if let Some(last) = sent.lock().unwrap().last().filter(|t| t.points.len() == 1) {
+            break last.clone();
+        }
+        assert!(t0.elapsed().as_secs() < 10, "no hold was sent");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    };
+    assert_eq!(hold.points[0].positions, start);
+    assert!(sent.lock().unwrap()[0].points.len() > 1, "the motion first");
+    // Silent: the states stop, the next motion stops after the timeout.
+    // (A goal 0.01 rad away: never off the path by the tolerance, never
+    // reached by an arm that stands still.)
+    silent.store(true, Ordering::Relaxed);
+    std::thread::sleep(std::time::Duration::from_millis(50));
+    let mut near = start.clone();
+    near[2] += 0.01;
+    let wall = std::time::Instant::now();
+    let e = driver.move_to(&near).unwrap_err().to_string();
+    let waited = wall.elapsed().as_secs_f64();
+    assert!(e.contains("no joint state on /joint_states for"), "{e}");
+    assert!(waited < 10.0, "gave up after {waited} s");
+}

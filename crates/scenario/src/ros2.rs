@@ -10,6 +10,7 @@
 //! trajectory_topic = "/joint_trajectory_controller/joint_trajectory"
 //! joint_names = []        # the robot's own names, in its joint order
 //! tolerance_rad = 0.001   # a motion is done when every joint is this close
+//! path_tolerance_rad = 0.05  # a joint farther off its trajectory stops the run
 //! timeout_s = 10.0        # past a motion's planned time, or a sensing wait
 //! joint_speed = 1.0       # rad/s a trajectory's time is planned at
 //! ```
@@ -23,6 +24,9 @@ pub const MAX_TIMEOUT_S: Real = 3600.0;
 /// Largest joint-goal tolerance a `[ros2]` table may set, radians: a
 /// looser one would let the loop plan from a pose the arm is not at.
 pub const MAX_TOLERANCE_RAD: Real = 0.05;
+
+/// Largest path tolerance a `[ros2]` table may set, radians.
+pub const MAX_PATH_TOLERANCE_RAD: Real = 0.5;
 
 /// Fastest planned joint speed, rad/s.
 pub const MAX_JOINT_SPEED: Real = 10.0;
@@ -45,6 +49,12 @@ pub struct Ros2Spec {
     pub joint_names: Vec<String>,
     /// A motion is done when every joint is this close to its goal, radians.
     pub tolerance_rad: Real,
+    /// A joint reported farther than this from where its trajectory has it
+    /// (while it runs, and after it while the arm settles) stops the run:
+    /// the arm is held where it is and the loop ends with an error naming
+    /// the joint (ros2_control's path tolerance), radians. At least
+    /// `tolerance_rad`.
+    pub path_tolerance_rad: Real,
     /// How long past a motion's planned time (or for a scan or reading) to
     /// wait before stopping with an error, seconds.
     pub timeout_s: Real,
@@ -61,6 +71,7 @@ impl Default for Ros2Spec {
             trajectory_topic: "/joint_trajectory_controller/joint_trajectory".into(),
             joint_names: Vec::new(),
             tolerance_rad: 1e-3,
+            path_tolerance_rad: 0.05,
             timeout_s: 10.0,
             joint_speed: 1.0,
         }
@@ -136,6 +147,18 @@ impl Ros2Spec {
             MAX_TOLERANCE_RAD,
             "radians",
         )?;
+        within(
+            "path_tolerance_rad",
+            self.path_tolerance_rad,
+            MAX_PATH_TOLERANCE_RAD,
+            "radians",
+        )?;
+        if self.path_tolerance_rad < self.tolerance_rad {
+            return Err(format!(
+                "ros2.path_tolerance_rad: expected at least tolerance_rad ({}), got {}",
+                self.tolerance_rad, self.path_tolerance_rad
+            ));
+        }
         within("timeout_s", self.timeout_s, MAX_TIMEOUT_S, "seconds")?;
         within("joint_speed", self.joint_speed, MAX_JOINT_SPEED, "rad/s")?;
         Ok(())
@@ -179,6 +202,8 @@ mod tests {
         bad(&|s| s.tolerance_rad = 0.0, "tolerance_rad");
         bad(&|s| s.tolerance_rad = 0.2, "tolerance_rad");
         bad(&|s| s.timeout_s = Real::NAN, "timeout_s");
+        bad(&|s| s.path_tolerance_rad = 0.6, "path_tolerance_rad");
+        bad(&|s| s.path_tolerance_rad = 0.0005, "path_tolerance_rad");
         bad(&|s| s.joint_speed = 11.0, "joint_speed");
         let s = Ros2Spec {
             joint_names: vec!["x".into()],

@@ -9,12 +9,13 @@ installation), in place of `surveyor sim-robot`.
 The model comes from `surveyor scenario mjcf` (SURVEYOR_BIN, default
 target/release/surveyor) with its JSON sidecar. The physics steps every
 2 ms on its own clock, `--rate` sim seconds per wall second (0: as fast as
-it can; fallen more than 5 ms of wall time behind, it does not race to
+it can; fallen more than 1 ms of wall time behind, it does not race to
 catch up, its clock runs slower for a moment), and the robot publishes,
 stamped on that clock (`start` + sim
 time, as sim-robot stamps):
 
-- /clock (rosgraph_msgs/Clock, best effort, keep last 1) every 5 ms;
+- /clock (rosgraph_msgs/Clock, best effort, keep last 1) every 5 ms (and
+  at most every 0.5 ms of wall time);
 - /joint_states every 10 ms (100 Hz): the joints' ROS names, the measured
   positions and velocities, the motor torques as efforts;
 - /scan (sensor_msgs/LaserScan) every scan time (0.1 s): a free-running
@@ -47,6 +48,11 @@ and `scene/...`) is logged to --contacts as a JSON line (sim time, the two
 geoms, penetration depth). On SIGINT or SIGTERM it stops, and prints the
 largest tracking error (while a trajectory runs and while the arm holds
 still) and the number of contacts.
+
+Faults for the driver to cope with (the tests' fault cases): the torque
+limits scaled (`--torque-scale 0.5`: an arm too weak to keep up), a share
+of the scans dropped (`--drop-scans 0.05`), Gaussian noise on the joint
+positions reported (`--joint-noise 0.001`, rad).
 """
 
 import argparse
@@ -173,7 +179,16 @@ STATE_PERIOD_S = 0.01   # 100 Hz
 RANGE_PERIOD_S = 0.1
 OMEGA = 50.0           # the PD loop's natural frequency, rad/s (critically damped)
 STILL_AFTER_S = 0.5    # the arm holds still this long after a trajectory's end and arrival
-MAX_BEHIND_S = 0.005   # wall seconds the sim may fall behind its rate before it stops catching up
+MAX_BEHIND_S = 0.001   # wall seconds the sim may fall behind its rate before it stops catching up
+
+
+def as_slice(index):
+    """Indices as a slice when they are consecutive (a view, not a copy, of
+    the arrays they index), else as an array."""
+    index = [int(i) for i in index]
+    if index == list(range(index[0], index[0] + len(index))):
+        return slice(index[0], index[0] + len(index))
+    return np.array(index)
 
 
 def stamp(ns):
@@ -202,6 +217,8 @@ class Trajectory:
 
     def __init__(self, t, q):
         self.knots = [(t, np.array(q, dtype=float))]
+        self.still = np.zeros(len(q))
+        self.seg = 0  # the segment sampled last: the next sample is most often in it
 
     def end_s(self):
         return self.knots[-1][0]
@@ -210,17 +227,20 @@ class Trajectory:
         """Desired positions and velocities at sim time `t`."""
         k = self.knots
         if t <= k[0][0]:
-            return k[0][1], np.zeros_like(k[0][1])
+            return k[0][1], self.still
         if t >= k[-1][0]:
-            return k[-1][1], np.zeros_like(k[-1][1])
-        lo, hi = 0, len(k) - 1
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if k[mid][0] <= t:
-                lo = mid
-            else:
-                hi = mid
-        (t0, q0), (t1, q1) = k[lo], k[hi]
+            return k[-1][1], self.still
+        lo = self.seg
+        if not (lo + 1 < len(k) and k[lo][0] <= t < k[lo + 1][0]):
+            lo, hi = 0, len(k) - 1
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                if k[mid][0] <= t:
+                    lo = mid
+                else:
+                    hi = mid
+            self.seg = lo
+        (t0, q0), (t1, q1) = k[lo], k[lo + 1]
         v = (q1 - q0) / (t1 - t0)
         return q0 + v * (t - t0), v
 
@@ -243,6 +263,7 @@ class Trajectory:
         while len(kept) > 2 and kept[1][0] < now - 1.0:
             kept.pop(0)
         self.knots = kept
+        self.seg = 0
 
 
 class Robot:
@@ -257,10 +278,14 @@ class Robot:
         mujoco.mj_forward(m, self.d)
         joints = self.side["joints"]
         self.names = [j["ros_name"] for j in joints]
-        self.qadr = np.array([m.jnt_qposadr[m.joint(j["name"]).id] for j in joints])
-        self.vadr = np.array([m.jnt_dofadr[m.joint(j["name"]).id] for j in joints])
-        self.act = np.array([m.actuator(j["name"]).id for j in joints])
-        self.tau_max = np.array([j["torque_limit"] for j in joints])
+        self.qadr = as_slice([m.jnt_qposadr[m.joint(j["name"]).id] for j in joints])
+        self.vadr = as_slice([m.jnt_dofadr[m.joint(j["name"]).id] for j in joints])
+        self.act = as_slice([m.actuator(j["name"]).id for j in joints])
+        self.tau_max = args.torque_scale * np.array([j["torque_limit"] for j in joints])
+        self.err = np.zeros(len(joints))
+        self.abs_err = np.zeros(len(joints))
+        self.tau = np.zeros(len(joints))
+        self.accj = np.zeros(len(joints))
         self.acc = np.zeros(m.nv)
         self.weighted = np.zeros(m.nv)
         self.rng = np.random.default_rng(args.seed)
@@ -303,6 +328,7 @@ class Robot:
         self.latest = 0.0  # by how much, the most, sim seconds
         self.states = 0
         self.scans = 0
+        self.dropped = 0
         self.readings = 0
 
     def q(self):
@@ -313,18 +339,24 @@ class Robot:
     def control(self, t):
         d = self.d
         q_des, v_des = self.traj.at(t)
-        q, v = d.qpos[self.qadr], d.qvel[self.vadr]
-        err = q_des - q
+        err, tau = self.err, self.tau
+        np.subtract(q_des, d.qpos[self.qadr], out=err)
         # The PD's accelerations, weighted by the mass matrix (armature
         # included): every joint, coupled or not, a critically damped loop
         # of OMEGA while the torques stay within their limits.
-        self.acc[:] = 0.0
-        self.acc[self.vadr] = OMEGA * OMEGA * err + 2.0 * OMEGA * (v_des - v)
+        acc = self.accj
+        np.subtract(v_des, d.qvel[self.vadr], out=acc)
+        acc *= 2.0 * OMEGA
+        acc += OMEGA * OMEGA * err
+        self.acc[self.vadr] = acc
         mujoco.mj_mulM(self.m, d, self.weighted, self.acc)
-        tau = d.qfrc_bias[self.vadr] + self.weighted[self.vadr]
-        d.ctrl[self.act] = np.clip(tau, -self.tau_max, self.tau_max)
-        e = float(np.max(np.abs(err)))
-        j = int(np.argmax(np.abs(err)))
+        np.add(d.qfrc_bias[self.vadr], self.weighted[self.vadr], out=tau)
+        np.maximum(tau, -self.tau_max, out=tau)
+        np.minimum(tau, self.tau_max, out=tau)
+        d.ctrl[self.act] = tau
+        np.abs(err, out=self.abs_err)
+        j = int(self.abs_err.argmax())
+        e = float(self.abs_err[j])
         if t > max(self.traj.end_s(), self.taken_s) + STILL_AFTER_S:
             if e > self.worst_still[0]:
                 self.worst_still = (e, self.names[j], t)
@@ -474,6 +506,13 @@ class Robot:
         t = 0.0
         step = 0
         next_clock = next_state = next_range = 0.0
+        # /clock every 5 ms of sim time, and no more often than every
+        # 0.5 ms of wall time: faster than real time, a message of every
+        # 5 ms would cost more than the physics.
+        clock_period = max(CLOCK_PERIOD_S, 0.0005 * args.rate)
+        # Faults asked for: noise on the joint positions reported, scans
+        # dropped (their own generator, so the sensor noise stays as without).
+        faults = np.random.default_rng(args.seed + 1)
         # The scan under way: its beginning, its ranges so far.
         scan_begin, scan_next_beam = 0.0, 0
         if self.scanner:
@@ -503,13 +542,15 @@ class Robot:
                     if isinstance(msg, JointTrajectory):  # not a writer's disposal
                         self.take(msg, t, start_ns)
             if t >= next_clock - 1e-9:
-                next_clock += CLOCK_PERIOD_S
+                next_clock += clock_period
                 clock_w.write(Clock(stamp(now_ns)))
             if t >= next_state - 1e-9:
                 next_state += STATE_PERIOD_S
-                state_w.write(JointState(Header(stamp(now_ns), ""), self.names,
-                                         d.qpos[self.qadr].tolist(), d.qvel[self.vadr].tolist(),
-                                         d.ctrl[self.act].tolist()))
+                q = d.qpos[self.qadr]
+                if args.joint_noise > 0:
+                    q = q + args.joint_noise * faults.standard_normal(len(self.names))
+                state_w.write(JointState(Header(stamp(now_ns), ""), self.names, q.tolist(),
+                                         d.qvel[self.vadr].tolist(), d.ctrl[self.act].tolist()))
                 self.states += 1
             if self.scanner:
                 # Beams whose moment is nearest this step.
@@ -523,12 +564,16 @@ class Robot:
                     if scan_next_beam < nb:
                         break
                     ranges, intens = self.scan_readings(raw)
-                    scan_w.write(LaserScan(
-                        Header(stamp(start_ns + int(round(scan_begin * 1e9))), "scanner"),
-                        b0, float(np.float32(self.bearings[-1])), binc, self.inc,
-                        self.scan_period, self.cfg["min_range_m"], self.cfg["max_range_m"],
-                        ranges.astype(np.float32).tolist(), intens.astype(np.float32).tolist()))
-                    self.scans += 1
+                    if args.drop_scans > 0 and faults.random() < args.drop_scans:
+                        self.dropped += 1
+                    else:
+                        scan_w.write(LaserScan(
+                            Header(stamp(start_ns + int(round(scan_begin * 1e9))), "scanner"),
+                            b0, float(np.float32(self.bearings[-1])), binc, self.inc,
+                            self.scan_period, self.cfg["min_range_m"], self.cfg["max_range_m"],
+                            ranges.astype(np.float32).tolist(),
+                            intens.astype(np.float32).tolist()))
+                        self.scans += 1
                     scan_begin += self.scan_period
                     scan_next_beam = 0
                     raw = new_raw()
@@ -553,7 +598,8 @@ class Robot:
         e, j, at = self.worst_moving
         es, js, ats = self.worst_still
         print(f"ran {t:.3f} s of sim time in {wall:.3f} s of wall time ({t / max(wall, 1e-9):.1f}x); "
-              f"{self.states} joint states, {self.scans} scans, {self.readings} readings, "
+              f"{self.states} joint states, {self.scans} scans ({self.dropped} dropped), "
+              f"{self.readings} readings, "
               f"{self.trajectories} trajectories ({self.refused} refused, {self.late} came after "
               f"their stamp, by at most {1000 * self.latest:.1f} ms)")
         print(f"largest tracking error: {e:.3e} rad ({j} at {at:.3f} s) while moving; "
@@ -576,7 +622,20 @@ def main():
                    help="rad/s of a one-point trajectory without a time")
     p.add_argument("--for", dest="duration_s", type=float,
                    help="stop after this many wall seconds")
+    faults = p.add_argument_group("faults")
+    faults.add_argument("--torque-scale", type=float, default=1.0,
+                        help="the model's torque limits times this (0.5: half as strong)")
+    faults.add_argument("--drop-scans", type=float, default=0.0,
+                        help="the share of /scan messages not sent (0.05: one in twenty)")
+    faults.add_argument("--joint-noise", type=float, default=0.0,
+                        help="σ of Gaussian noise on the joint positions reported, rad")
     args = p.parse_args()
+    if not (0 < args.torque_scale <= 10):
+        p.error(f"--torque-scale {args.torque_scale}: expected more than 0, at most 10")
+    if not (0 <= args.drop_scans < 1):
+        p.error(f"--drop-scans {args.drop_scans}: expected a share from 0 to below 1")
+    if not (0 <= args.joint_noise <= 0.1):
+        p.error(f"--joint-noise {args.joint_noise}: expected 0 to 0.1 rad")
     if args.rate < 0 or not math.isfinite(args.rate):
         p.error(f"--rate {args.rate}: expected sim seconds per wall second ≥ 0")
     if not 0 <= args.domain <= 232:

@@ -20,6 +20,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
+from mujoco_judge import read_ply
 
 ROOT = Path(__file__).resolve().parents[4]
 BINARY = os.environ.get("SURVEYOR_BIN", str(ROOT / "target/release/surveyor"))
@@ -36,9 +37,10 @@ def mjcf(tmp_path, scenario, robot=None):
 
 
 def fk(robot, q):
+    tip = ["--tip", "tool0"] if robot.endswith(".urdf") else []  # the UR5's, as ur5_bridge's
     out = subprocess.run(
-        [BINARY, "fk", "--robot", robot, "--joints", ",".join(repr(float(v)) for v in q), "--json"],
-        check=True, capture_output=True, text=True).stdout
+        [BINARY, "fk", "--robot", robot, *tip, "--joints", ",".join(repr(float(v)) for v in q),
+         "--json"], check=True, capture_output=True, text=True).stdout
     return json.loads(out)
 
 
@@ -63,10 +65,14 @@ def pose(m, d, kind, name):
     return t
 
 
+UR5_BRIDGE = str(ROOT / "data/scenarios/ur5_bridge.toml")
+UR5 = str(ROOT / "data/robots/ur5/ur5_robot.urdf")
+
+
 @pytest.mark.parametrize("scenario,robot", [("bridge1", "denso-vm6083"),
-                                            ("block1", "arm4")])
+                                            ("block1", "arm4"), (UR5_BRIDGE, UR5)])
 def test_mujoco_s_kinematics_are_surveyor_fk_s(tmp_path, scenario, robot):
-    m, side = mjcf(tmp_path, scenario, None if scenario == "bridge1" else robot)
+    m, side = mjcf(tmp_path, scenario, robot if scenario == "block1" else None)
     d = mujoco.MjData(m)
     mujoco.mj_kinematics(m, d)
     world_from_base = pose(m, d, "body", m.body(1).name)  # the base link's body
@@ -89,17 +95,6 @@ def test_mujoco_s_kinematics_are_surveyor_fk_s(tmp_path, scenario, robot):
             checked += 1
     print(f"{scenario}: {checked} frames, largest position difference {worst:.3e} m")
     assert checked >= 6 * 3
-
-
-def read_ply(path):
-    """The float32 vertices of a `surveyor scan` PLY, as named columns."""
-    data = path.read_bytes()
-    head, body = data.split(b"end_header\n", 1)
-    lines = head.decode().splitlines()
-    n = int(next(x for x in lines if x.startswith("element vertex")).split()[2])
-    names = [x.split()[2] for x in lines if x.startswith("property float")]
-    v = np.frombuffer(body, dtype="<f4", count=n * len(names)).reshape(n, len(names))
-    return {k: v[:, i].astype(np.float64) for i, k in enumerate(names)}
 
 
 def test_mujoco_s_rays_are_our_sweep_s(tmp_path):
@@ -146,7 +141,8 @@ def test_mujoco_s_rays_are_our_sweep_s(tmp_path):
 
 
 @pytest.mark.parametrize("scenario,robot", [("bridge1", None), ("bridge3", None),
-                                            ("block1", "arm4"), ("cube", None)])
+                                            ("block1", "arm4"), ("cube", None),
+                                            (UR5_BRIDGE, None)])
 def test_the_arm_at_its_start_touches_nothing(tmp_path, scenario, robot):
     m, _ = mjcf(tmp_path, scenario, robot)
     d = mujoco.MjData(m)

@@ -26,10 +26,11 @@ here with SURVEYOR_BIN (default target/release/surveyor).
 
 import csv
 import os
-import random
 import signal
 import subprocess
 from pathlib import Path
+
+import ros_domain
 
 
 ROOT = Path(__file__).resolve().parents[4]
@@ -52,7 +53,7 @@ def in_process(tmp_path_factory, env, name, args):
 def over_ros2(out, robot_args, run_args):
     """Run `run_args` with --ros2 against `sim-robot robot_args`, in a
     domain of their own; returns the robot's summary line."""
-    env = dict(os.environ, ROS_DOMAIN_ID=str(random.randrange(100, 200)))
+    env = dict(os.environ, ROS_DOMAIN_ID=str(ros_domain.pick()))
     robot = subprocess.Popen(
         [BINARY, "sim-robot", *robot_args, "--ros2", "--lockstep", "--joint-speed", "10",
          "--for", "1200"],

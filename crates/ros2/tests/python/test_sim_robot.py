@@ -13,7 +13,6 @@ so that concurrent runs do not meet.
 """
 
 import os
-import random
 import signal
 import subprocess
 import time
@@ -21,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+import ros_domain
 from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.idl import IdlStruct
@@ -141,7 +141,7 @@ def stop(proc):
 
 @pytest.fixture(scope="module")
 def robot():
-    domain = random.randrange(1, 100)
+    domain = ros_domain.pick()
     proc = serve("bridge1", domain)
     os.environ["CYCLONEDDS_URI"] = LOOPBACK
     participant = DomainParticipant(domain)
@@ -211,7 +211,7 @@ def test_a_trajectory_moves_the_robot(robot):
 def test_range_finders_publish_ranges():
     """block1's point robot: a Range per range finder, in its frame, within
     its range or +inf (REP 117)."""
-    domain = random.randrange(100, 200)
+    domain = ros_domain.pick()
     proc = serve("block1", domain)
     os.environ["CYCLONEDDS_URI"] = LOOPBACK
     participant = DomainParticipant(domain)

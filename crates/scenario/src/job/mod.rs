@@ -134,8 +134,13 @@ pub fn check_stands_at(q: &[Real], start: &[Real], tolerance: Real) -> Result<()
     if there {
         Ok(())
     } else {
+        let noisier = if tolerance > 0.0 {
+            " (a robot whose joint states are noisier than that needs a larger [ros2] tolerance_rad)"
+        } else {
+            ""
+        };
         Err(format!(
-            "stands at joints {q:?}, not at the run's start joints {start:?} (within {tolerance} rad): a run starts from the pose its setup checked"
+            "stands at joints {q:?}, not at the run's start joints {start:?} (within {tolerance} rad): a run starts from the pose its setup checked{noisier}"
         ))
     }
 }
