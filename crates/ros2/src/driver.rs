@@ -171,7 +171,8 @@ fn device(message: String) -> HwError {
 /// it runs on that clock (`use_sim_time`): a robot running faster or
 /// slower than real time gets its timeouts in its own seconds, and one
 /// whose clock stops advancing times out after `silent_s` of wall time
-/// (the configured timeout) without a new `/clock` message. Without `/clock` it runs on the wall
+/// (the configured timeout) without a new `/clock` message. Without
+/// `/clock` it runs on the wall
 /// clock. A setting that is no duration (negative, not finite, too long)
 /// waits a day rather than panicking.
 struct Wait {
@@ -1031,5 +1032,22 @@ impl RangeSensors for Ros2Hardware {
             }));
         }
         Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::interpolated;
+
+    #[test]
+    fn joints_between_two_states_are_interpolated_by_their_stamps() {
+        let states = vec![(1_000, vec![0.0, 1.0]), (3_000, vec![1.0, 3.0])];
+        // A quarter of the way: by hand, 0.25 and 1.5.
+        assert_eq!(interpolated(&states, 1_500), vec![0.25, 1.5]);
+        assert_eq!(interpolated(&states, 3_000), vec![1.0, 3.0]);
+        // Outside them, the nearest.
+        assert_eq!(interpolated(&states, 500), vec![0.0, 1.0]);
+        assert_eq!(interpolated(&states, 9_000), vec![1.0, 3.0]);
+        assert!(interpolated(&[], 9_000).is_empty());
     }
 }
