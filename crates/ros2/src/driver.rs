@@ -172,9 +172,8 @@ fn device(message: String) -> HwError {
 /// slower than real time gets its timeouts in its own seconds, and one
 /// whose clock stops advancing times out after `silent_s` of wall time
 /// (the configured timeout) without a new `/clock` message. Without
-/// `/clock` it runs on the wall
-/// clock. A setting that is no duration (negative, not finite, too long)
-/// waits a day rather than panicking.
+/// `/clock` it runs on the wall clock. A setting that is no duration
+/// (negative, not finite, too long) waits a day rather than panicking.
 struct Wait {
     seconds: Real,
     /// Wall seconds without a `/clock` message that end the wait.

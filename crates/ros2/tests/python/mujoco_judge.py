@@ -57,7 +57,7 @@ def drive(tmp_path, scenario, command, robot_args=(), robot=None, kill_after_s=N
     rproc = subprocess.Popen(rcmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                              text=True)
     cmd = [BINARY, *command, "--ros2", "--out", str(tmp_path / "run")]
-    after_kill = None
+    after_kill, proc = None, None
     try:
         wall = time.monotonic()
         proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
@@ -74,7 +74,7 @@ def drive(tmp_path, scenario, command, robot_args=(), robot=None, kill_after_s=N
             out, err = proc.communicate(timeout=timeout_s)
         wall = time.monotonic() - wall
     finally:
-        if proc.poll() is None:
+        if proc is not None and proc.poll() is None:
             proc.kill()
         if rproc.poll() is None:
             rproc.send_signal(signal.SIGTERM)

@@ -50,7 +50,8 @@ largest tracking error (while a trajectory runs and while the arm holds
 still) and the number of contacts.
 
 Faults for the driver to cope with (the tests' fault cases): the torque
-limits scaled (`--torque-scale 0.5`: an arm too weak to keep up), a share
+limits scaled (`--torque-scale 0.25`: the DENSO cannot hold its wrist
+against gravity; at 0.5 it still keeps up), a share
 of the scans dropped (`--drop-scans 0.05`), Gaussian noise on the joint
 positions reported (`--joint-noise 0.001`, rad).
 """
