@@ -1,6 +1,7 @@
 //! Stage One's parameters (A Table 6.1 where the thesis gives them).
 
 use crate::ExploreError;
+use crate::gain::GainKind;
 use geom::Real;
 use plan::PlanConfig;
 use sensor::SweepConfig;
@@ -41,9 +42,10 @@ pub const MAX_MOTION_POSES: usize = 1000;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Selection {
-    /// The most information predicted: the largest `ΔH1/H1₀ + ΔH2/H2₀`
-    /// (geometric and C-space information revealed, each over its value
-    /// before the first sweep), ties to the lower index. Our choice: Paul's
+    /// The largest gain ([`ExploreConfig::gain`]; by default the most
+    /// information predicted, `ΔH1/H1₀ + ΔH2/H2₀`: geometric and C-space
+    /// information revealed, each over its value before the first sweep),
+    /// ties to the lower index. Our choice: Paul's
     /// rank sum favours the front's small moves (f3) and safest poses (f4),
     /// and on the bridge scenes the arm then turned its wrist for ten
     /// viewpoints before its shoulder moved (see the crate README).
@@ -52,6 +54,17 @@ pub enum Selection {
     /// A§3.2.2, eq. 3.7–3.8: the Pareto front of (f1, f2, f3, f4), the
     /// lowest rank sum, f1 breaking ties.
     RankSum,
+    /// A baseline: a candidate drawn uniformly among the clear candidates
+    /// whose sweep is safe, roadmap nodes and local poses alike (after the
+    /// first sweep on bridge1 no roadmap node is safe), seeded by the plan
+    /// seed and the number of sweeps; one without a safe path is dropped
+    /// and another drawn.
+    Random,
+    /// A baseline after Yamauchi (1997): the nearest candidate (the
+    /// roadmap's weighted joint distance) whose predicted rays cross the
+    /// frontier, from a free voxel into an unknown one, into at least
+    /// [`crate::stage_one::FRONTIER_MIN_VOXELS`] unknown voxels.
+    Frontier,
 }
 
 /// How the arm moves while the scanner scans (a transit that scans, a
@@ -210,8 +223,14 @@ pub struct ExploreConfig {
     pub stage_two_scan_step_deg: Real,
     /// How the arm moves while the scanner scans.
     pub motion: Motion,
-    /// How the next viewpoint is chosen among the safe candidates.
+    /// How the next viewpoint is chosen among the safe candidates (also
+    /// read as `strategy`).
+    #[serde(alias = "strategy")]
     pub selection: Selection,
+    /// How `selection = "information"` scores a candidate's predicted sweep
+    /// ([`crate::gain`]: ours, Paul's f1, or one of Delmerico et al.'s
+    /// volumetric gains).
+    pub gain: GainKind,
     /// Stage One keeps the robot's collision capsules at least this far
     /// from every point the scanner has measured, along the path to a
     /// viewpoint and through its sweep, metres (0: `dist(Q) > 1` alone, as
@@ -249,6 +268,7 @@ impl Default for ExploreConfig {
             stage_two_scan_step_deg: 0.0,
             motion: Motion::StopAndGo,
             selection: Selection::Information,
+            gain: GainKind::Information,
             stage_one_clearance_m: 0.05,
         }
     }

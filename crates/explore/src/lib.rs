@@ -8,6 +8,7 @@
 //! | [`run`](mod@run) | [`run()`], [`RunOptions`], [`ExploreRun`]: both stages, the checkpoint, the map products |
 //! | [`judge`] | [`Judge`], [`NoJudge`], [`SafetyTally`] |
 //! | [`stage_one`] | [`StageOne`]: the decision of A§3.2 |
+//! | [`gain`] | [`Gain`], [`GainKind`], [`Trace`]: how a candidate's predicted sweep is scored |
 //! | [`pareto`] | the Pareto front and rank sum (eq. 3.7–3.8) |
 //! | [`discs`] | [`DiscMap`]: discs, segments, material belief |
 //! | [`lrc`] | [`lrc::train_lrc`], [`lrc::PatchIndex`], [`lrc::IDENTIFIED_P`]: the run's classifier and its observations |
@@ -15,6 +16,7 @@
 mod config;
 pub mod discs;
 mod error;
+pub mod gain;
 pub mod judge;
 pub mod lrc;
 mod materials;
@@ -32,6 +34,7 @@ pub use config::{
 };
 pub use discs::DiscMap;
 pub use error::ExploreError;
+pub use gain::{Gain, GainContext, GainKind, Trace};
 pub use judge::{Judge, NoJudge, SafetyTally};
 pub use lrc::{IDENTIFIED_P, PatchIndex, lrc_config, patch_radius_m, train_lrc};
 pub use run::{ExploreRun, RunIdentity, RunOptions, run, viewpoint_seed};

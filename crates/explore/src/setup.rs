@@ -75,6 +75,14 @@ pub struct Setup {
 }
 
 impl Setup {
+    /// The same setup with Stage One's predicted sweeps scored by `gain`
+    /// (a user's own [`crate::Gain`]; `[explore] gain` names the built-in
+    /// ones). It is used when `selection = "information"`.
+    pub fn with_gain(mut self, gain: std::sync::Arc<dyn crate::Gain>) -> Self {
+        self.stage.set_gain(gain);
+        self
+    }
+
     /// The setup of `inputs`: the start within the joint limits, the
     /// C-space model built or loaded, the planning grid at the start pose.
     pub fn new(inputs: SetupInputs) -> Result<Self, ExploreError> {

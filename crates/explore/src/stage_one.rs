@@ -10,6 +10,7 @@
 //! tie-break choose (eq. 3.8), and A* through the roadmap must find a safe
 //! path there, else the next choice is tried.
 
+use crate::gain::{self, Gain, GainContext, Trace};
 use crate::pareto::{self, Sense};
 use crate::{ExploreConfig, ExploreError, Selection};
 use geom::{Isometry3, Point3, Real, UnitVector3};
@@ -23,6 +24,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use robot::Robot;
 use sensor::Sweep;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// The objectives of eq. 3.7, in order: f1, f2, f3 minimised, f4 maximised.
@@ -32,6 +34,14 @@ const SENSES: [Sense; 4] = [
     Sense::Minimise,
     Sense::Maximise,
 ];
+
+/// Unknown voxels a candidate's predicted rays must enter from free space
+/// for `selection = "frontier"` to go there: 1 m² of 0.1 m voxels. After
+/// Yamauchi's smallest frontier region worth going to ("roughly the size of
+/// the robot"); with any one voxel, the nearest candidate was a wrist turn
+/// that revealed under 1 % and the 1 % rule ended bridge1's run at its
+/// second viewpoint.
+pub const FRONTIER_MIN_VOXELS: usize = 100;
 
 /// Joint travel (Σ|Δqᵢ|, radians) under which a candidate is the current pose.
 const SAME_POSE_RAD: Real = 1e-9;
@@ -50,6 +60,12 @@ pub struct Candidate {
     pub f: [Real; 4],
     /// Unknown voxels the sweep is predicted to reveal.
     pub revealed: usize,
+    /// The gain's score of the predicted sweep ([`crate::gain`]).
+    pub gain: Real,
+    /// Unknown voxels a predicted ray enters directly from a free voxel
+    /// (a frontier voxel: free, beside unknown space), each once; computed
+    /// only for `selection = "frontier"`, else 0.
+    pub frontier: usize,
 }
 
 /// What a decision chose.
@@ -125,6 +141,8 @@ pub struct StageOne {
     tilt_first_link: usize,
     /// `(H1 weighted, H2)` before any sweep, then after each.
     history: Vec<(Real, Real)>,
+    /// How a predicted sweep is scored.
+    gain: Arc<dyn Gain>,
 }
 
 impl StageOne {
@@ -181,6 +199,7 @@ impl StageOne {
             .into_iter()
             .map(|b| UnitVector3::new_normalize(sensor::beam_direction(b)))
             .collect();
+        let gain = config.gain.gain();
         let mut stage = Self {
             config,
             model,
@@ -190,6 +209,7 @@ impl StageOne {
             tilt_joint,
             tilt_first_link,
             history: Vec::new(),
+            gain,
         };
         let envelope = stage.sweep_envelope(start)?;
         for key in envelope {
@@ -206,6 +226,19 @@ impl StageOne {
     /// The planning grid.
     pub fn grid(&self) -> &OccupancyGrid {
         &self.grid
+    }
+
+    /// How a candidate's predicted sweep is scored (`[explore] gain`'s
+    /// built-in unless [`StageOne::set_gain`] gave another).
+    pub fn gain(&self) -> &dyn Gain {
+        self.gain.as_ref()
+    }
+
+    /// Score predicted sweeps with `gain` from the next decision on (one of
+    /// [`gain::GainKind`] or a user's own; with `selection =
+    /// "information"` the candidate of the largest score is chosen).
+    pub fn set_gain(&mut self, gain: Arc<dyn Gain>) {
+        self.gain = gain;
     }
 
     /// The C-space model.
@@ -338,21 +371,17 @@ impl StageOne {
         Ok(Some(best))
     }
 
-    /// The information `(geometric weighted, C-space)` the sweep from `q`
-    /// is predicted to reveal, and the number of unknown voxels: the sweep's
-    /// predicted rays cast through the grid up to the scanner's range,
-    /// stopping at occupied voxels (A§4.2, Fig. 4.3), each unknown voxel
-    /// counted once. `information` is the grid's
-    /// [`OccupancyGrid::information_by_slot`]; `stamp` is scratch of
-    /// `slot_count()` entries; `mark` must differ from every value in it.
+    /// The predicted sweep from `q` ([`Trace`]): the sweep's predicted rays
+    /// cast through the grid up to the scanner's range, stopping at occupied
+    /// voxels (A§4.2, Fig. 4.3), and, when the arm scans as it moves, the
+    /// rays of `prediction.motion_poses` scanner poses on the straight
+    /// motion `from` the current pose.
     fn predict(
         &self,
         q: &[Real],
         from: Option<&[Real]>,
-        information: &[[Real; 2]],
-        stamp: &mut [u32],
-        mark: u32,
-    ) -> Result<(Real, Real, usize), ExploreError> {
+        trace: &mut Trace,
+    ) -> Result<(), ExploreError> {
         let (lo, hi) = self.sweep_range(q);
         let j = self.tilt_joint;
         let span = hi[j] - lo[j];
@@ -360,7 +389,6 @@ impl StageOne {
             .ceil()
             .max(0.0) as usize;
         let world_from_base = *self.safety().world_from_base();
-        let (mut g1, mut g2, mut n) = (0.0, 0.0, 0usize);
         let mut configs: Vec<Vec<Real>> = Vec::new();
         let mut c = lo.clone();
         for s in 0..=steps {
@@ -380,6 +408,8 @@ impl StageOne {
                 configs.push(from.iter().zip(q).map(|(a, b)| a + (b - a) * t).collect());
             }
         }
+        let keep_steps = self.gain.reads_steps() || self.config.selection == Selection::Frontier;
+        trace.begin(self.grid.geometry().slot_count(), keep_steps);
         for c in &configs {
             let Some(pose) = self.robot().scanner_pose(c)? else {
                 continue;
@@ -388,19 +418,10 @@ impl StageOne {
             let origin = Point3::from(pose.translation.vector);
             for d in &self.dirs {
                 let dir = UnitVector3::new_unchecked(pose.rotation * d.into_inner());
-                self.grid
-                    .cast_through_unknown_slots(&origin, &dir, self.max_range_m, |_, slot| {
-                        if stamp[slot] != mark {
-                            stamp[slot] = mark;
-                            let [h1, h2] = information[slot];
-                            g1 += h1;
-                            g2 += h2;
-                            n += 1;
-                        }
-                    });
+                trace.cast_ray(&self.grid, &origin, &dir, self.max_range_m);
             }
         }
-        Ok((g1, g2, n))
+        Ok(())
     }
 
     /// The contending viewpoints of a decision from `q`: the roadmap's nodes,
@@ -445,15 +466,20 @@ impl StageOne {
     pub fn score(&self, q: &[Real]) -> Result<Vec<Candidate>, ExploreError> {
         self.robot().check_joints(q)?;
         let (h1, h2) = self.information();
-        let slots = self.grid.geometry().slot_count();
         let contenders = self.contenders(q);
         let information = self.grid.information_by_slot();
+        let context = GainContext::new(
+            &self.grid,
+            &information,
+            self.information(),
+            self.initial_information(),
+        );
+        let frontier = self.config.selection == Selection::Frontier;
         let scored: Vec<Option<Candidate>> = contenders
             .into_par_iter()
-            .enumerate()
             .map_init(
-                || vec![0u32; slots],
-                |stamp, (i, (node, c))| -> Result<Option<Candidate>, ExploreError> {
+                Trace::new,
+                |trace, (node, c)| -> Result<Option<Candidate>, ExploreError> {
                     // The current pose itself is no new viewpoint.
                     let f3: Real = c.iter().zip(q).map(|(a, b)| (a - b).abs()).sum();
                     if f3 <= SAME_POSE_RAD {
@@ -462,13 +488,20 @@ impl StageOne {
                     let Some(f4) = self.sweep_dist(&c)? else {
                         return Ok(None);
                     };
-                    let (g1, g2, revealed) =
-                        self.predict(&c, Some(q), &information, stamp, i as u32 + 1)?;
+                    self.predict(&c, Some(q), trace)?;
+                    let (g1, g2) = gain::revealed(trace, &context);
+                    let frontier = if frontier {
+                        gain::frontier_crossings(trace)
+                    } else {
+                        0
+                    };
                     Ok(Some(Candidate {
                         node,
                         q: c,
                         f: [h1 - g1, h2 - g2, f3, f4],
-                        revealed,
+                        revealed: trace.distinct_unknown().len(),
+                        gain: self.gain.score(trace, &context),
+                        frontier,
                     }))
                 },
             )
@@ -531,6 +564,31 @@ impl StageOne {
             },
             q,
         ));
+        // What the choice maximises, per candidate (rank sum aside).
+        let key: Vec<Real> = match self.config.selection {
+            Selection::RankSum => Vec::new(),
+            Selection::Information => candidates.iter().map(|c| c.gain).collect(),
+            // Yamauchi: the nearest candidate that sees a frontier region.
+            Selection::Frontier => candidates
+                .iter()
+                .map(|c| {
+                    if c.frontier >= FRONTIER_MIN_VOXELS {
+                        -self.model.roadmap().distance(q, &c.q)
+                    } else {
+                        Real::NEG_INFINITY
+                    }
+                })
+                .collect(),
+            // Uniformly among the clear candidates: independent uniform
+            // keys, the largest first (a dropped one leaves the rest
+            // uniform).
+            Selection::Random => {
+                let seed = self.config.plan.seed
+                    ^ 0xd1b5_4a32_d192_ed03_u64.wrapping_mul(self.sweeps() as u64 + 1);
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                candidates.iter().map(|_| rng.random::<Real>()).collect()
+            }
+        };
         for attempt in 0..self.config.max_plan_attempts {
             let f: Vec<Vec<Real>> = pool.iter().map(|&i| candidates[i].f.to_vec()).collect();
             if attempt == 0 {
@@ -543,9 +601,7 @@ impl StageOne {
             }
             let picked = match self.config.selection {
                 Selection::RankSum => pareto::choose(&f, &SENSES),
-                Selection::Information => {
-                    most_information(&f, self.information(), self.initial_information())
-                }
+                _ => largest(pool.iter().map(|&i| key[i])),
             };
             let Some((k, rank_sum)) = picked else {
                 break;
@@ -661,18 +717,12 @@ fn path_into(
     None
 }
 
-/// The candidate (index into `f`, rank sum 0) predicted to reveal the most
-/// information, `ΔH1/H1₀ + ΔH2/H2₀` with `ΔH = H now − f` (f1 and f2 are
-/// what would remain); ties to the lower index. `None` when `f` is empty.
-fn most_information(
-    f: &[Vec<Real>],
-    (h1, h2): (Real, Real),
-    (h10, h20): (Real, Real),
-) -> Option<(usize, usize)> {
-    let share = |gain: Real, of: Real| if of > 0.0 { gain / of } else { 0.0 };
-    f.iter()
+/// The index (and rank sum 0) of the largest finite value, ties to the
+/// lower index; `None` when there is none.
+fn largest(values: impl Iterator<Item = Real>) -> Option<(usize, usize)> {
+    values
         .enumerate()
-        .map(|(i, v)| (i, share(h1 - v[0], h10) + share(h2 - v[1], h20)))
+        .filter(|(_, v)| v.is_finite())
         .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
         .map(|(i, _)| (i, 0))
 }
@@ -709,7 +759,7 @@ fn first_link_moved_by(robot: &Robot, a: usize) -> usize {
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)]
-    use super::{most_information, path_via_visited, subsample};
+    use super::{largest, path_via_visited, subsample};
     use geom::Real;
     use plan::{Edge, MotionChecker, NodeId, Roadmap, RoadmapParts};
 
@@ -781,26 +831,15 @@ mod tests {
         assert!(path_via_visited(&roadmap, &[], &from, &goal, 2, &mut checker).is_none());
     }
 
-    /// By hand: H now (100, 10), H₀ (200, 20). Candidate 0 reveals 20 of H1
-    /// (0.1) and 1 of H2 (0.05): 0.15; candidate 1 reveals 0 and 4 (0.2);
-    /// candidate 2 the same as 1 (a tie: the lower index).
+    /// The largest finite key, ties to the lower index; keys of candidates
+    /// that cannot be chosen (-inf, NaN) never are.
     #[test]
-    fn the_most_information_by_hand() {
-        let f = vec![
-            vec![80.0, 9.0, 0.5, 2.0],
-            vec![100.0, 6.0, 3.0, 1.5],
-            vec![100.0, 6.0, 0.1, 9.0],
-        ];
-        assert_eq!(
-            most_information(&f, (100.0, 10.0), (200.0, 20.0)),
-            Some((1, 0))
-        );
-        assert_eq!(most_information(&[], (100.0, 10.0), (200.0, 20.0)), None);
-        // With H₀ = 0 a share counts for nothing.
-        assert_eq!(
-            most_information(&f, (100.0, 10.0), (0.0, 20.0)),
-            Some((1, 0))
-        );
+    fn the_largest_key_is_chosen() {
+        let inf = Real::INFINITY;
+        assert_eq!(largest([0.1, 0.3, 0.3, 0.2].into_iter()), Some((1, 0)));
+        assert_eq!(largest([-inf, -2.0, -1.0].into_iter()), Some((2, 0)));
+        assert_eq!(largest([-inf, Real::NAN, inf].into_iter()), None);
+        assert_eq!(largest(std::iter::empty()), None);
     }
 
     #[test]

@@ -1200,6 +1200,25 @@ impl OccupancyGrid {
         max_range_m: Real,
         mut visit: impl FnMut(VoxelKey, usize),
     ) -> UnknownRun {
+        self.cast_slots(origin, dir, max_range_m, |key, slot, state| {
+            if state == VoxelState::Unknown {
+                visit(key, slot);
+            }
+        })
+    }
+
+    /// Cast a ray as [`OccupancyGrid::cast_through_unknown`] does, calling
+    /// `visit` on every voxel passed in order, free and unknown, with its
+    /// storage slot ([`GridGeometry::slot_of`]) and state, and last on the
+    /// first occupied voxel, where the ray stops. What the information
+    /// gains of a predicted sweep read (visibility, rear sides, frontiers).
+    pub fn cast_slots(
+        &self,
+        origin: &Point3,
+        dir: &UnitVector3,
+        max_range_m: Real,
+        mut visit: impl FnMut(VoxelKey, usize, VoxelState),
+    ) -> UnknownRun {
         let mut run = UnknownRun::default();
         if !(max_range_m.is_finite() && max_range_m >= 0.0 && geom::math::is_finite_point(origin)) {
             return run;
@@ -1218,13 +1237,15 @@ impl OccupancyGrid {
                 match cells.state_bits(idx) {
                     BITS_UNKNOWN => {
                         run.unknown += 1;
-                        visit(g.key(cell), idx);
+                        visit(g.key(cell), idx, VoxelState::Unknown);
                     }
                     BITS_OCCUPIED => {
-                        run.blocked_by = Some(g.key(cell));
+                        let key = g.key(cell);
+                        visit(key, idx, VoxelState::Occupied);
+                        run.blocked_by = Some(key);
                         return run;
                     }
-                    _ => {}
+                    _ => visit(g.key(cell), idx, VoxelState::Free),
                 }
             }
             if !w.advance() {
