@@ -10,10 +10,14 @@ calls behind them.
 * ``studies.fit_exponential`` recovers a known curve;
 * ``studies.sld`` and ``studies.candidates`` as campaigns on a local Ray:
   their CSV rows are the library calls' answers, their PNG is written, and
-  called again they compute nothing.
+  called again they compute nothing;
+* ``studies.strategies`` as a campaign on a local Ray: a row per run, each
+  what its run folder's run.json and viewpoints.csv say, its table and
+  plots written, and called again it runs nothing.
 """
 
 import csv
+import json
 import os
 
 os.environ.setdefault("RAY_AUTH_MODE", "disabled")
@@ -177,6 +181,68 @@ def test_the_candidate_study_is_a_resumable_campaign(local_ray, tmp_path):
     assert again == ["0 points to compute, 2 already done"]
 
 
+def test_the_strategy_study_is_a_resumable_campaign(local_ray, tmp_path):
+    # Ours and one of Delmerico et al.'s gains.
+    chosen = ["information", "rear_side_voxel"]
+    lines = []
+    path = studies.strategies("bridge1", [0], tmp_path, strategies=chosen, max_viewpoints=3,
+                              log=lines.append)
+    assert path == tmp_path / studies.STRATEGIES_CSV
+    assert lines[0].startswith("2 runs to do, 0 already done")  # the campaign's
+    assert lines[-1] == "strategies: 2 runs done now, 0 already done"
+    rows = read_csv(path)
+    assert tuple(rows[0]) == studies.STRATEGY_COLUMNS
+    assert [(r["scene"], r["seed"], r["strategy"]) for r in rows] == [
+        ("bridge1", "0", "information"), ("bridge1", "0", "rear_side_voxel")]
+    for r in rows:
+        # Read by hand from the run folder: its config, run.json, viewpoints.csv.
+        folder = tmp_path / r["folder"]
+        assert folder.parent.parent.parent == tmp_path / "strategies_runs"
+        config = json.loads(json.loads((folder / "campaign.json").read_text())["config"])
+        assert config == {"stages": "one", "max_viewpoints": 3, "timings": True,
+                          "report": False, "explore": studies.STRATEGIES[r["strategy"]]}
+        summary = json.loads((folder / "run.json").read_text())
+        views = read_csv(folder / "viewpoints.csv")
+        assert [v["stage"] for v in views] == ["1"] * 3
+        assert int(r["viewpoints"]) == len(views) == 3
+        assert r["termination"] == summary["termination"] == "viewpoint_budget"
+        assert r["viewpoints_to_rule"] == ""
+        a1 = float(views[-1]["coverage_a1"])  # fewer than 12 viewpoints: the last
+        oracle = summary["coverage"]["oracle"]
+        assert float(r["a1_at_12"]) == a1
+        assert float(r["oracle_a1_at_12"]) == oracle["oracle"]["A1_after_sweeps"][11]
+        assert float(r["ratio_at_12"]) == a1 / oracle["A1_after_12"]
+        assert float(r["ratio_at_12"]) == pytest.approx(oracle["ratio_after_12"], rel=1e-12)
+        assert float(r["a1_final"]) == summary["coverage"]["A1"] == pytest.approx(a1, rel=1e-12)
+        assert float(r["joint_travel_rad"]) == pytest.approx(
+            sum(float(v["joint_travel"]) for v in views), rel=1e-12)
+        # viewpoints.csv's robot time is per viewpoint, to the microsecond.
+        assert float(r["robot_time_s"]) == summary["robot_time_s"]["stage_one"]
+        assert float(r["robot_time_s"]) == pytest.approx(
+            sum(float(v["robot_time_s"]) for v in views), abs=1e-5)
+        decisions = sorted(float(v["decision_ms"]) for v in views[1:])
+        assert float(r["decision_median_ms"]) == summary["decision_ms"]["median"] > 0
+        assert float(r["decision_median_ms"]) == pytest.approx(decisions[len(decisions) // 2],
+                                                               abs=5e-4)
+        assert int(r["collisions"]) == summary["collisions"]
+        assert int(r["unsafe_configurations"]) == summary["unsafe_configurations"]
+    table = (tmp_path / studies.STRATEGIES_MD).read_text()
+    assert "| strategy | bridge1 | all |" in table
+    for r in rows:
+        a1 = f"{100 * float(r['a1_at_12']):.1f}"
+        assert f"| {r['strategy']} | {a1} | {a1} |" in table  # A1 after 12, one seed
+        # The 1 % rule ended no run: "– (0/1)", no mean, 0 runs of 1.
+        assert f"| {r['strategy']} | – (0/1) | – (0/1) |" in table
+    for name in (studies.STRATEGIES_COVERAGE_PNG, studies.STRATEGIES_TIME_PNG,
+                 studies.STRATEGIES_DECISION_PNG):
+        assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
+    again = []
+    studies.strategies("bridge1", [0], tmp_path, strategies=chosen, max_viewpoints=3,
+                       log=again.append)
+    assert again == ["strategies: 0 runs done now, 2 already done"]
+    assert read_csv(path) == rows
+
+
 def test_bad_study_arguments_raise_before_anything_runs(small_run, tmp_path):
     with pytest.raises(ValueError, match="inputs"):
         studies.sld(small_run.dir, tmp_path, inputs=["voxels"])
@@ -192,6 +258,20 @@ def test_bad_study_arguments_raise_before_anything_runs(small_run, tmp_path):
         studies.candidates("no_such_scene", tmp_path, sizes=[2])
     with pytest.raises(OSError):
         studies.sld(tmp_path / "no_run", tmp_path)
+    for kwargs, pattern in [
+        ({"strategies": ["rank_sum", "no_such_strategy"]}, "unknown strategy 'no_such_strategy'"),
+        ({"strategies": ["rank_sum", "rank_sum"]}, "listed twice"),
+        ({"strategies": []}, "at least one"),
+        ({"strategies": {"a": {}, "b": {}}}, "the same overrides"),
+        ({"strategies": {"x": {"no_such_key": 1}}}, "no_such_key"),
+        ({"strategies": ["rank_sum"], "max_viewpoints": 0}, "max_viewpoints"),
+        ({"strategies": ["rank_sum"], "max_viewpoints": 1001}, "max_viewpoints"),
+        ({"strategies": ["rank_sum"], "seeds": []}, "seeds"),
+        ({"strategies": ["rank_sum"], "scenarios": []}, "scenarios"),
+        ({"strategies": ["rank_sum"], "scenarios": ["no_such_scene"]}, "no_such_scene"),
+    ]:
+        with pytest.raises(ValueError, match=pattern):
+            studies.strategies(**{"scenarios": "bridge1", "seeds": [0], **kwargs}, out=tmp_path)
     assert list(tmp_path.iterdir()) == []
 
 
@@ -201,6 +281,13 @@ def test_bad_study_arguments_raise_before_anything_runs(small_run, tmp_path):
     ["candidates", "--sizes", "x"],
     ["candidates", "--seeds", "x"],
     ["candidates", "--num-cpus", "0"],
+    ["strategies", "--strategies", "rank_sum,no_such_strategy"],
+    ["strategies", "--strategies", ","],
+    ["strategies", "--max-viewpoints", "0"],
+    ["strategies", "--max-viewpoints", "x"],
+    ["strategies", "--seeds", "x"],
+    ["strategies", "--scenarios", ","],
+    ["strategies", "--num-cpus", "0"],
 ])
 def test_bad_study_command_lines_exit_with_code_2(tmp_path, args, capsys):
     with pytest.raises(SystemExit) as e:
