@@ -19,7 +19,7 @@
 //! |---|---|---|
 //! | `"information"` | `ΔH1/H1₀ + ΔH2/H2₀`, each unknown voxel once | ours (A eq. 4.11, 4.14) |
 //! | `"paul_f1"` | `ΔH1`: the weighted geometric information revealed | A§3.2.1.1, eq. 3.1, 4.11 |
-//! | `"average_entropy"` | `Σ I_o(x) / N` over the `N` voxels the rays pass | Kriegel et al. 2015 in D§3 |
+//! | `"average_entropy"` | `Σ I_o(x) / N` over the `N` voxels the rays pass | Kriegel et al. 2015, as D compares it |
 //! | `"occlusion_aware"` | `Σ P_v(x) I_o(x)` | D, occlusion aware |
 //! | `"unobserved_voxel"` | `Σ P_v(x) I_u(x)` | D, unobserved voxel |
 //! | `"rear_side_voxel"` | `Σ I_b(x)` | D, rear side voxel |
@@ -40,7 +40,8 @@
 //! * `I_u(x) = 1` when `x` is unknown, else 0;
 //! * `I_b(x) = 1` when `x` is a rear-side voxel: an unknown voxel directly
 //!   before the occupied voxel the ray stops at (the ray reaches the far
-//!   side of a surface seen from elsewhere); D counts them without `P_v`;
+//!   side of a surface seen from elsewhere), counted without `P_v` as the
+//!   reference implementation below counts them;
 //! * a rear-side run: the unknown voxels directly before the occupied voxel
 //!   a ray stops at (the ray's last unknown voxels, no known voxel between
 //!   them and the hit); rays that stop at no occupied voxel have none;
@@ -50,9 +51,10 @@
 //! D's sums run over rays: a voxel met by two rays counts twice, with each
 //! ray's `P_v` (the predicted rays are 2° apart, about one per 0.1 m voxel
 //! at 3 m). The reference implementation (ETH's `ig_active_reconstruction`)
-//! multiplies `P_v` by `P_o` rather than `1 − P_o`; with unknown voxels at
-//! 0.5 the two agree, and with known ones the ray stops (occupied) or the
-//! factor is 1 (free) here, so both give D's `P_v`.
+//! multiplies `P_v` by `P_o` rather than `1 − P_o`: the two agree on unknown
+//! voxels (0.5), but a free voxel (0) would make every voxel behind it
+//! invisible there. We follow D's `P_v`, under which free voxels do not
+//! occlude.
 
 use geom::{Point3, Real, UnitVector3};
 use map::{OccupancyGrid, VoxelKey, VoxelState};
